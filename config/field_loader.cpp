@@ -1,0 +1,82 @@
+#include "config/field_loader.hpp"
+
+#include <algorithm>
+#include <optional>
+#include <string>
+#include <utility>
+
+namespace ph {
+namespace {
+
+// Runs a decoding step, prefixing the file's path to any FieldError that does not name it yet.
+template <typename Step>
+auto naming_file(const std::filesystem::path& path, Step step) {
+  try {
+    return step();
+  } catch (const FieldError& error) {
+    const std::string prefix = path.string() + ": ";
+    const std::string message = error.what();
+    if (message.rfind(prefix, 0) == 0) throw;
+    throw FieldError(prefix + message);
+  }
+}
+
+void require_sources(const FieldSources& sources, FieldNeeds needs) {
+  if (needs.gradient && !sources.normal_map && !sources.depth_map) {
+    throw FieldError("the method needs normals: give a normal map or a depth map");
+  }
+  if (needs.depth && !sources.depth_map) {
+    throw FieldError("the depth method needs a depth map (a normal map alone is not enough)");
+  }
+}
+
+DepthField load_depth(const std::filesystem::path& path, const DepthDecodeOptions& options, std::int32_t width,
+                      std::int32_t height, DecodeReport& report, const ImageLimits& limits) {
+  const RawImage image = read_image(path, limits);
+  return naming_file(path, [&] { return resample_depth(decode_depth(image, options, report), width, height); });
+}
+
+NormalImage load_normals(const std::filesystem::path& path, const NormalDecodeOptions& options, std::int32_t width,
+                         std::int32_t height, DecodeReport& report, const ImageLimits& limits) {
+  const RawImage image = read_image(path, limits);
+  return naming_file(path, [&] { return resample_normals(decode_normals(image, options, report), width, height); });
+}
+
+// A texel with n_z just above 0 is a wall: its slope stays finite so that later arithmetic never sees inf.
+Gradient finite_gradient(Normal n) {
+  constexpr float max_slope = 1.0e6f;
+  const Gradient g = gradient_from_normal(n);
+  return {std::clamp(g.x, -max_slope, max_slope), std::clamp(g.y, -max_slope, max_slope)};
+}
+
+GradientField gradient_from_normals(const NormalImage& normals) {
+  GradientField gradient(normals.width, normals.height);
+  std::transform(normals.values.begin(), normals.values.end(), gradient.values.begin(), finite_gradient);
+  return gradient;
+}
+
+}  // namespace
+
+RegionFields load_region_fields(const FieldSources& sources, std::int32_t width, std::int32_t height, FieldNeeds needs,
+                                FieldLoadReport& report, const ImageLimits& limits) {
+  report = {};
+  require_sources(sources, needs);
+  // Depth is read once, for the depth itself or for normals when there is no normal map; nothing else is read.
+  const bool gradient_from_depth_map = needs.gradient && !sources.normal_map;
+  std::optional<DepthField> depth;
+  if (needs.depth || gradient_from_depth_map) {
+    depth = load_depth(*sources.depth_map, sources.depth_options, width, height, report.depth, limits);
+  }
+
+  RegionFields fields;
+  if (needs.gradient) {
+    fields.gradient = gradient_from_depth_map
+                          ? gradient_from_depth(*depth)
+                          : gradient_from_normals(load_normals(*sources.normal_map, sources.normal_options, width,
+                                                               height, report.normals, limits));
+  }
+  if (needs.depth) fields.depth = std::move(depth);
+  return fields;
+}
+
+}  // namespace ph

@@ -1,0 +1,31 @@
+// Builds a region's fields from its image files: read, decode, repair, resample, and keep only what the
+// region's method needs (a method that needs normals and has only a depth map gets them from the depth).
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "config/image_io.hpp"
+#include "core/decode.hpp"
+#include "core/field.hpp"
+
+namespace ph {
+
+struct FieldSources {
+  std::optional<std::filesystem::path> normal_map;
+  NormalDecodeOptions normal_options;
+  std::optional<std::filesystem::path> depth_map;
+  DepthDecodeOptions depth_options;
+};
+
+struct FieldLoadReport {
+  DecodeReport normals;  // texels counted at the image's own size
+  DecodeReport depth;
+};
+
+// Throws FieldError naming the file, or naming what is missing (e.g. the depth method with only a normal map).
+RegionFields load_region_fields(const FieldSources& sources, std::int32_t width, std::int32_t height, FieldNeeds needs,
+                                FieldLoadReport& report, const ImageLimits& limits = {});
+
+}  // namespace ph

@@ -1,0 +1,29 @@
+// Reading and writing images through OpenImageIO. Every error names the file.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+
+#include "core/decode.hpp"
+#include "core/field.hpp"
+
+namespace ph {
+
+// Images larger than this are refused before any pixel is read.
+struct ImageLimits {
+  std::int64_t max_pixels = std::int64_t{1} << 26;  // 67 M pixels (8192 x 8192)
+  std::int32_t max_side = 32768;
+  std::int32_t max_channels = 16;  // normal and depth maps use at most 4
+};
+
+// Reads every channel as float (integer formats scaled to [0, 1] by OpenImageIO).
+// Throws FieldError("PATH: reason") for a missing, unreadable, truncated, zero-sized or too large image.
+RawImage read_image(const std::filesystem::path& path, const ImageLimits& limits = {});
+
+// 16-bit RGB PNG of unit normals, tangent-space OpenGL convention (+green = screen -y), c = round((n+1)/2 * 65535).
+void write_normal_png16(const std::filesystem::path& path, const NormalImage& normals);
+
+// 16-bit grey PNG of values in [0, 1] (clamped), c = round(v * 65535).
+void write_gray_png16(const std::filesystem::path& path, const Grid<float>& values);
+
+}  // namespace ph
