@@ -1,0 +1,237 @@
+#include "config/scene_file.hpp"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <toml++/toml.h>
+
+namespace ph {
+
+namespace {
+
+// Builds "FILE:LINE: key: message" errors.
+class Reporter {
+ public:
+  explicit Reporter(std::string origin) : origin_(std::move(origin)) {}
+
+  [[noreturn]] void fail(const toml::node* at, std::string_view key, std::string_view message) const {
+    const int line = at != nullptr ? static_cast<int>(at->source().begin.line) : 0;
+    if (line > 0) throw ConfigError(fmt::format("{}:{}: {}: {}", origin_, line, key, message));
+    throw ConfigError(fmt::format("{}: {}: {}", origin_, key, message));
+  }
+
+ private:
+  std::string origin_;
+};
+
+void reject_unknown_keys(const Reporter& rep, const toml::table& table, const std::set<std::string_view>& allowed,
+                         std::string_view where) {
+  for (const auto& [key, value] : table) {
+    if (!allowed.contains(key.str())) {
+      std::string list;
+      for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      rep.fail(&value, fmt::format("{}{}", where, key.str()), fmt::format("unknown key (allowed: {})", list));
+    }
+  }
+}
+
+double get_number(const Reporter& rep, const toml::table& t, std::string_view key, std::string_view where,
+                  double fallback) {
+  const toml::node* node = t.get(key);
+  if (node == nullptr) return fallback;
+  if (auto v = node->value<double>()) return *v;  // integers convert too
+  rep.fail(node, fmt::format("{}{}", where, key), "must be a number");
+}
+
+std::int32_t get_int(const Reporter& rep, const toml::table& t, std::string_view key, std::string_view where,
+                     std::optional<std::int32_t> fallback, std::int64_t lo, std::int64_t hi) {
+  const toml::node* node = t.get(key);
+  if (node == nullptr) {
+    if (fallback) return *fallback;
+    rep.fail(&t, fmt::format("{}{}", where, key), "is required");
+  }
+  const auto v = node->value_exact<std::int64_t>();
+  if (!v) rep.fail(node, fmt::format("{}{}", where, key), "must be a whole number");
+  if (*v < lo || *v > hi) {
+    rep.fail(node, fmt::format("{}{}", where, key), fmt::format("must be between {} and {} (got {})", lo, hi, *v));
+  }
+  return static_cast<std::int32_t>(*v);
+}
+
+std::optional<std::string> get_string(const Reporter& rep, const toml::table& t, std::string_view key,
+                                      std::string_view where) {
+  const toml::node* node = t.get(key);
+  if (node == nullptr) return std::nullopt;
+  if (auto v = node->value_exact<std::string>()) return *v;
+  rep.fail(node, fmt::format("{}{}", where, key), "must be a string");
+}
+
+// A [lower, upper] pair of numbers.
+void get_limits(const Reporter& rep, const toml::table& t, std::string_view key, std::string_view where, double& lo,
+                double& hi) {
+  const toml::node* node = t.get(key);
+  if (node == nullptr) return;
+  const toml::array* arr = node->as_array();
+  if (arr == nullptr || arr->size() != 2 || !(*arr)[0].value<double>() || !(*arr)[1].value<double>()) {
+    rep.fail(node, fmt::format("{}{}", where, key), "must be a pair of numbers [lower, upper]");
+  }
+  lo = *(*arr)[0].value<double>();
+  hi = *(*arr)[1].value<double>();
+}
+
+const toml::table* get_table(const Reporter& rep, const toml::table& t, std::string_view key, std::string_view where) {
+  const toml::node* node = t.get(key);
+  if (node == nullptr) return nullptr;
+  if (const toml::table* table = node->as_table()) return table;
+  rep.fail(node, fmt::format("{}{}", where, key), "must be a table");
+}
+
+CurvatureParams parse_curvature(const Reporter& rep, const toml::table& t, std::string_view where) {
+  reject_unknown_keys(rep, t, {"kmax_prime", "kmin_prime", "kmax_limits", "kmin_limits", "delta_beta_sign"}, where);
+  CurvatureParams p;
+  p.kmax_prime = get_number(rep, t, "kmax_prime", where, p.kmax_prime);
+  p.kmin_prime = get_number(rep, t, "kmin_prime", where, p.kmin_prime);
+  get_limits(rep, t, "kmax_limits", where, p.kmax_lo, p.kmax_hi);
+  get_limits(rep, t, "kmin_limits", where, p.kmin_lo, p.kmin_hi);
+  p.delta_beta_sign = get_number(rep, t, "delta_beta_sign", where, p.delta_beta_sign);
+  if (auto error = validate(p); !error.empty()) rep.fail(&t, where.substr(0, where.size() - 1), error);
+  return p;
+}
+
+DepthParams parse_depth(const Reporter& rep, const toml::table& t, std::string_view where) {
+  reject_unknown_keys(rep, t, {"gain", "kmax", "kmin"}, where);
+  DepthParams p;
+  p.gain = get_number(rep, t, "gain", where, p.gain);
+  p.kmax = get_number(rep, t, "kmax", where, p.kmax);
+  p.kmin = get_number(rep, t, "kmin", where, p.kmin);
+  if (auto error = validate(p); !error.empty()) rep.fail(&t, where.substr(0, where.size() - 1), error);
+  return p;
+}
+
+std::filesystem::path resolve(const std::filesystem::path& base_dir, const std::string& path) {
+  const std::filesystem::path p(path);
+  return p.is_absolute() ? p : base_dir / p;
+}
+
+constexpr std::int64_t kMaxCoordinate = 1 << 20;
+constexpr std::int64_t kMaxRegionSide = 1 << 14;
+
+RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t index,
+                        const std::filesystem::path& base_dir) {
+  const std::string where = fmt::format("region[{}].", index);
+  reject_unknown_keys(rep, t,
+                      {"name", "x", "y", "width", "height", "method", "normal_map", "normal_green", "normal_encoding",
+                       "depth_map", "depth_zero", "relief_px", "curvature", "depth"},
+                      where);
+  RegionSpec r;
+  r.line = static_cast<int>(t.source().begin.line);
+  r.name = get_string(rep, t, "name", where).value_or(fmt::format("region {}", index));
+  r.rect.x = get_int(rep, t, "x", where, 0, -kMaxCoordinate, kMaxCoordinate);
+  r.rect.y = get_int(rep, t, "y", where, 0, -kMaxCoordinate, kMaxCoordinate);
+  r.rect.w = get_int(rep, t, "width", where, std::nullopt, 1, kMaxRegionSide);
+  r.rect.h = get_int(rep, t, "height", where, std::nullopt, 1, kMaxRegionSide);
+
+  const std::string method = get_string(rep, t, "method", where).value_or("curvature");
+  const auto kind = parse_method_kind(method);
+  if (!kind) rep.fail(t.get("method"), where + "method", fmt::format("unknown method '{}' (allowed: curvature, depth)", method));
+  r.method = *kind;
+
+  if (auto p = get_string(rep, t, "normal_map", where)) r.sources.normal_map = resolve(base_dir, *p);
+  if (auto p = get_string(rep, t, "depth_map", where)) r.sources.depth_map = resolve(base_dir, *p);
+  const std::string green = get_string(rep, t, "normal_green", where).value_or("opengl");
+  if (green == "opengl") {
+    r.sources.normal_options.green = GreenConvention::opengl;
+  } else if (green == "directx") {
+    r.sources.normal_options.green = GreenConvention::directx;
+  } else {
+    rep.fail(t.get("normal_green"), where + "normal_green", "must be \"opengl\" or \"directx\"");
+  }
+  const std::string encoding = get_string(rep, t, "normal_encoding", where).value_or("auto");
+  if (encoding == "auto") {
+    r.sources.normal_options.encoding = NormalEncoding::automatic;
+  } else if (encoding == "unorm") {
+    r.sources.normal_options.encoding = NormalEncoding::unorm;
+  } else if (encoding == "signed") {
+    r.sources.normal_options.encoding = NormalEncoding::signed_values;
+  } else {
+    rep.fail(t.get("normal_encoding"), where + "normal_encoding", "must be \"auto\", \"unorm\" or \"signed\"");
+  }
+  r.sources.depth_options.depth_zero = get_number(rep, t, "depth_zero", where, 0.0);
+  r.sources.depth_options.relief_px = get_number(rep, t, "relief_px", where, 100.0);
+  if (!std::isfinite(r.sources.depth_options.depth_zero)) rep.fail(t.get("depth_zero"), where + "depth_zero", "must be finite");
+  if (!std::isfinite(r.sources.depth_options.relief_px)) rep.fail(t.get("relief_px"), where + "relief_px", "must be finite");
+
+  if (!r.sources.normal_map && !r.sources.depth_map) rep.fail(&t, where + "normal_map", "a region needs a normal_map or a depth_map");
+  if (r.method == MethodKind::depth && !r.sources.depth_map) {
+    rep.fail(&t, where + "depth_map", "the depth method needs a depth_map (a normal map alone is not enough)");
+  }
+  if (const toml::table* c = get_table(rep, t, "curvature", where)) r.curvature = parse_curvature(rep, *c, where + "curvature.");
+  if (const toml::table* d = get_table(rep, t, "depth", where)) r.depth = parse_depth(rep, *d, where + "depth.");
+  return r;
+}
+
+}  // namespace
+
+std::optional<MethodKind> parse_method_kind(std::string_view name) {
+  if (name == "curvature") return MethodKind::curvature;
+  if (name == "depth") return MethodKind::depth;
+  return std::nullopt;
+}
+
+std::string_view method_kind_name(MethodKind kind) { return kind == MethodKind::depth ? "depth" : "curvature"; }
+
+SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& origin) {
+  const Reporter rep(origin.string());
+  toml::table root;
+  try {
+    root = toml::parse(text, origin.string());
+  } catch (const toml::parse_error& e) {
+    throw ConfigError(fmt::format("{}:{}: {}", origin.string(), e.source().begin.line, e.description()));
+  }
+  reject_unknown_keys(rep, root, {"region"}, "");
+  SceneSpec spec;
+  spec.file = origin;
+  const toml::node* regions = root.get("region");
+  if (regions == nullptr) return spec;
+  const toml::array* arr = regions->as_array();
+  if (arr == nullptr || !arr->is_array_of_tables()) rep.fail(regions, "region", "must be written as [[region]] tables");
+  const std::filesystem::path base_dir = origin.parent_path();
+  for (std::size_t i = 0; i < arr->size(); ++i) spec.regions.push_back(parse_region(rep, *(*arr)[i].as_table(), i, base_dir));
+  return spec;
+}
+
+SceneSpec parse_scene_file(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw ConfigError(fmt::format("{}: cannot open the scene file", file.string()));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_scene_text(text.str(), file);
+}
+
+MethodPtr make_method(const RegionSpec& region) {
+  if (region.method == MethodKind::depth) return std::make_shared<DepthMethod>(region.depth);
+  return std::make_shared<CurvatureMethod>(region.curvature);
+}
+
+Scene load_scene(const SceneSpec& spec, SceneLoadReport* report) {
+  std::vector<Region> regions;
+  for (const RegionSpec& r : spec.regions) {
+    Region region;
+    region.name = r.name;
+    region.rect = r.rect;
+    region.method = make_method(r);
+    FieldLoadReport field_report;
+    try {
+      region.fields = load_region_fields(r.sources, r.rect.w, r.rect.h, region.method->needs(), field_report);
+    } catch (const FieldError& e) {
+      throw ConfigError(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, e.what()));
+    }
+    if (report != nullptr) report->regions.push_back(field_report);
+    regions.push_back(std::move(region));
+  }
+  return Scene(std::move(regions));
+}
+
+}  // namespace ph

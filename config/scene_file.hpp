@@ -1,0 +1,59 @@
+// Scene files (TOML): regions with their images, method and parameters. Every error names the file,
+// the line and the key, and says what is allowed. Unknown keys are errors: a typo must not pass silently.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "config/field_loader.hpp"
+#include "core/method_curvature.hpp"
+#include "core/method_depth.hpp"
+#include "core/scene.hpp"
+
+namespace ph {
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class MethodKind { curvature, depth };
+
+std::optional<MethodKind> parse_method_kind(std::string_view name);
+std::string_view method_kind_name(MethodKind kind);
+
+// A region as the scene file describes it, before its images are read.
+struct RegionSpec {
+  std::string name;
+  Rect rect;
+  MethodKind method = MethodKind::curvature;
+  FieldSources sources;  // paths already resolved against the scene file's folder
+  CurvatureParams curvature;
+  DepthParams depth;
+  int line = 0;  // where the region starts in the file
+};
+
+struct SceneSpec {
+  std::filesystem::path file;  // empty for a scene given as text
+  std::vector<RegionSpec> regions;
+};
+
+// `origin` names the text in errors and is the base for relative image paths.
+SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& origin);
+SceneSpec parse_scene_file(const std::filesystem::path& file);
+
+MethodPtr make_method(const RegionSpec& region);
+
+struct SceneLoadReport {
+  std::vector<FieldLoadReport> regions;
+};
+
+// Reads every region's images (only those its method needs). Throws ConfigError naming the scene file
+// and the region for an image that cannot be used.
+Scene load_scene(const SceneSpec& spec, SceneLoadReport* report = nullptr);
+
+}  // namespace ph

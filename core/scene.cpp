@@ -1,0 +1,58 @@
+#include "core/scene.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace ph {
+
+namespace {
+
+template <typename T>
+bool matches(const std::optional<Grid<T>>& grid, Rect r) {
+  return grid && grid->width == r.w && grid->height == r.h &&
+         grid->values.size() == static_cast<std::size_t>(r.w) * static_cast<std::size_t>(r.h);
+}
+
+void check_region(const Region& region) {
+  const std::string who = "region '" + region.name + "': ";
+  if (region.rect.w <= 0 || region.rect.h <= 0) throw std::invalid_argument(who + "width and height must be > 0");
+  if (!region.method) throw std::invalid_argument(who + "no method");
+  const FieldNeeds needs = region.method->needs();
+  if (needs.gradient && !matches(region.fields.gradient, region.rect)) {
+    throw std::invalid_argument(who + "the method needs normals matching the region's size");
+  }
+  if (needs.depth && !matches(region.fields.depth, region.rect)) {
+    throw std::invalid_argument(who + "the method needs a depth field matching the region's size");
+  }
+}
+
+// Loaders repair invalid texels; this keeps the no-NaN promise for scenes built any other way.
+void flatten_non_finite(RegionFields& fields) {
+  if (fields.gradient) {
+    for (Gradient& g : fields.gradient->values) {
+      if (!std::isfinite(g.x) || !std::isfinite(g.y)) g = {};
+    }
+  }
+  if (fields.depth) {
+    for (float& h : fields.depth->values) {
+      if (!std::isfinite(h)) h = 0.0f;
+    }
+  }
+}
+
+}  // namespace
+
+Scene::Scene(std::vector<Region> regions) : regions_(std::move(regions)) {
+  for (Region& region : regions_) {
+    check_region(region);
+    flatten_non_finite(region.fields);
+  }
+}
+
+std::size_t Scene::bytes() const {
+  std::size_t total = 0;
+  for (const Region& region : regions_) total += region.fields.bytes();
+  return total;
+}
+
+}  // namespace ph

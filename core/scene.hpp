@@ -1,0 +1,50 @@
+// A scene: regions on the screen, each with its fields and its method. Later regions lie on top of
+// earlier ones; outside every region the surface is flat (ALGORITHMS.md section 1).
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/field.hpp"
+#include "core/geometry.hpp"
+#include "core/method.hpp"
+
+namespace ph {
+
+struct Region {
+  std::string name;
+  Rect rect;  // on screen; the fields are exactly rect.w x rect.h texels
+  RegionFields fields;
+  MethodPtr method;
+
+  // Texel of the region's fields under a screen texel the region contains.
+  Texel local(Texel screen) const { return {screen.x - rect.x, screen.y - rect.y}; }
+};
+
+class Scene {
+ public:
+  Scene() = default;
+  // Throws std::invalid_argument if a region is empty, has no method, or its fields do not match its
+  // size or lack what its method needs.
+  explicit Scene(std::vector<Region> regions);
+
+  const std::vector<Region>& regions() const { return regions_; }
+  bool empty() const { return regions_.empty(); }
+
+  // Index of the topmost region containing the texel, or nullopt on the flat outside.
+  std::optional<std::size_t> owner(Texel t) const {
+    for (std::size_t i = regions_.size(); i-- > 0;) {
+      if (regions_[i].rect.contains(t)) return i;
+    }
+    return std::nullopt;
+  }
+
+  std::size_t bytes() const;
+
+ private:
+  std::vector<Region> regions_;
+};
+
+}  // namespace ph
