@@ -2,10 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <toml++/toml.h>
 #include <fstream>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
 namespace ph {
 
@@ -135,7 +135,8 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
 
   const std::string method = get_string(rep, t, "method", where).value_or("curvature");
   const auto kind = parse_method_kind(method);
-  if (!kind) rep.fail(t.get("method"), where + "method", fmt::format("unknown method '{}' (allowed: curvature, depth)", method));
+  if (!kind)
+    rep.fail(t.get("method"), where + "method", fmt::format("unknown method '{}' (allowed: curvature, depth)", method));
   r.method = *kind;
 
   if (auto p = get_string(rep, t, "normal_map", where)) r.sources.normal_map = resolve(base_dir, *p);
@@ -160,14 +161,18 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   }
   r.sources.depth_options.depth_zero = get_number(rep, t, "depth_zero", where, 0.0);
   r.sources.depth_options.relief_px = get_number(rep, t, "relief_px", where, 100.0);
-  if (!std::isfinite(r.sources.depth_options.depth_zero)) rep.fail(t.get("depth_zero"), where + "depth_zero", "must be finite");
-  if (!std::isfinite(r.sources.depth_options.relief_px)) rep.fail(t.get("relief_px"), where + "relief_px", "must be finite");
+  if (!std::isfinite(r.sources.depth_options.depth_zero))
+    rep.fail(t.get("depth_zero"), where + "depth_zero", "must be finite");
+  if (!std::isfinite(r.sources.depth_options.relief_px))
+    rep.fail(t.get("relief_px"), where + "relief_px", "must be finite");
 
-  if (!r.sources.normal_map && !r.sources.depth_map) rep.fail(&t, where + "normal_map", "a region needs a normal_map or a depth_map");
+  if (!r.sources.normal_map && !r.sources.depth_map)
+    rep.fail(&t, where + "normal_map", "a region needs a normal_map or a depth_map");
   if (r.method == MethodKind::depth && !r.sources.depth_map) {
     rep.fail(&t, where + "depth_map", "the depth method needs a depth_map (a normal map alone is not enough)");
   }
-  if (const toml::table* c = get_table(rep, t, "curvature", where)) r.curvature = parse_curvature(rep, *c, where + "curvature.");
+  if (const toml::table* c = get_table(rep, t, "curvature", where))
+    r.curvature = parse_curvature(rep, *c, where + "curvature.");
   if (const toml::table* d = get_table(rep, t, "depth", where)) r.depth = parse_depth(rep, *d, where + "depth.");
   return r;
 }
@@ -198,7 +203,8 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
   const toml::array* arr = regions->as_array();
   if (arr == nullptr || !arr->is_array_of_tables()) rep.fail(regions, "region", "must be written as [[region]] tables");
   const std::filesystem::path base_dir = origin.parent_path();
-  for (std::size_t i = 0; i < arr->size(); ++i) spec.regions.push_back(parse_region(rep, *(*arr)[i].as_table(), i, base_dir));
+  for (std::size_t i = 0; i < arr->size(); ++i)
+    spec.regions.push_back(parse_region(rep, *(*arr)[i].as_table(), i, base_dir));
   return spec;
 }
 

@@ -16,7 +16,9 @@ GradientField gradient_from_depth(const DepthField& depth) {
   const std::int32_t h = depth.height;
   GradientField out(w, h);
   // Central difference inside, one-sided at the border; a 1-texel axis has no slope along it.
-  auto diff = [](float lo, float hi, std::int32_t span) { return span > 0 ? (hi - lo) / static_cast<float>(span) : 0.0f; };
+  auto diff = [](float lo, float hi, std::int32_t span) {
+    return span > 0 ? (hi - lo) / static_cast<float>(span) : 0.0f;
+  };
   for (std::int32_t y = 0; y < h; ++y) {
     const std::int32_t y0 = y > 0 ? y - 1 : y;
     const std::int32_t y1 = y + 1 < h ? y + 1 : y;

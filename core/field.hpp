@@ -57,9 +57,7 @@ struct RegionFields {
   std::optional<GradientField> gradient;
   std::optional<DepthField> depth;
 
-  std::size_t bytes() const {
-    return (gradient ? gradient->bytes() : 0) + (depth ? depth->bytes() : 0);
-  }
+  std::size_t bytes() const { return (gradient ? gradient->bytes() : 0) + (depth ? depth->bytes() : 0); }
 };
 
 // Gradient of a unit normal with n_z > 0: g = (-n_x / n_z, -n_y / n_z).

@@ -75,7 +75,8 @@ TexelSample CurvatureMethod::sample(const RegionFields* fields, Texel local, Vec
   return {-t / std::sqrt(1.0 + t * t), std::atan(t)};
 }
 
-double CurvatureMethod::cd(const TexelSample& from, const TexelSample& to, double /*step_px*/, StepDetail* detail) const {
+double CurvatureMethod::cd(const TexelSample& from, const TexelSample& to, double /*step_px*/,
+                           StepDetail* detail) const {
   return curvature_cd(params_, from.v0, from.v1, to.v0, to.v1, detail);
 }
 

@@ -26,7 +26,8 @@ double slope_angle(Gradient g, Vec2 direction);
 
 // Eq. 1-3 from the two projected values a1 = n''_x(p1), a2 = n''_x(p2) and the slope angles
 // theta = asin(-a) of the same texels (passed to avoid recomputing acos). detail may be null.
-double curvature_cd(const CurvatureParams& params, double a1, double theta1, double a2, double theta2, StepDetail* detail);
+double curvature_cd(const CurvatureParams& params, double a1, double theta1, double a2, double theta2,
+                    StepDetail* detail);
 
 class CurvatureMethod final : public Method {
  public:

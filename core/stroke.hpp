@@ -14,7 +14,7 @@ namespace ph {
 struct StrokeSpec {
   Vec2 from;
   Vec2 to;
-  double motor_step_px = 1.0;          // motor travel per frame (px at C/D = 1)
+  double motor_step_px = 1.0;           // motor travel per frame (px at C/D = 1)
   std::size_t max_frames = 10'000'000;  // a stroke that cannot finish stops here
 };
 

@@ -15,10 +15,10 @@ enum class TargetProfile { linear, gaussian, polynomial };
 struct TargetSpec {
   TargetShape shape = TargetShape::bump;
   TargetProfile profile = TargetProfile::gaussian;
-  double height = 1.0;    // 0.25 or 1 on a depth normalised to [-1, 1]
-  double radius = 200.0;  // px
-  std::int32_t size = 500;       // the target is size x size px, centred at (size/2, size/2)
-  double relief_px = 100.0;      // screen px of height per unit of normalised depth
+  double height = 1.0;       // 0.25 or 1 on a depth normalised to [-1, 1]
+  double radius = 200.0;     // px
+  std::int32_t size = 500;   // the target is size x size px, centred at (size/2, size/2)
+  double relief_px = 100.0;  // screen px of height per unit of normalised depth
 
   std::string name() const;  // e.g. "bump-gaussian-h1-r200", "hole-linear-h0.25-r100"
 };

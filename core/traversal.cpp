@@ -228,10 +228,10 @@ class Walker {
   const int sx_, sy_;
   const double tdx_, tdy_;  // display travel per texel along x and y
   Texel texel_, from_;
-  Vec2 origin_;             // start of the current straight leg
-  double t_ = 0.0;          // display travel since origin_
+  Vec2 origin_;                     // start of the current straight leg
+  double t_ = 0.0;                  // display travel since origin_
   double tmx_ = kInf, tmy_ = kInf;  // display travel from origin_ to the next x / y texel boundary
-  double budget_ = 0.0;     // motor travel left in the frame
+  double budget_ = 0.0;             // motor travel left in the frame
   bool all_unit_ = true;
   std::uint64_t steps_ = 0;
 };

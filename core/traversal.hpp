@@ -25,12 +25,12 @@ CursorState cursor_at(Vec2 position);
 
 // One texel segment of a frame, for traces and tests.
 struct StepRecord {
-  Vec2 entry;             // cursor position where the segment starts (screen px)
-  Texel texel;            // screen texel of the segment
-  Texel came_from;        // screen texel it was entered from
-  bool entered = false;   // false for the texel the frame started in
+  Vec2 entry;            // cursor position where the segment starts (screen px)
+  Texel texel;           // screen texel of the segment
+  Texel came_from;       // screen texel it was entered from
+  bool entered = false;  // false for the texel the frame started in
   double cd = 1.0;
-  StepDetail detail{};    // method quantities of the step (NaN where a method has none)
+  StepDetail detail{};  // method quantities of the step (NaN where a method has none)
   const Region* region = nullptr;
 };
 

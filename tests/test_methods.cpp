@@ -131,7 +131,7 @@ TEST(CurvatureCd, ConfiguredLimitsApply) {
   p.kmax_hi = 3.0;
   p.kmin_prime = 2.0;
   p.kmin_hi = 2.5;
-  EXPECT_NEAR(cd_for(p, 30, 30), 1.0 + 0.5 * 1.0, 1e-12);  // kmax = 2
+  EXPECT_NEAR(cd_for(p, 30, 30), 1.0 + 0.5 * 1.0, 1e-12);                                              // kmax = 2
   EXPECT_NEAR(cd_for(p, 20, 10), 1.0 + (std::sin(20 * kDeg) + std::sin(10 * kDeg)) / 2 * 2.0, 1e-12);  // 3
   EXPECT_NEAR(cd_for(p, -20, -10), 1.0 - (std::sin(20 * kDeg) + std::sin(10 * kDeg)) / 2 * (1 - 1 / 2.5), 1e-12);
 }
@@ -167,9 +167,9 @@ TEST(DepthCd, LinearInDepthChangeWithinLimits) {
   EXPECT_NEAR(d.dh, 0.5, 1e-12);
   EXPECT_TRUE(std::isnan(d.cos_alpha));
   EXPECT_NEAR(depth_cd(p, 0.0, -0.1, 1.0, nullptr), 0.7, 1e-12);
-  EXPECT_EQ(depth_cd(p, 0.0, 5.0, 1.0, nullptr), 4.0);           // kmax
+  EXPECT_EQ(depth_cd(p, 0.0, 5.0, 1.0, nullptr), 4.0);                // kmax
   EXPECT_NEAR(depth_cd(p, 0.0, -5.0, 1.0, nullptr), 1 / 1.5, 1e-12);  // 1 / kmin
-  EXPECT_NEAR(depth_cd(p, 0.0, 0.5, 2.0, nullptr), 1.75, 1e-12);  // per px travelled
+  EXPECT_NEAR(depth_cd(p, 0.0, 0.5, 2.0, nullptr), 1.75, 1e-12);      // per px travelled
   EXPECT_EQ(depth_cd(p, 3.0, 3.0, 1.0, nullptr), 1.0);
 }
 

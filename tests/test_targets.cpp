@@ -1,6 +1,7 @@
 // The 24 analytic targets (core/targets) and the files written from them (config/target_files).
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -8,7 +9,6 @@
 #include <set>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 #include "config/image_io.hpp"
@@ -102,8 +102,10 @@ TEST(Targets, ExactGradientMatchesCentralDifferencesAwayFromKinks) {
     for (const Vec2 p : sample_points(spec)) {
       const double r = distance_from_centre(spec, p);
       if (r < 0.01 || std::abs(r - spec.radius) < 0.01) continue;  // the apex and the rim are kinks or steps
-      const double fd_x = (target_height(spec, p + Vec2{step, 0}) - target_height(spec, p - Vec2{step, 0})) / (2 * step);
-      const double fd_y = (target_height(spec, p + Vec2{0, step}) - target_height(spec, p - Vec2{0, step})) / (2 * step);
+      const double fd_x =
+          (target_height(spec, p + Vec2{step, 0}) - target_height(spec, p - Vec2{step, 0})) / (2 * step);
+      const double fd_y =
+          (target_height(spec, p + Vec2{0, step}) - target_height(spec, p - Vec2{0, step})) / (2 * step);
       const Gradient g = target_gradient(spec, p);
       ASSERT_NEAR(g.x, fd_x, 1e-5 + 1e-5 * std::abs(fd_x)) << spec.name() << " at " << p.x << ", " << p.y;
       ASSERT_NEAR(g.y, fd_y, 1e-5 + 1e-5 * std::abs(fd_y)) << spec.name() << " at " << p.x << ", " << p.y;
@@ -238,8 +240,8 @@ TEST(TargetFiles, RoundTripThroughTheWrittenFiles) {
   EXPECT_FALSE(target_files_present(dir.path(), targets));
 
   std::vector<std::size_t> progress_calls;
-  const std::vector<std::filesystem::path> scenes =
-      write_target_files(dir.path() / "nested", targets, [&](std::size_t done, std::size_t total, const TargetSpec& spec) {
+  const std::vector<std::filesystem::path> scenes = write_target_files(
+      dir.path() / "nested", targets, [&](std::size_t done, std::size_t total, const TargetSpec& spec) {
         EXPECT_EQ(total, targets.size());
         EXPECT_EQ(spec.name(), targets[done - 1].name());
         progress_calls.push_back(done);

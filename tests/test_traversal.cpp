@@ -111,7 +111,8 @@ TEST(Traversal, ConstantSlopeCurvatureSumsToInputOverCd) {
 
 TEST(Traversal, ConstantSlopeDepthSumsToInputOverCd) {
   // h = 0.05 x: C/D = 1 + 3 * 0.05 in every step.
-  const Scene ramp = scene_of({depth_region({0, 0, 12000, 3}, [](int x, int) { return 0.05f * static_cast<float>(x); })});
+  const Scene ramp =
+      scene_of({depth_region({0, 0, 12000, 3}, [](int x, int) { return 0.05f * static_cast<float>(x); })});
   // Heights are floats: up to 600 px here, so a step's height change is good to about 1e-4 px.
   expect_constant_ratio(ramp, {1.5, 1.5}, {1.0, 0.0}, 1.15, 10000, 5, 3e-4);
 }
@@ -292,8 +293,8 @@ TEST(Traversal, NoNaNOrInfinityForAnyInput) {
   deep.fields.depth->at(1, 1) = NAN;
   regions.push_back(std::move(deep));
   const Scene scene = scene_of(std::move(regions));
-  const Vec2 inputs[] = {{0, 0},     {NAN, 1},     {1, INFINITY}, {-INFINITY, INFINITY}, {1e6, -1e6}, {1e300, 1e300},
-                         {1e-300, 0}, {5e-324, 0}, {-3.5, 2.25},  {0.001, -0.0007}};
+  const Vec2 inputs[] = {{0, 0},         {NAN, 1},    {1, INFINITY}, {-INFINITY, INFINITY}, {1e6, -1e6},
+                         {1e300, 1e300}, {1e-300, 0}, {5e-324, 0},   {-3.5, 2.25},          {0.001, -0.0007}};
   CursorState cursor = cursor_at({40.0, 40.0});
   std::uniform_int_distribution<int> pick(0, std::size(inputs) - 1);
   for (int i = 0; i < 200000; ++i) {

@@ -1,0 +1,82 @@
+// `pseudohaptic demo`: the paper's Fig. 5 in numbers. Generates the 24 target files if they are missing,
+// loads each through the scene loader (as the daemon will) and strokes horizontally through its centre
+// with each method.
+#include <fmt/core.h>
+
+#include <cstdlib>
+#include <filesystem>
+
+#include "config/scene_file.hpp"
+#include "config/target_files.hpp"
+#include "core/stroke.hpp"
+#include "core/targets.hpp"
+#include "tools/commands.hpp"
+
+namespace ph::tools {
+
+namespace {
+
+std::filesystem::path default_targets_dir() {
+  if (const char* cache = std::getenv("XDG_CACHE_HOME"); cache != nullptr && *cache != '\0') {
+    return std::filesystem::path(cache) / "pseudohaptic" / "targets";
+  }
+  if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0') {
+    return std::filesystem::path(home) / ".cache" / "pseudohaptic" / "targets";
+  }
+  return "pseudohaptic-targets";
+}
+
+struct Range {
+  double lo = 1.0, hi = 1.0;
+};
+
+Range stroke_range(const SceneSpec& target_scene, MethodKind method, double step) {
+  SceneSpec spec = target_scene;
+  spec.regions.front().method = method;
+  const Scene scene = load_scene(spec);
+  const Rect r = scene.regions().front().rect;
+  StrokeSpec stroke;
+  stroke.from = {static_cast<double>(r.x), r.y + r.h / 2.0};
+  stroke.to = {static_cast<double>(r.x + r.w), r.y + r.h / 2.0};
+  stroke.motor_step_px = step;
+  const StrokeResult result = run_stroke(scene, stroke);
+  return {result.cd_min, result.cd_max};
+}
+
+}  // namespace
+
+Run add_demo_command(CLI::App& app) {
+  auto dir = std::make_shared<std::string>();
+  auto step = std::make_shared<double>(2.0);
+  app.add_option("--targets", *dir, "Folder of the target files (default: $XDG_CACHE_HOME/pseudohaptic/targets)");
+  app.add_option("--step", *step, "Motor travel per frame, px")->capture_default_str();
+  return [dir, step] {
+    const std::filesystem::path folder = dir->empty() ? default_targets_dir() : std::filesystem::path(*dir);
+    const auto targets = all_targets();
+    if (!target_files_present(folder, targets)) {
+      fmt::print(stderr, "writing the 24 targets to {}\n", folder.string());
+      write_target_files(folder, targets, [](std::size_t done, std::size_t total, const TargetSpec& t) {
+        fmt::print(stderr, "\r[{:2}/{}] {:<28}", done, total, t.name());
+      });
+      fmt::print(stderr, "\n");
+    }
+    fmt::print("C/D ratio met on a horizontal stroke through the centre of each target\n");
+    fmt::print("(below 1: the cursor speeds up, downhill; above 1: it slows down, uphill)\n\n");
+    fmt::print("{:<28} {:>19} {:>19}\n", "target", "curvature", "depth");
+    std::size_t done = 0;
+    for (const TargetSpec& t : targets) {
+      fmt::print(stderr, "\r[{:2}/{}] {:<28}", ++done, targets.size(), t.name());
+      const SceneSpec spec = parse_scene_file(target_file_paths(folder, t).scene);
+      const Range c = stroke_range(spec, MethodKind::curvature, *step);
+      const Range d = stroke_range(spec, MethodKind::depth, *step);
+      fmt::print(stderr, "\r{:40}\r", "");
+      fmt::print("{:<28} {:>8.3f} .. {:>6.3f} {:>8.3f} .. {:>6.3f}\n", t.name(), c.lo, c.hi, d.lo, d.hi);
+      std::fflush(stdout);
+    }
+    fmt::print("\nTrace one of them: pseudohaptic trace --scene {} -o trace.csv\n",
+               target_file_paths(folder, targets.front()).scene.string());
+    return 0;
+  };
+}
+
+}  // namespace ph::tools

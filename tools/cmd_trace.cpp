@@ -1,0 +1,194 @@
+// `pseudohaptic trace`: the data behind the paper's Fig. 5, one CSV row per texel step.
+#include <fmt/core.h>
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <optional>
+
+#include "config/image_io.hpp"
+#include "config/scene_file.hpp"
+#include "core/stroke.hpp"
+#include "core/targets.hpp"
+#include "tools/commands.hpp"
+
+namespace ph::tools {
+
+namespace {
+
+struct TraceOptions {
+  std::string scene_file, normal_map, depth_map, target;
+  std::string normal_green = "opengl", normal_encoding = "auto";
+  std::optional<double> depth_zero, relief_px;
+  std::string method;
+  std::optional<double> kmax_prime, kmin_prime, delta_beta_sign, gain, depth_kmax, depth_kmin;
+  std::vector<double> kmax_limits, kmin_limits, from, to;
+  std::optional<double> step, speed;
+  double rate = 125.0;
+  std::string output = "-";
+};
+
+// The options that change a region's method, applied to every region of the traced scene.
+void apply_overrides(const TraceOptions& o, RegionSpec& r) {
+  if (!o.method.empty()) r.method = *parse_method_kind(o.method);
+  if (o.kmax_prime) r.curvature.kmax_prime = *o.kmax_prime;
+  if (o.kmin_prime) r.curvature.kmin_prime = *o.kmin_prime;
+  if (o.delta_beta_sign) r.curvature.delta_beta_sign = *o.delta_beta_sign;
+  if (o.kmax_limits.size() == 2)
+    std::tie(r.curvature.kmax_lo, r.curvature.kmax_hi) = std::pair(o.kmax_limits[0], o.kmax_limits[1]);
+  if (o.kmin_limits.size() == 2)
+    std::tie(r.curvature.kmin_lo, r.curvature.kmin_hi) = std::pair(o.kmin_limits[0], o.kmin_limits[1]);
+  if (o.gain) r.depth.gain = *o.gain;
+  if (o.depth_kmax) r.depth.kmax = *o.depth_kmax;
+  if (o.depth_kmin) r.depth.kmin = *o.depth_kmin;
+  if (auto e = validate(r.curvature); !e.empty()) throw std::invalid_argument("curvature method: " + e);
+  if (auto e = validate(r.depth); !e.empty()) throw std::invalid_argument("depth method: " + e);
+}
+
+// A one-region scene at (0, 0) covering the given image(s) at their own size.
+SceneSpec scene_from_maps(const TraceOptions& o) {
+  RegionSpec r;
+  r.name = "trace";
+  if (!o.normal_map.empty()) r.sources.normal_map = o.normal_map;
+  if (!o.depth_map.empty()) r.sources.depth_map = o.depth_map;
+  const RawImage first = read_image(!o.normal_map.empty() ? o.normal_map : o.depth_map);
+  r.rect = {0, 0, first.width, first.height};
+  r.sources.normal_options.green = o.normal_green == "directx" ? GreenConvention::directx : GreenConvention::opengl;
+  r.sources.normal_options.encoding = o.normal_encoding == "unorm"    ? NormalEncoding::unorm
+                                      : o.normal_encoding == "signed" ? NormalEncoding::signed_values
+                                                                      : NormalEncoding::automatic;
+  r.sources.depth_options.depth_zero = o.depth_zero.value_or(0.0);
+  r.sources.depth_options.relief_px = o.relief_px.value_or(100.0);
+  r.method = o.depth_map.empty() || !o.normal_map.empty() ? MethodKind::curvature : MethodKind::depth;
+  SceneSpec spec;
+  spec.file = !o.normal_map.empty() ? o.normal_map : o.depth_map;
+  spec.regions.push_back(r);
+  return spec;
+}
+
+// A target built in memory from its exact analytic fields (no files).
+Scene scene_from_target(const TraceOptions& o) {
+  for (const TargetSpec& t : all_targets()) {
+    if (t.name() != o.target) continue;
+    RegionSpec r;
+    apply_overrides(o, r);
+    Region region;
+    region.name = t.name();
+    region.rect = {0, 0, t.size, t.size};
+    region.method = make_method(r);
+    if (region.method->needs().gradient) region.fields.gradient = target_gradient_field(t);
+    if (region.method->needs().depth) region.fields.depth = target_depth_field(t);
+    std::vector<Region> regions;
+    regions.push_back(std::move(region));
+    return Scene(std::move(regions));
+  }
+  throw std::invalid_argument(fmt::format("no target named '{}' (see `pseudohaptic targets`)", o.target));
+}
+
+Scene build_scene(const TraceOptions& o) {
+  const int sources = !o.scene_file.empty() + !o.target.empty() + (!o.normal_map.empty() || !o.depth_map.empty());
+  if (sources != 1) throw std::invalid_argument("give exactly one of --scene, --target, or --normal-map/--depth-map");
+  if (!o.target.empty()) return scene_from_target(o);
+  SceneSpec spec = !o.scene_file.empty() ? parse_scene_file(o.scene_file) : scene_from_maps(o);
+  if (spec.regions.empty()) throw std::invalid_argument(fmt::format("{}: the scene has no region", spec.file.string()));
+  for (RegionSpec& r : spec.regions) apply_overrides(o, r);
+  return load_scene(spec);
+}
+
+Vec2 point(const std::vector<double>& v, Vec2 fallback) { return v.size() == 2 ? Vec2{v[0], v[1]} : fallback; }
+
+void append_number(fmt::memory_buffer& out, double v) {
+  if (std::isfinite(v)) fmt::format_to(std::back_inserter(out), "{:.6g}", v);
+}
+
+int run_trace(const TraceOptions& o) {
+  const Scene scene = build_scene(o);
+  const Rect first = scene.regions().front().rect;
+  StrokeSpec stroke;
+  const double mid_y = first.y + first.h / 2.0;
+  stroke.from = point(o.from, {static_cast<double>(first.x), mid_y});
+  stroke.to = point(o.to, {static_cast<double>(first.x + first.w), mid_y});
+  if (o.step && o.speed) throw std::invalid_argument("give --step or --speed, not both");
+  stroke.motor_step_px = o.step ? *o.step : o.speed ? *o.speed / o.rate : 1.0;
+
+  std::FILE* file = o.output == "-" ? stdout : std::fopen(o.output.c_str(), "w");
+  if (file == nullptr) throw std::runtime_error(fmt::format("{}: cannot open for writing", o.output));
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> closer(file == stdout ? nullptr : file, &std::fclose);
+
+  fmt::memory_buffer out;
+  fmt::format_to(std::back_inserter(out),
+                 "frame,x,y,texel_x,texel_y,cos_alpha,delta_beta_deg,kmax,kmin,dh,cd,region\n");
+  auto flush = [&] {
+    std::fwrite(out.data(), 1, out.size(), file);
+    out.clear();
+  };
+  const StrokeResult result = run_stroke(scene, stroke, [&](std::size_t frame, const StepRecord& s) {
+    if (!s.entered && frame != 0) return;  // one row per texel step (and the texel the stroke starts in)
+    fmt::format_to(std::back_inserter(out), "{},{:.6f},{:.6f},{},{},", frame, s.entry.x, s.entry.y, s.texel.x,
+                   s.texel.y);
+    for (double v : {s.detail.cos_alpha, s.detail.delta_beta_deg, s.detail.kmax, s.detail.kmin, s.detail.dh}) {
+      append_number(out, v);
+      out.push_back(',');
+    }
+    fmt::format_to(std::back_inserter(out), "{:.6g},{}\n", s.cd, s.region != nullptr ? s.region->name : "");
+    if (out.size() > (1 << 16)) flush();
+  });
+  flush();
+  if (std::fflush(file) != 0) throw std::runtime_error(fmt::format("{}: write failed", o.output));
+  fmt::print(stderr, "{} frames, cursor ended at ({:.3f}, {:.3f}), C/D range [{:.4g}, {:.4g}]{}\n", result.frames,
+             result.end.position.x, result.end.position.y, result.cd_min, result.cd_max,
+             result.reached ? "" : " (stopped before the end point)");
+  return 0;
+}
+
+}  // namespace
+
+Run add_trace_command(CLI::App& app) {
+  auto o = std::make_shared<TraceOptions>();
+  app.description(
+      "Move the cursor along a straight stroke across a texture and write CSV, one row per texel step:\n"
+      "frame,x,y,texel_x,texel_y,cos_alpha,delta_beta_deg,kmax,kmin,dh,cd,region\n"
+      "(x, y: where the cursor entered the texel, screen px; empty cells: quantities the method has not).");
+  auto* src = app.add_option_group("texture", "What to trace across (exactly one)");
+  src->add_option("--scene", o->scene_file, "Scene file (TOML); the stroke defaults to the first region");
+  src->add_option("--target", o->target, "One of the 24 targets by name (e.g. bump-gaussian-h1-r200), exact fields");
+  src->add_option("--normal-map", o->normal_map, "Normal map image (PNG, TIFF, EXR); region at (0,0), image size");
+  src->add_option("--depth-map", o->depth_map, "Depth map image (one channel); with --normal-map too, both are used");
+  app.add_option("--normal-green", o->normal_green, "Green channel convention of the normal map")
+      ->check(CLI::IsMember({"opengl", "directx"}))
+      ->capture_default_str();
+  app.add_option("--normal-encoding", o->normal_encoding, "auto: unorm for integer images, signed for float ones")
+      ->check(CLI::IsMember({"auto", "unorm", "signed"}))
+      ->capture_default_str();
+  app.add_option("--depth-zero", o->depth_zero, "Depth map value of height 0 (default 0)");
+  app.add_option("--relief-px", o->relief_px, "Screen px of height per unit of depth map value (default 100)");
+  app.add_option("--method", o->method, "C/D method for every region (default: the scene's, else curvature)")
+      ->check(CLI::IsMember({"curvature", "depth"}));
+  app.add_option("--kmax-prime", o->kmax_prime, "Curvature: k'max, largest C/D when delta-beta = 0 (default 4)");
+  app.add_option("--kmin-prime", o->kmin_prime, "Curvature: k'min, 1 / smallest C/D when delta-beta = 0 (default 1.5)");
+  app.add_option("--kmax-limits", o->kmax_limits, "Curvature: LO,HI limits of kmax (default 1,30)")
+      ->delimiter(',')
+      ->expected(2);
+  app.add_option("--kmin-limits", o->kmin_limits, "Curvature: LO,HI limits of kmin (default 1,5)")
+      ->delimiter(',')
+      ->expected(2);
+  app.add_option("--delta-beta-sign", o->delta_beta_sign,
+                 "Curvature: 1 = Eq. 1 as printed (default), -1 = the paper's prose reading");
+  app.add_option("--gain", o->gain, "Depth: C/D change per px of height change per px (default 3)");
+  app.add_option("--depth-kmax", o->depth_kmax, "Depth: largest C/D (default 4)");
+  app.add_option("--depth-kmin", o->depth_kmin, "Depth: 1 / smallest C/D (default 1.5)");
+  app.add_option("--from", o->from, "X,Y start of the stroke, screen px (default: left edge, middle height)")
+      ->delimiter(',')
+      ->expected(2);
+  app.add_option("--to", o->to, "X,Y end of the stroke (default: right edge, middle height)")
+      ->delimiter(',')
+      ->expected(2);
+  app.add_option("--step", o->step, "Motor travel per frame, px at C/D 1 (default 1)");
+  app.add_option("--speed", o->speed, "Hand speed, px/s at C/D 1; the step is speed / rate");
+  app.add_option("--rate", o->rate, "Frames per second with --speed")->capture_default_str();
+  app.add_option("-o,--output", o->output, "CSV file, - for standard output")->capture_default_str();
+  return [o] { return run_trace(*o); };
+}
+
+}  // namespace ph::tools

@@ -1,0 +1,16 @@
+// Subcommands of the `pseudohaptic` tool. Each registers its options on the app and returns the function
+// that runs it once CLI11 has parsed the command line.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace ph::tools {
+
+using Run = std::function<int()>;
+
+Run add_targets_command(CLI::App& app);
+Run add_trace_command(CLI::App& app);
+Run add_demo_command(CLI::App& app);
+
+}  // namespace ph::tools

@@ -1,0 +1,43 @@
+// pseudohaptic: the command-line tool for researchers and for checking scenes.
+#include <fmt/core.h>
+
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <map>
+
+#include "tools/commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "pseudohaptic: pseudo-haptic textures for an ordinary mouse.\n"
+      "Tools to make test targets, trace the cursor across a texture and compare the methods."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "pseudohaptic 0.1.0");
+
+  std::map<CLI::App*, ph::tools::Run> runs;
+  auto add = [&](const char* name, const char* help, ph::tools::Run (*setup)(CLI::App&)) {
+    CLI::App* sub = app.add_subcommand(name, help);
+    runs[sub] = setup(*sub);
+  };
+  add("targets", "Write the 24 targets of the curvature paper (normal maps, depth maps, scene files)",
+      ph::tools::add_targets_command);
+  add("trace", "Move the cursor along a straight stroke across a texture and write one CSV row per texel step",
+      ph::tools::add_trace_command);
+  add("demo", "Print the C/D-ratio range of both methods on each of the 24 targets (the paper's Fig. 5 in numbers)",
+      ph::tools::add_demo_command);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    for (const auto& [sub, run] : runs) {
+      if (sub->parsed()) return run();
+    }
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "pseudohaptic: {}\n", e.what());
+    return 1;
+  }
+  return 1;
+}
