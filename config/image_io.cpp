@@ -91,6 +91,8 @@ RawImage read_image(const std::filesystem::path& path, const ImageLimits& limits
   image.height = spec.height;
   image.channels = spec.nchannels;
   image.is_float = is_float_type(spec.format);
+  if (spec.format == OIIO::TypeDesc::UINT8) image.code_max = 255;
+  if (spec.format == OIIO::TypeDesc::UINT16) image.code_max = 65535;
   image.pixels.resize(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height) *
                       static_cast<std::size_t>(spec.nchannels));
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {

@@ -88,6 +88,16 @@ const toml::table* get_table(const Reporter& rep, const toml::table& t, std::str
   rep.fail(node, fmt::format("{}{}", where, key), "must be a table");
 }
 
+// Checks one parameter where it is written, so that the error names its line and key.
+template <typename Check>
+void check_key(const Reporter& rep, const toml::table& t, std::string_view key, std::string_view where, Check ok,
+               std::string_view allowed) {
+  if (t.get(key) != nullptr && !ok()) rep.fail(t.get(key), fmt::format("{}{}", where, key), allowed);
+}
+
+bool positive_finite(double v) { return std::isfinite(v) && v > 0.0; }
+bool limits_ok(double lo, double hi) { return std::isfinite(lo) && std::isfinite(hi) && lo >= 1.0 && lo <= hi; }
+
 CurvatureParams parse_curvature(const Reporter& rep, const toml::table& t, std::string_view where) {
   reject_unknown_keys(rep, t, {"kmax_prime", "kmin_prime", "kmax_limits", "kmin_limits", "delta_beta_sign"}, where);
   CurvatureParams p;
@@ -96,6 +106,18 @@ CurvatureParams parse_curvature(const Reporter& rep, const toml::table& t, std::
   get_limits(rep, t, "kmax_limits", where, p.kmax_lo, p.kmax_hi);
   get_limits(rep, t, "kmin_limits", where, p.kmin_lo, p.kmin_hi);
   p.delta_beta_sign = get_number(rep, t, "delta_beta_sign", where, p.delta_beta_sign);
+  check_key(
+      rep, t, "kmax_prime", where, [&] { return positive_finite(p.kmax_prime); }, "must be a finite number > 0");
+  check_key(
+      rep, t, "kmin_prime", where, [&] { return positive_finite(p.kmin_prime); }, "must be a finite number > 0");
+  const char* limits = "must be [lower, upper] with 1 <= lower <= upper (Eq. 2 needs k >= 1)";
+  check_key(
+      rep, t, "kmax_limits", where, [&] { return limits_ok(p.kmax_lo, p.kmax_hi); }, limits);
+  check_key(
+      rep, t, "kmin_limits", where, [&] { return limits_ok(p.kmin_lo, p.kmin_hi); }, limits);
+  check_key(
+      rep, t, "delta_beta_sign", where, [&] { return p.delta_beta_sign == 1.0 || p.delta_beta_sign == -1.0; },
+      "must be 1 or -1 (1: Eq. 1 as printed; -1: reversed)");
   if (auto error = validate(p); !error.empty()) rep.fail(&t, where.substr(0, where.size() - 1), error);
   return p;
 }
@@ -106,6 +128,12 @@ DepthParams parse_depth(const Reporter& rep, const toml::table& t, std::string_v
   p.gain = get_number(rep, t, "gain", where, p.gain);
   p.kmax = get_number(rep, t, "kmax", where, p.kmax);
   p.kmin = get_number(rep, t, "kmin", where, p.kmin);
+  check_key(
+      rep, t, "gain", where, [&] { return std::isfinite(p.gain); }, "must be a finite number");
+  check_key(
+      rep, t, "kmax", where, [&] { return std::isfinite(p.kmax) && p.kmax >= 1.0; }, "must be a finite number >= 1");
+  check_key(
+      rep, t, "kmin", where, [&] { return std::isfinite(p.kmin) && p.kmin >= 1.0; }, "must be a finite number >= 1");
   if (auto error = validate(p); !error.empty()) rep.fail(&t, where.substr(0, where.size() - 1), error);
   return p;
 }

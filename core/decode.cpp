@@ -61,10 +61,14 @@ bool stores_unorm(const RawImage& image, NormalEncoding encoding) {
 }
 
 // The screen-frame unit normal of one texel, or nothing when the texel is invalid.
-std::optional<Normal> decode_normal_texel(const float* rgb, bool unorm, GreenConvention green) {
+// `zero_band`: tangent components this close to 0 are quantisation of 0 (see decode.hpp).
+std::optional<Normal> decode_normal_texel(const float* rgb, bool unorm, double zero_band, GreenConvention green) {
   std::array<double, 3> c{rgb[0], rgb[1], rgb[2]};
   if (unorm) {
     for (double& v : c) v = 2.0 * v - 1.0;
+    for (int i = 0; i < 2; ++i) {
+      if (std::abs(c[i]) <= zero_band) c[i] = 0.0;
+    }
   }
   // Tangent space has +green toward the top of the image; screen y points down.
   const double x = c[0];
@@ -225,11 +229,14 @@ NormalImage decode_normals(const RawImage& image, const NormalDecodeOptions& opt
   require_normal_channels(image);
   require_consistent(image);
   const bool unorm = stores_unorm(image, options.encoding);
+  // One code is 2/cmax in n; half of it plus float slack catches the two codes around 0.
+  const double zero_band = image.code_max > 0 ? 1.0 / image.code_max + 1e-7 : 0.0;
   NormalImage normals(image.width, image.height);
   std::vector<std::uint8_t> valid(normals.values.size(), 1);
   std::size_t invalid = 0;
   for (std::size_t i = 0; i < normals.values.size(); ++i) {
-    const std::optional<Normal> n = decode_normal_texel(&image.pixels[i * image.channels], unorm, options.green);
+    const std::optional<Normal> n =
+        decode_normal_texel(&image.pixels[i * image.channels], unorm, zero_band, options.green);
     if (n) {
       normals.values[i] = *n;
     } else {

@@ -17,8 +17,9 @@ struct RawImage {
   std::int32_t width = 0;
   std::int32_t height = 0;
   std::int32_t channels = 0;
-  bool is_float = false;      // float/half pixels hold signed values as stored
-  std::vector<float> pixels;  // row-major, channels interleaved; integer formats scaled to [0, 1]
+  bool is_float = false;       // float/half pixels hold signed values as stored
+  std::vector<float> pixels;   // row-major, channels interleaved; integer formats scaled to [0, 1]
+  std::uint32_t code_max = 0;  // largest code of an integer format (255, 65535); 0 when unknown or float
 };
 
 // Raised for an image or field that cannot be used; the message names the file when one is known.
@@ -46,8 +47,10 @@ struct DecodeReport {
   std::size_t invalid_texels = 0;
 };
 
-// Unit normals in the screen frame. Invalid texels (length < 0.5, n_z <= 0, non-finite) take the value of
-// the nearest valid texel, or flat when there is none. Throws FieldError on a wrong channel count.
+// Unit normals in the screen frame. A unorm image cannot store 0 (2c/cmax - 1 is +-1/cmax around it), so
+// tangent components within one code of 0 are taken as 0: a flat area of an 8- or 16-bit map is exactly
+// flat (C/D exactly 1) rather than tilted by 1/cmax. Invalid texels (length < 0.5, n_z <= 0, non-finite) take the value
+// of the nearest valid texel, or flat when there is none. Throws FieldError on a wrong channel count.
 NormalImage decode_normals(const RawImage& image, const NormalDecodeOptions& options, DecodeReport& report);
 
 // Heights in screen px, h = (v - depth_zero) * relief_px. Non-finite texels are repaired like normals.

@@ -395,3 +395,31 @@ TEST(Resample, RefusesEmptySizes) {
 
 }  // namespace
 }  // namespace ph
+
+namespace ph {
+namespace {
+
+// A unorm map cannot store 0: the codes around it decode to +-1/cmax. They must come out exactly flat,
+// or every flat area of an 8-bit map would be a 0.4% slope with C/D != 1.
+TEST(DecodeNormals, QuantisedZeroIsExactlyFlat) {
+  for (std::uint32_t cmax : {255u, 65535u}) {
+    const float below = static_cast<float>((cmax / 2) / static_cast<double>(cmax));
+    const float above = static_cast<float>((cmax / 2 + 1) / static_cast<double>(cmax));
+    RawImage image{2, 1, 3, false, {below, above, 1.0f, above, below, 1.0f}, cmax};
+    DecodeReport report;
+    const NormalImage n = decode_normals(image, {}, report);
+    for (const Normal& v : n.values) {
+      EXPECT_EQ(v.x, 0.0f) << cmax;
+      EXPECT_EQ(v.y, 0.0f) << cmax;
+      EXPECT_EQ(v.z, 1.0f) << cmax;
+    }
+    // One code further from 0 is a real slope and stays.
+    const float next = static_cast<float>((cmax / 2 + 2) / static_cast<double>(cmax));
+    image.pixels = {next, above, 1.0f, above, above, 1.0f};
+    const NormalImage m = decode_normals(image, {}, report);
+    EXPECT_GT(m.values[0].x, 0.0f);
+  }
+}
+
+}  // namespace
+}  // namespace ph

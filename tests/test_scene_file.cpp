@@ -1,0 +1,480 @@
+// Scene files (config/scene_file): parsing of good scenes, an error for every kind of mistake that names the
+// file, the line and the key and says what is allowed, and loading the regions' images.
+#include "config/scene_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "config/target_files.hpp"
+#include "core/targets.hpp"
+
+namespace ph {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A fresh directory for one test, removed with everything in it afterwards.
+class TempDir {
+ public:
+  TempDir() {
+    static std::atomic<int> counter{0};
+    const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
+    path_ =
+        fs::temp_directory_path() / ("ph_test_scene_file_" + std::to_string(stamp) + "_" + std::to_string(counter++));
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  const fs::path& path() const { return path_; }
+  fs::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  fs::path path_;
+};
+
+void write_text(const fs::path& path, std::string_view text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+}
+
+bool contains(const std::string& text, std::string_view part) { return text.find(part) != std::string::npos; }
+
+// Where scene texts of the parsing tests come from: a relative folder, so that relative paths stay relative.
+const fs::path kOrigin = fs::path("scenes") / "hills.toml";
+
+// The message of the ConfigError that parsing `text` throws, or a test failure.
+std::string parse_error(std::string_view text, const fs::path& origin = kOrigin) {
+  try {
+    parse_scene_text(text, origin);
+  } catch (const ConfigError& error) {
+    return error.what();
+  }
+  ADD_FAILURE() << "no ConfigError for:\n" << text;
+  return {};
+}
+
+// The error names the origin and the line as "FILE:LINE:", the key, and every fragment of what is allowed.
+void expect_error(std::string_view text, int line, std::string_view key, std::initializer_list<std::string_view> says) {
+  SCOPED_TRACE(std::string(text));
+  const std::string message = parse_error(text);
+  const std::string where = kOrigin.string() + ":" + std::to_string(line) + ":";
+  EXPECT_EQ(message.rfind(where, 0), 0u) << "expected it to start with '" << where << "': " << message;
+  EXPECT_TRUE(contains(message, key)) << "expected the key '" << key << "': " << message;
+  for (std::string_view part : says) EXPECT_TRUE(contains(message, part)) << "expected '" << part << "': " << message;
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Good scenes
+
+constexpr std::string_view kFullScene = R"(# every key
+[[region]]
+name = "left"
+x = 10
+y = -20
+width = 300
+height = 200
+method = "curvature"
+normal_map = "maps/left.normal.png"
+normal_green = "directx"
+normal_encoding = "signed"
+depth_map = "/data/left.depth.exr"
+depth_zero = 0.5
+relief_px = 200
+
+[region.curvature]
+kmax_prime = 5.5
+kmin_prime = 2
+kmax_limits = [1.5, 20]
+kmin_limits = [1, 4.5]
+delta_beta_sign = -1
+
+[region.depth]
+gain = 2.5
+kmax = 3
+kmin = 2.0
+
+[[region]]
+width = 64
+height = 32
+method = "depth"
+depth_map = "d.png"
+
+[[region]]
+width = 1
+height = 16384
+normal_map = "../up.png"
+normal_encoding = "unorm"
+curvature = { kmax_prime = 3.0 }
+)";
+
+TEST(SceneFileParse, ReadsEveryKey) {
+  const SceneSpec spec = parse_scene_text(kFullScene, kOrigin);
+  EXPECT_EQ(spec.file, kOrigin);
+  ASSERT_EQ(spec.regions.size(), 3u);
+
+  const RegionSpec& r = spec.regions[0];
+  EXPECT_EQ(r.name, "left");
+  EXPECT_EQ(r.line, 2);
+  EXPECT_EQ(r.rect.x, 10);
+  EXPECT_EQ(r.rect.y, -20);
+  EXPECT_EQ(r.rect.w, 300);
+  EXPECT_EQ(r.rect.h, 200);
+  EXPECT_EQ(r.method, MethodKind::curvature);
+  ASSERT_TRUE(r.sources.normal_map);
+  EXPECT_EQ(*r.sources.normal_map, fs::path("scenes") / "maps/left.normal.png");  // relative: against the folder
+  ASSERT_TRUE(r.sources.depth_map);
+  EXPECT_EQ(*r.sources.depth_map, fs::path("/data/left.depth.exr"));  // absolute: kept
+  EXPECT_EQ(r.sources.normal_options.green, GreenConvention::directx);
+  EXPECT_EQ(r.sources.normal_options.encoding, NormalEncoding::signed_values);
+  EXPECT_DOUBLE_EQ(r.sources.depth_options.depth_zero, 0.5);
+  EXPECT_DOUBLE_EQ(r.sources.depth_options.relief_px, 200.0);  // an integer where a number is wanted
+  EXPECT_DOUBLE_EQ(r.curvature.kmax_prime, 5.5);
+  EXPECT_DOUBLE_EQ(r.curvature.kmin_prime, 2.0);
+  EXPECT_DOUBLE_EQ(r.curvature.kmax_lo, 1.5);
+  EXPECT_DOUBLE_EQ(r.curvature.kmax_hi, 20.0);
+  EXPECT_DOUBLE_EQ(r.curvature.kmin_lo, 1.0);
+  EXPECT_DOUBLE_EQ(r.curvature.kmin_hi, 4.5);
+  EXPECT_DOUBLE_EQ(r.curvature.delta_beta_sign, -1.0);
+  EXPECT_DOUBLE_EQ(r.depth.gain, 2.5);
+  EXPECT_DOUBLE_EQ(r.depth.kmax, 3.0);
+  EXPECT_DOUBLE_EQ(r.depth.kmin, 2.0);
+}
+
+TEST(SceneFileParse, FillsDefaults) {
+  const SceneSpec spec = parse_scene_text(kFullScene, kOrigin);
+  ASSERT_EQ(spec.regions.size(), 3u);
+  const RegionSpec& r = spec.regions[1];
+  const CurvatureParams curvature;
+  const DepthParams depth;
+  EXPECT_EQ(r.name, "region 1");
+  EXPECT_EQ(r.line, 28);
+  EXPECT_EQ(r.rect.x, 0);
+  EXPECT_EQ(r.rect.y, 0);
+  EXPECT_EQ(r.rect.w, 64);
+  EXPECT_EQ(r.rect.h, 32);
+  EXPECT_EQ(r.method, MethodKind::depth);
+  EXPECT_FALSE(r.sources.normal_map);
+  ASSERT_TRUE(r.sources.depth_map);
+  EXPECT_EQ(*r.sources.depth_map, fs::path("scenes") / "d.png");
+  EXPECT_EQ(r.sources.normal_options.green, GreenConvention::opengl);
+  EXPECT_EQ(r.sources.normal_options.encoding, NormalEncoding::automatic);
+  EXPECT_DOUBLE_EQ(r.sources.depth_options.depth_zero, 0.0);
+  EXPECT_DOUBLE_EQ(r.sources.depth_options.relief_px, 100.0);
+  EXPECT_EQ(r.curvature.kmax_prime, curvature.kmax_prime);
+  EXPECT_EQ(r.curvature.kmin_prime, curvature.kmin_prime);
+  EXPECT_EQ(r.curvature.kmax_lo, curvature.kmax_lo);
+  EXPECT_EQ(r.curvature.kmax_hi, curvature.kmax_hi);
+  EXPECT_EQ(r.curvature.kmin_lo, curvature.kmin_lo);
+  EXPECT_EQ(r.curvature.kmin_hi, curvature.kmin_hi);
+  EXPECT_EQ(r.curvature.delta_beta_sign, 1.0);
+  EXPECT_EQ(r.depth.gain, depth.gain);
+  EXPECT_EQ(r.depth.kmax, depth.kmax);
+  EXPECT_EQ(r.depth.kmin, depth.kmin);
+
+  // The third: the largest side, a path out of the folder, an inline curvature table with one key.
+  const RegionSpec& t = spec.regions[2];
+  EXPECT_EQ(t.name, "region 2");
+  EXPECT_EQ(t.rect.h, 16384);
+  EXPECT_EQ(t.method, MethodKind::curvature);
+  ASSERT_TRUE(t.sources.normal_map);
+  EXPECT_EQ(*t.sources.normal_map, fs::path("scenes") / "../up.png");
+  EXPECT_EQ(t.sources.normal_options.encoding, NormalEncoding::unorm);
+  EXPECT_DOUBLE_EQ(t.curvature.kmax_prime, 3.0);
+  EXPECT_EQ(t.curvature.kmin_prime, curvature.kmin_prime);
+}
+
+TEST(SceneFileParse, EmptySceneHasNoRegions) {
+  EXPECT_TRUE(parse_scene_text("", kOrigin).regions.empty());
+  EXPECT_TRUE(parse_scene_text("# nothing here\n", kOrigin).regions.empty());
+}
+
+TEST(SceneFileParse, PathsOfASceneWithoutFolderStayAsWritten) {
+  const SceneSpec spec = parse_scene_text("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n", "hills.toml");
+  ASSERT_EQ(spec.regions.size(), 1u);
+  EXPECT_EQ(*spec.regions[0].sources.normal_map, fs::path("n.png"));
+}
+
+TEST(SceneFileParse, MethodNamesAndMethods) {
+  EXPECT_EQ(parse_method_kind("curvature"), MethodKind::curvature);
+  EXPECT_EQ(parse_method_kind("depth"), MethodKind::depth);
+  EXPECT_FALSE(parse_method_kind("Depth"));
+  EXPECT_FALSE(parse_method_kind(""));
+  EXPECT_EQ(method_kind_name(MethodKind::curvature), "curvature");
+  EXPECT_EQ(method_kind_name(MethodKind::depth), "depth");
+
+  const SceneSpec spec = parse_scene_text(kFullScene, kOrigin);
+  const MethodPtr curvature = make_method(spec.regions[0]);
+  EXPECT_EQ(curvature->name(), "curvature");
+  EXPECT_DOUBLE_EQ(curvature->cd_upper_bound(), 20.0);     // kmax_limits upper
+  EXPECT_DOUBLE_EQ(curvature->cd_lower_bound(), 1 / 4.5);  // 1 / kmin_limits upper
+  RegionSpec as_depth = spec.regions[0];
+  as_depth.method = MethodKind::depth;
+  const MethodPtr depth = make_method(as_depth);
+  EXPECT_EQ(depth->name(), "depth");
+  EXPECT_DOUBLE_EQ(depth->cd_upper_bound(), 3.0);
+  EXPECT_DOUBLE_EQ(depth->cd_lower_bound(), 0.5);
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Errors: file, line, key, what is allowed
+
+TEST(SceneFileErrors, UnknownTopLevelKey) {
+  expect_error("title = \"hills\"\n[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n", 1, "title",
+               {"unknown key", "allowed: region"});
+  expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n[regions]\nx = 1\n", 5, "regions",
+               {"unknown key", "region"});
+}
+
+TEST(SceneFileErrors, UnknownRegionKeyListsTheAllowedOnes) {
+  expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n\n[[region]]\nwidth = 2\nwidht = 3\n", 8,
+               "region[1].widht",
+               {"unknown key", "name", "x", "y", "width", "height", "method", "normal_map", "normal_green",
+                "normal_encoding", "depth_map", "depth_zero", "relief_px", "curvature", "depth"});
+  expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n[region.curvature]\nkmax = 3\n", 6,
+               "region[0].curvature.kmax",
+               {"unknown key", "kmax_prime", "kmin_prime", "kmax_limits", "kmin_limits", "delta_beta_sign"});
+  expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\ndepth = { gain = 1, kmax_prime = 3 }\n", 5,
+               "region[0].depth.kmax_prime", {"unknown key", "gain", "kmax", "kmin"});
+}
+
+TEST(SceneFileErrors, UnknownMethod) {
+  expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\nmethod = \"height\"\n", 5,
+               "region[0].method", {"'height'", "curvature", "depth"});
+}
+
+TEST(SceneFileErrors, WrongTypes) {
+  const std::string head = "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n";  // 4 lines
+  expect_error(head + "name = 5\n", 5, "region[0].name", {"must be a string"});
+  expect_error(head + "x = 1.5\n", 5, "region[0].x", {"whole number"});
+  expect_error(head + "y = \"3\"\n", 5, "region[0].y", {"whole number"});
+  expect_error("[[region]]\nheight = 2\nnormal_map = \"n.png\"\nwidth = \"500\"\n", 4, "region[0].width",
+               {"whole number"});
+  expect_error(head + "method = 1\n", 5, "region[0].method", {"must be a string"});
+  expect_error(head + "depth_map = true\n", 5, "region[0].depth_map", {"must be a string"});
+  expect_error(head + "normal_green = [\"opengl\"]\n", 5, "region[0].normal_green", {"must be a string"});
+  expect_error(head + "depth_zero = \"half\"\n", 5, "region[0].depth_zero", {"must be a number"});
+  expect_error(head + "relief_px = true\n", 5, "region[0].relief_px", {"must be a number"});
+  expect_error(head + "curvature = 3\n", 5, "region[0].curvature", {"must be a table"});
+  expect_error(head + "depth = \"deep\"\n", 5, "region[0].depth", {"must be a table"});
+  expect_error(head + "[region.curvature]\nkmax_prime = \"big\"\n", 6, "region[0].curvature.kmax_prime",
+               {"must be a number"});
+  expect_error(head + "[region.depth]\ngain = [1]\n", 6, "region[0].depth.gain", {"must be a number"});
+}
+
+TEST(SceneFileErrors, MissingSize) {
+  expect_error("\n[[region]]\nheight = 2\nnormal_map = \"n.png\"\n", 2, "region[0].width", {"required"});
+  expect_error("[[region]]\nwidth = 2\nnormal_map = \"n.png\"\n", 1, "region[0].height", {"required"});
+}
+
+TEST(SceneFileErrors, SizeAndPositionOutOfRange) {
+  expect_error("[[region]]\nwidth = 0\nheight = 2\nnormal_map = \"n.png\"\n", 2, "region[0].width",
+               {"between 1 and 16384", "got 0"});
+  expect_error("[[region]]\nwidth = 100000\nheight = 2\nnormal_map = \"n.png\"\n", 2, "region[0].width",
+               {"between 1 and 16384", "got 100000"});
+  expect_error("[[region]]\nwidth = 2\nheight = -5\nnormal_map = \"n.png\"\n", 3, "region[0].height",
+               {"between 1 and 16384"});
+  expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\nx = 9999999999\n", 5, "region[0].x",
+               {"between"});
+}
+
+TEST(SceneFileErrors, BadNormalOptions) {
+  const std::string head = "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n";
+  expect_error(head + "normal_green = \"up\"\n", 5, "region[0].normal_green", {"\"opengl\"", "\"directx\""});
+  expect_error(head + "normal_encoding = \"float\"\n", 5, "region[0].normal_encoding",
+               {"\"auto\"", "\"unorm\"", "\"signed\""});
+}
+
+TEST(SceneFileErrors, NonFiniteDepthOptions) {
+  const std::string head = "[[region]]\nwidth = 2\nheight = 2\ndepth_map = \"d.png\"\n";
+  expect_error(head + "depth_zero = inf\n", 5, "region[0].depth_zero", {"finite"});
+  expect_error(head + "relief_px = nan\n", 5, "region[0].relief_px", {"finite"});
+}
+
+// Two regions, the bad limits on line 12, in the second region's [region.curvature] table (line 10).
+std::string limits_scene(std::string_view line12) {
+  return "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n\n"
+         "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n[region.curvature]\nkmax_prime = 3\n" +
+         std::string(line12) + "\n";
+}
+
+TEST(SceneFileErrors, LimitsNotAPair) {
+  expect_error(limits_scene("kmax_limits = 3"), 12, "region[1].curvature.kmax_limits", {"pair", "[lower, upper]"});
+  expect_error(limits_scene("kmax_limits = [1, 2, 3]"), 12, "region[1].curvature.kmax_limits", {"pair"});
+  expect_error(limits_scene("kmin_limits = [1]"), 12, "region[1].curvature.kmin_limits", {"pair"});
+  expect_error(limits_scene("kmin_limits = [\"1\", \"2\"]"), 12, "region[1].curvature.kmin_limits", {"pair"});
+}
+
+TEST(SceneFileErrors, LimitsLowerAboveUpper) {
+  expect_error(limits_scene("kmax_limits = [5, 2]"), 12, "region[1].curvature.kmax_limits", {"1 <= lower <= upper"});
+  expect_error(limits_scene("kmin_limits = [3.5, 3]"), 12, "region[1].curvature.kmin_limits", {"1 <= lower <= upper"});
+}
+
+TEST(SceneFileErrors, LimitsBelowOne) {
+  expect_error(limits_scene("kmax_limits = [0.5, 2]"), 12, "region[1].curvature.kmax_limits", {"1 <= lower"});
+  expect_error(limits_scene("kmin_limits = [0, 3]"), 12, "region[1].curvature.kmin_limits", {"1 <= lower"});
+}
+
+TEST(SceneFileErrors, BadMethodParameters) {
+  const std::string head = "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n";
+  expect_error(head + "[region.curvature]\ndelta_beta_sign = 0\n", 6, "region[0].curvature.delta_beta_sign",
+               {"1 or -1"});
+  expect_error(head + "[region.curvature]\ndelta_beta_sign = 0.5\n", 6, "region[0].curvature.delta_beta_sign",
+               {"1 or -1"});
+  expect_error(head + "[region.curvature]\nkmax_prime = -1\n", 6, "region[0].curvature.kmax_prime", {"> 0"});
+  expect_error(head + "[region.depth]\nkmin = 0.5\n", 6, "region[0].depth.kmin", {">= 1"});
+  expect_error(head + "depth = { kmax = 0.9 }\n", 5, "region[0].depth.kmax", {">= 1"});
+}
+
+TEST(SceneFileErrors, DepthMethodWithoutDepthMap) {
+  expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\nmethod = \"depth\"\n", 1,
+               "region[0].depth_map", {"depth method needs a depth_map"});
+}
+
+TEST(SceneFileErrors, RegionWithoutMap) {
+  expect_error("[[region]]\nwidth = 2\nheight = 2\n\n[[region]]\nwidth = 2\nheight = 2\n", 1, "region[0]",
+               {"normal_map", "depth_map"});
+}
+
+TEST(SceneFileErrors, TomlSyntaxErrorReportsTheLine) {
+  const std::string m1 = parse_error("[[region]]\nwidth = 2\nheight = = 2\n");
+  EXPECT_EQ(m1.rfind(kOrigin.string() + ":3:", 0), 0u) << m1;
+  const std::string m2 = parse_error("[[region]]\nwidth = 2\n\nname = \"open\nheight = 2\n");
+  EXPECT_EQ(m2.rfind(kOrigin.string() + ":4:", 0), 0u) << m2;
+  const std::string m3 = parse_error("[[region]]\nwidth = 2\nwidth = 3\n");  // a key given twice
+  EXPECT_EQ(m3.rfind(kOrigin.string() + ":3:", 0), 0u) << m3;
+}
+
+TEST(SceneFileErrors, RegionMustBeAnArrayOfTables) {
+  expect_error("[region]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n", 1, "region", {"[[region]]"});
+  expect_error("\nregion = 5\n", 2, "region", {"[[region]]"});
+  expect_error("region = [1, 2]\n", 1, "region", {"[[region]]"});
+  expect_error("region = [{ width = 2, height = 2, normal_map = \"n.png\" }, 3]\n", 1, "region", {"[[region]]"});
+}
+
+TEST(SceneFileErrors, MissingSceneFileIsNamed) {
+  TempDir dir;
+  const fs::path missing = dir / "nope.toml";
+  try {
+    parse_scene_file(missing);
+    ADD_FAILURE() << "no ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_TRUE(contains(e.what(), missing.string())) << e.what();
+  }
+}
+
+TEST(SceneFileErrors, ErrorsOfAFileNameTheFile) {
+  TempDir dir;
+  const fs::path file = dir / "bad.toml";
+  write_text(file, "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\nnormal_green = \"up\"\n");
+  try {
+    parse_scene_file(file);
+    ADD_FAILURE() << "no ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(file.string() + ":5:", 0), 0u) << e.what();
+  }
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Loading
+
+TEST(SceneFileLoad, MissingImageNamesSceneRegionAndImage) {
+  TempDir dir;
+  const fs::path file = dir / "scene.toml";
+  write_text(file,
+             "[[region]]\nname = \"lonely\"\nwidth = 20\nheight = 10\nnormal_map = \"maps/missing.normal.png\"\n\n"
+             "[[region]]\nname = \"deep\"\nwidth = 20\nheight = 10\nmethod = \"depth\"\nnormal_map = \"n.png\"\n"
+             "depth_map = \"gone.png\"\n");
+  SceneSpec spec = parse_scene_file(file);
+  ASSERT_EQ(spec.regions.size(), 2u);
+  for (int which = 0; which < 2; ++which) {
+    SceneSpec one = spec;
+    one.regions.erase(one.regions.begin() + (1 - which));
+    const std::string image = (which == 0 ? dir / "maps" / "missing.normal.png" : dir / "gone.png").string();
+    const std::string region = which == 0 ? "lonely" : "deep";
+    try {
+      load_scene(one);
+      ADD_FAILURE() << "no ConfigError";
+    } catch (const ConfigError& e) {
+      const std::string message = e.what();
+      EXPECT_TRUE(contains(message, file.string())) << message;
+      EXPECT_TRUE(contains(message, region)) << message;
+      EXPECT_TRUE(contains(message, image)) << message;
+    }
+  }
+}
+
+TEST(SceneFileLoad, TargetFilesRoundTrip) {
+  TempDir dir;
+  const std::vector<TargetSpec> targets = all_targets();
+  const std::vector<fs::path> scenes = write_target_files(dir.path(), targets);
+  ASSERT_EQ(scenes.size(), 24u);
+  for (std::size_t i = 0; i < targets.size(); ++i) {
+    const TargetSpec& target = targets[i];
+    SCOPED_TRACE(target.name());
+    const SceneSpec spec = parse_scene_file(scenes[i]);
+    ASSERT_EQ(spec.regions.size(), 1u);
+    EXPECT_EQ(spec.regions[0].name, target.name());
+    EXPECT_EQ(spec.regions[0].method, MethodKind::curvature);
+
+    SceneLoadReport report;
+    const Scene curvature = load_scene(spec, &report);
+    EXPECT_EQ(report.regions.size(), 1u);
+    ASSERT_EQ(curvature.regions().size(), 1u);
+    const Region& c = curvature.regions()[0];
+    EXPECT_EQ(c.rect.x, 0);
+    EXPECT_EQ(c.rect.y, 0);
+    EXPECT_EQ(c.rect.w, 500);
+    EXPECT_EQ(c.rect.h, 500);
+    EXPECT_EQ(c.method->name(), "curvature");
+    ASSERT_TRUE(c.fields.gradient);
+    EXPECT_FALSE(c.fields.depth);
+    EXPECT_EQ(c.fields.gradient->width, 500);
+    EXPECT_EQ(c.fields.gradient->height, 500);
+
+    SceneSpec as_depth = spec;
+    as_depth.regions[0].method = MethodKind::depth;
+    const Scene depth = load_scene(as_depth);
+    ASSERT_EQ(depth.regions().size(), 1u);
+    const Region& d = depth.regions()[0];
+    EXPECT_EQ(d.rect.w, 500);
+    EXPECT_EQ(d.rect.h, 500);
+    EXPECT_EQ(d.method->name(), "depth");
+    ASSERT_TRUE(d.fields.depth);
+    EXPECT_FALSE(d.fields.gradient);
+    EXPECT_EQ(d.fields.depth->width, 500);
+    EXPECT_EQ(d.fields.depth->height, 500);
+
+    // The values are the target's, up to 16-bit quantisation, along the middle row and column.
+    const GradientField exact_gradient = target_gradient_field(target);
+    const DepthField exact_depth = target_depth_field(target);
+    int bad_gradient = 0, bad_depth = 0;
+    for (std::int32_t k = 0; k < 500; ++k) {
+      for (const Texel t : {Texel{k, 250}, Texel{250, k}, Texel{k, k}}) {
+        const Gradient g = c.fields.gradient->at(t.x, t.y);
+        const Gradient e = exact_gradient.at(t.x, t.y);
+        const double scale = 1.0 + e.x * e.x + e.y * e.y;
+        if (std::abs(g.x - e.x) > 2e-3 * scale * scale || std::abs(g.y - e.y) > 2e-3 * scale * scale) ++bad_gradient;
+        if (std::abs(d.fields.depth->at(t.x, t.y) - exact_depth.at(t.x, t.y)) > 0.01) ++bad_depth;
+      }
+    }
+    EXPECT_EQ(bad_gradient, 0);
+    EXPECT_EQ(bad_depth, 0);
+  }
+}
+
+}  // namespace
+}  // namespace ph
