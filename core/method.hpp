@@ -2,6 +2,7 @@
 // nothing else about a method, so new methods plug in without touching it (STYLE.md, libinput filters).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string_view>
 
@@ -28,9 +29,14 @@ struct StepDetail {
 };
 StepDetail empty_step_detail();
 
+// The built-in methods, which the traversal calls without a virtual call per texel. Any other method
+// (BuiltinMethod::none) goes through the virtual interface, unchanged.
+enum class BuiltinMethod : std::uint8_t { none, curvature, depth };
+
 class Method {
  public:
   virtual ~Method() = default;
+  BuiltinMethod builtin() const { return builtin_; }
 
   virtual std::string_view name() const = 0;
   virtual FieldNeeds needs() const = 0;
@@ -46,6 +52,12 @@ class Method {
   // The range every value of cd() lies in.
   virtual double cd_lower_bound() const = 0;
   virtual double cd_upper_bound() const = 0;
+
+ protected:
+  explicit Method(BuiltinMethod builtin = BuiltinMethod::none) : builtin_(builtin) {}
+
+ private:
+  BuiltinMethod builtin_;
 };
 
 using MethodPtr = std::shared_ptr<const Method>;

@@ -41,43 +41,12 @@ double projected_normal_x(Normal n, Vec2 m) {
   return denom > 0.0 ? s / denom : 0.0;
 }
 
-double slope_angle(Gradient g, Vec2 m) { return std::atan(g.x * m.x + g.y * m.y); }
-
-double curvature_cd(const CurvatureParams& p, double a1, double theta1, double a2, double theta2, StepDetail* detail) {
-  // Eq. 1: cos(alpha) is the mean of the projected normals; delta-beta = acos(a1) - acos(a2) = theta1 - theta2.
-  const double cos_alpha = 0.5 * (a1 + a2);
-  const double delta_beta = p.delta_beta_sign * (theta1 - theta2) * (180.0 / std::numbers::pi);
-  // Eq. 3 with the limits that keep Eq. 2 meaningful (k >= 1).
-  const double kmax = std::clamp(p.kmax_prime * (1.0 + delta_beta), p.kmax_lo, p.kmax_hi);
-  const double kmin = std::clamp(p.kmin_prime * (1.0 - delta_beta), p.kmin_lo, p.kmin_hi);
-  // Eq. 2: cos(alpha) < 0 is uphill (the projected normal leans against the motion).
-  double cd = 1.0;
-  if (cos_alpha > 0.0) {
-    cd = 1.0 - cos_alpha * (1.0 - 1.0 / kmin);
-  } else if (cos_alpha < 0.0) {
-    cd = 1.0 - cos_alpha * (kmax - 1.0);
-  }
-  if (detail != nullptr) {
-    *detail = {cos_alpha, delta_beta, kmax, kmin, std::numeric_limits<double>::quiet_NaN()};
-  }
-  return cd;
+double slope_angle(Gradient g, Vec2 m) {
+  return fast_atan(static_cast<double>(g.x) * m.x + static_cast<double>(g.y) * m.y);
 }
 
-CurvatureMethod::CurvatureMethod(const CurvatureParams& params) : params_(params) {
+CurvatureMethod::CurvatureMethod(const CurvatureParams& params) : Method(BuiltinMethod::curvature), params_(params) {
   if (auto error = validate(params); !error.empty()) throw std::invalid_argument("curvature method: " + error);
-}
-
-TexelSample CurvatureMethod::sample(const RegionFields* fields, Texel local, Vec2 m) const {
-  if (fields == nullptr || !fields->gradient) return {0.0, 0.0};
-  const Gradient g = fields->gradient->at(local.x, local.y);
-  // With n = (-g, 1)/|.|, n''_x = -t / sqrt(1 + t^2) and theta = atan(t), t = g . m the slope along m.
-  const double t = static_cast<double>(g.x) * m.x + static_cast<double>(g.y) * m.y;
-  return {-t / std::sqrt(1.0 + t * t), std::atan(t)};
-}
-
-double CurvatureMethod::cd(const TexelSample& from, const TexelSample& to, double /*step_px*/,
-                           StepDetail* detail) const {
-  return curvature_cd(params_, from.v0, from.v1, to.v0, to.v1, detail);
 }
 
 }  // namespace ph

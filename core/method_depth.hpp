@@ -1,6 +1,9 @@
 // Depth-based C/D ratio of Lécuyer et al. 2004, as the curvature paper describes it (ALGORITHMS.md section 4).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <string>
 
 #include "core/method.hpp"
@@ -16,7 +19,17 @@ struct DepthParams {
 std::string validate(const DepthParams& params);
 
 // CD = clamp(1 + gain * dh / step, 1 / kmin, kmax). detail may be null.
-double depth_cd(const DepthParams& params, double h1, double h2, double step_px, StepDetail* detail);
+inline double depth_cd(const DepthParams& p, double h1, double h2, double step_px, StepDetail* detail) {
+  const double dh = h2 - h1;
+  const double slope = step_px > 0.0 ? dh / step_px : 0.0;
+  double cd = std::clamp(1.0 + p.gain * slope, 1.0 / p.kmin, p.kmax);
+  if (!std::isfinite(cd)) cd = 1.0;  // only for non-finite heights, which scenes never hold
+  if (detail != nullptr) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    *detail = {nan, nan, nan, nan, dh};
+  }
+  return cd;
+}
 
 class DepthMethod final : public Method {
  public:
@@ -24,8 +37,14 @@ class DepthMethod final : public Method {
 
   std::string_view name() const override { return "depth"; }
   FieldNeeds needs() const override { return {.gradient = false, .depth = true}; }
-  TexelSample sample(const RegionFields* fields, Texel local, Vec2 direction) const override;
-  double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override;
+  // Inline: the traversal calls these directly on the final class (core/traversal.cpp).
+  TexelSample sample(const RegionFields* fields, Texel local, Vec2 /*direction*/) const override {
+    if (fields == nullptr || !fields->depth) return {0.0, 0.0};
+    return {fields->depth->at(local.x, local.y), 0.0};
+  }
+  double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
+    return depth_cd(params_, from.v0, to.v0, step_px, detail);
+  }
   double cd_lower_bound() const override { return 1.0 / params_.kmin; }
   double cd_upper_bound() const override { return params_.kmax; }
   const DepthParams& params() const { return params_; }

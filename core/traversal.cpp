@@ -4,6 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#include "core/fast_math.hpp"
+#include "core/method_curvature.hpp"
+#include "core/method_depth.hpp"
+
 namespace ph {
 
 namespace {
@@ -16,16 +20,10 @@ int sign_of(double v) { return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0); }
 
 // Index of the grid cell a coordinate lies in, taking a coordinate on a cell boundary to belong to the
 // cell the motion came from (so a stop exactly on a boundary stays in the texel that was being walked).
-std::int32_t cell_behind(double v, int step) {
-  const double c = step > 0 ? std::ceil(v) - 1.0 : std::floor(v);
-  return static_cast<std::int32_t>(c);
-}
+std::int32_t cell_behind(double v, int step) { return step > 0 ? -floor_to_int(-v) - 1 : floor_to_int(v); }
 
 // Index of the cell a motion starting at a coordinate moves into.
-std::int32_t cell_ahead(double v, int step) {
-  const double c = step < 0 ? std::ceil(v) - 1.0 : std::floor(v);
-  return static_cast<std::int32_t>(c);
-}
+std::int32_t cell_ahead(double v, int step) { return step < 0 ? -floor_to_int(-v) - 1 : floor_to_int(v); }
 
 // Where a ray enters a region's box, if it does within `limit` of display travel.
 struct Entry {
@@ -57,7 +55,19 @@ class Walker {
     while (budget_ > 0.0) {
       const std::optional<std::size_t> owner = scene_.owner(texel_);
       if (owner) {
-        walk_region(*owner, first);
+        // One dispatch per leg: the built-in methods' sample() and cd() then inline into the loop.
+        const Method& method = *scene_.regions()[*owner].method;
+        switch (method.builtin()) {
+          case BuiltinMethod::curvature:
+            walk_region(*owner, static_cast<const CurvatureMethod&>(method), first);
+            break;
+          case BuiltinMethod::depth:
+            walk_region(*owner, static_cast<const DepthMethod&>(method), first);
+            break;
+          case BuiltinMethod::none:
+            walk_region(*owner, method, first);
+            break;
+        }
       } else {
         cross_flat();
       }
@@ -82,21 +92,22 @@ class Walker {
     tmy_ = sy_ > 0 ? (texel_.y + 1.0 - p.y) * tdy_ : (sy_ < 0 ? (p.y - texel_.y) * tdy_ : kInf);
   }
 
-  TexelSample sample_with(const Method& method, Texel t) const {
+  template <typename M>
+  TexelSample sample_with(const M& method, Texel t) const {
     const std::optional<std::size_t> owner = scene_.owner(t);
     if (!owner) return method.sample(nullptr, {}, m_);
     const Region& region = scene_.regions()[*owner];
     return method.sample(&region.fields, region.local(t), m_);
   }
 
-  double step_cd(const Region& region, const TexelSample& from, const TexelSample& to, bool entered) {
-    StepRecord record;
-    const double cd = region.method->cd(from, to, 1.0, observer_ ? &record.detail : nullptr);
-    all_unit_ = all_unit_ && cd == 1.0;
-    result_.cd_min = std::min(result_.cd_min, cd);
-    result_.cd_max = std::max(result_.cd_max, cd);
-    if (entered) ++result_.steps;
-    if (observer_ != nullptr) {
+  template <typename M>
+  double step_cd(const Region& region, const M& method, const TexelSample& from, const TexelSample& to, bool entered) {
+    double cd;
+    if (observer_ == nullptr) {
+      cd = method.cd(from, to, 1.0, nullptr);
+    } else {
+      StepRecord record;
+      cd = method.cd(from, to, 1.0, &record.detail);
       record.entry = position();
       record.texel = texel_;
       record.came_from = from_;
@@ -105,16 +116,22 @@ class Walker {
       record.region = &region;
       observer_->on_step(record);
     }
+    all_unit_ = all_unit_ && cd == 1.0;
+    result_.cd_min = std::min(result_.cd_min, cd);
+    result_.cd_max = std::max(result_.cd_max, cd);
+    if (entered) ++result_.steps;
     return cd;
   }
 
-  // Walks texel by texel while the texels belong to `index`.
-  void walk_region(std::size_t index, bool first_leg) {
+  // Walks texel by texel while the texels belong to `index`. M is the method's concrete type for the
+  // built-in methods (calls inline), or Method itself (virtual calls) for any other.
+  template <typename M>
+  void walk_region(std::size_t index, const M& method, bool first_leg) {
     const Region& region = scene_.regions()[index];
-    const Method& method = *region.method;
     TexelSample s_from = sample_with(method, from_);
     TexelSample s_cur = method.sample(&region.fields, region.local(texel_), m_);
-    double cd = step_cd(region, s_from, s_cur, !first_leg);
+    double cd = step_cd(region, method, s_from, s_cur, !first_leg);
+    const bool topmost = index + 1 == scene_.regions().size();
     for (;;) {
       const double t_next = std::min(tmx_, tmy_);
       const double cost = cd * (t_next - t_);
@@ -137,13 +154,13 @@ class Walker {
         texel_.y += sy_;
         tmy_ += tdy_;
       }
-      if (!region.rect.contains(texel_) || scene_.owner(texel_) != index) {
+      if (!region.rect.contains(texel_) || (!topmost && scene_.owner(texel_) != index)) {
         restart_at(position());
         return;  // another region or the flat outside takes over
       }
       s_from = s_cur;
       s_cur = method.sample(&region.fields, region.local(texel_), m_);
-      cd = step_cd(region, s_from, s_cur, true);
+      cd = step_cd(region, method, s_from, s_cur, true);
     }
   }
 
@@ -238,6 +255,24 @@ class Walker {
 
 }  // namespace
 
+// True when the segment from the cursor by `motor` cannot touch any region: its bounding box misses
+// every region's closed box (a few compares per region), and it stays well inside the world.
+bool crosses_only_flat(const Scene& scene, const CursorState& cursor, Vec2 motor) {
+  constexpr double kFar = kWorldLimitPx / 2;
+  const Vec2 p = cursor.position;
+  const Vec2 end = p + motor;
+  if (!(std::abs(end.x) < kFar && std::abs(end.y) < kFar && std::abs(p.x) < kFar && std::abs(p.y) < kFar)) return false;
+  const double x0 = std::min(p.x, end.x), x1 = std::max(p.x, end.x);
+  const double y0 = std::min(p.y, end.y), y1 = std::max(p.y, end.y);
+  for (const Region& region : scene.regions()) {
+    const Rect& r = region.rect;
+    if (x1 >= r.x && x0 <= static_cast<double>(r.x) + r.w && y1 >= r.y && y0 <= static_cast<double>(r.y) + r.h) {
+      return false;
+    }
+  }
+  return true;
+}
+
 double clamp_to_world(double v) { return std::isfinite(v) ? std::clamp(v, -kWorldLimitPx, kWorldLimitPx) : 0.0; }
 
 CursorState cursor_at(Vec2 position) {
@@ -249,8 +284,18 @@ CursorState cursor_at(Vec2 position) {
 FrameResult advance(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserver* observer) {
   FrameResult result;
   if (!is_finite(motor)) return result;
-  double d = length(motor);
-  if (d == 0.0) return result;
+  if (motor.x == 0.0 && motor.y == 0.0) return result;
+  if (crosses_only_flat(scene, cursor, motor)) {
+    // C/D is 1 all the way: the display moves by the motor displacement itself, with no walk at all.
+    const Vec2 end = cursor.position + motor;
+    if (motor.x != 0.0) cursor.texel.x = cell_behind(end.x, motor.x > 0.0 ? 1 : -1);
+    if (motor.y != 0.0) cursor.texel.y = cell_behind(end.y, motor.y > 0.0 ? 1 : -1);
+    cursor.came_from = cursor.texel;
+    cursor.position = end;
+    result.display = motor;
+    return result;
+  }
+  double d = fast_length(motor.x, motor.y);
   // Divide rather than multiply by 1/d: for a denormal d, 1/d overflows and the walk would never advance.
   const Vec2 m{motor.x / d, motor.y / d};
   if (!is_finite(m)) return result;

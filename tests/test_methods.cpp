@@ -5,6 +5,7 @@
 #include <numbers>
 #include <random>
 
+#include "core/fast_math.hpp"
 #include "core/method_curvature.hpp"
 #include "core/method_depth.hpp"
 
@@ -185,6 +186,30 @@ TEST(DepthParams, InvalidValuesAreRefused) {
   p.kmin = 0.5;
   EXPECT_NE(validate(p).find("kmin"), std::string::npos);
   EXPECT_THROW(DepthMethod{p}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace ph
+
+namespace ph {
+namespace {
+
+TEST(FastMath, AtanIsFloatAccurateEverywhere) {
+  double worst = 0.0;
+  for (double x = -50.0; x <= 50.0; x += 1e-4) worst = std::max(worst, std::abs(fast_atan(x) - std::atan(x)));
+  for (double x : {0.0, -0.0, 1e-300, 1e6, -1e12, 1e300, HUGE_VAL, -HUGE_VAL}) {
+    worst = std::max(worst, std::abs(fast_atan(x) - std::atan(x)));
+  }
+  EXPECT_LT(worst, 2e-7);
+  // In degrees, as Eq. 3 uses it: an error of 1e-5 degrees changes k'max (1 + delta-beta) by 4e-5.
+  EXPECT_LT(worst * 180.0 / std::numbers::pi, 1.2e-5);
+  EXPECT_EQ(fast_atan(0.0), 0.0);
+}
+
+TEST(FastMath, FloorToIntMatchesFloor) {
+  for (double v : {0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 1e9 + 0.5, -1e9 - 0.5, 2.9999999, -2.0000001, 1e-300, -1e-300}) {
+    EXPECT_EQ(floor_to_int(v), static_cast<std::int32_t>(std::floor(v))) << v;
+  }
 }
 
 }  // namespace
