@@ -12,5 +12,6 @@ using Run = std::function<int()>;
 Run add_targets_command(CLI::App& app);
 Run add_trace_command(CLI::App& app);
 Run add_demo_command(CLI::App& app);
+Run add_replay_command(CLI::App& app);
 
 }  // namespace ph::tools

@@ -23,6 +23,8 @@ int main(int argc, char** argv) {
       ph::tools::add_targets_command);
   add("trace", "Move the cursor along a straight stroke across a texture and write one CSV row per texel step",
       ph::tools::add_trace_command);
+  add("replay", "Push a recorded mouse stream through the daemon's pipeline and write what it would emit",
+      ph::tools::add_replay_command);
   add("demo", "Print the C/D-ratio range of both methods on each of the 24 targets (the paper's Fig. 5 in numbers)",
       ph::tools::add_demo_command);
 

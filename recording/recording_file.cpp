@@ -1,0 +1,80 @@
+#include "recording/recording_file.hpp"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <iostream>
+
+#include "recording/evemu.hpp"
+#include "recording/libinput_record.hpp"
+
+namespace ph {
+
+RecordingFormat detect_recording_format(std::string_view start) {
+  // Skip blank lines and YAML/evemu comments; the first meaningful line tells.
+  std::size_t pos = 0;
+  while (pos < start.size()) {
+    const std::size_t end = std::min(start.find('\n', pos), start.size());
+    const std::string_view line = start.substr(pos, end - pos);
+    if (line.starts_with("# EVEMU")) return RecordingFormat::evemu;
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (first != std::string_view::npos && line[first] != '#') {
+      // libinput record files start with their top-level YAML keys; anything else is read as evemu,
+      // whose reader names the line it cannot make sense of.
+      const std::string_view word = line.substr(first);
+      for (std::string_view yaml_start : {"version:", "ndevices:", "libinput:", "system:", "devices:", "---"}) {
+        if (word.starts_with(yaml_start)) return RecordingFormat::libinput_record;
+      }
+      return RecordingFormat::evemu;
+    }
+    pos = end + 1;
+  }
+  return RecordingFormat::evemu;  // empty input: the evemu reader says what is missing
+}
+
+namespace {
+
+// Serves the bytes already read for format detection, then the rest of the original stream, so that a
+// reader can stream the input (and refuse an over-long line) without the whole file in memory.
+class PrefixedBuffer final : public std::streambuf {
+ public:
+  PrefixedBuffer(std::string head, std::streambuf* rest) : head_(std::move(head)), rest_(rest) {
+    setg(head_.data(), head_.data(), head_.data() + head_.size());
+  }
+
+ protected:
+  int_type underflow() override {
+    const std::streamsize n = rest_->sgetn(chunk_, sizeof chunk_);
+    if (n <= 0) return traits_type::eof();
+    setg(chunk_, chunk_, chunk_ + n);
+    return traits_type::to_int_type(*gptr());
+  }
+
+ private:
+  std::string head_;
+  std::streambuf* rest_;
+  char chunk_[1 << 16];
+};
+
+}  // namespace
+
+Recording read_recording(std::istream& in, const std::string& origin) {
+  std::string head(4096, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  if (in.bad()) throw RecordingError(fmt::format("{}: read error", origin));
+  const RecordingFormat format = detect_recording_format(head);
+  PrefixedBuffer buffer(std::move(head), in.rdbuf());
+  std::istream whole(&buffer);
+  if (format == RecordingFormat::libinput_record) return read_libinput_record(whole, origin);
+  return read_evemu(whole, origin);
+}
+
+Recording read_recording_file(const std::string& path) {
+  if (path == "-") return read_recording(std::cin, "<stdin>");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw RecordingError(fmt::format("{}: cannot open", path));
+  return read_recording(in, path);
+}
+
+}  // namespace ph

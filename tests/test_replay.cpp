@@ -1,0 +1,238 @@
+// The pipeline between source and sink, and `replay`, on generated and real recordings.
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "core/default_scene.hpp"
+#include "core/method_curvature.hpp"
+#include "core/replay.hpp"
+#include "core/targets.hpp"
+#include "recording/evemu.hpp"
+#include "recording/recording_file.hpp"
+#include "tests/recordings.hpp"
+
+namespace ph {
+namespace {
+
+using testing::add_frame;
+using testing::rel;
+using testing::scripted_stroke;
+
+bool is_motion(const InputEvent& e) { return e.type == ev::kRel && (e.code == ev::kRelX || e.code == ev::kRelY); }
+
+std::vector<Frame> frames_of(const std::vector<InputEvent>& events) {
+  std::vector<Frame> frames(1);
+  for (const InputEvent& e : events) {
+    frames.back().events.push_back(e);
+    if (e.type == ev::kSyn && e.code == ev::kSynReport) frames.emplace_back();
+  }
+  if (frames.back().events.empty()) frames.pop_back();
+  return frames;
+}
+
+Scene flat_region_scene() {
+  std::vector<Region> regions(1);
+  regions[0].name = "flat";
+  regions[0].rect = {0, 0, 1920, 1080};
+  regions[0].fields.gradient = GradientField(1920, 1080);
+  regions[0].method = std::make_shared<CurvatureMethod>(CurvatureParams{});
+  return Scene(std::move(regions));
+}
+
+// A bump target at (600, 300); a stroke from the flat outside across its centre.
+Scene bump_scene() {
+  const TargetSpec spec = all_targets()[9];  // bump-gaussian-h1-r200
+  std::vector<Region> regions(1);
+  regions[0].name = spec.name();
+  regions[0].rect = {600, 300, spec.size, spec.size};
+  regions[0].fields.gradient = target_gradient_field(spec);
+  regions[0].method = std::make_shared<CurvatureMethod>(CurvatureParams{});
+  return Scene(std::move(regions));
+}
+
+PipelineConfig start_at(Vec2 start) {
+  PipelineConfig config;
+  config.start = start;
+  return config;
+}
+
+TEST(Replay, FlatSceneIsBitIdentical) {
+  const Recording input = scripted_stroke(400, 3, -2);
+  const Scene empty;
+  const Scene flat = flat_region_scene();
+  for (const Scene* scene : {&empty, &flat}) {
+    const Recording output = replay(input, *scene, PipelineConfig{});
+    EXPECT_EQ(output.device, input.device);
+    ASSERT_EQ(output.events.size(), input.events.size());
+    for (std::size_t i = 0; i < input.events.size(); ++i) ASSERT_EQ(output.events[i], input.events[i]) << "event " << i;
+  }
+}
+
+TEST(Replay, StrokeOverBumpMatchesTheEngine) {
+  const Scene scene = bump_scene();
+  const Vec2 start{560.5, 550.5};
+  const Recording input = scripted_stroke(300, 2, 0);
+  std::vector<FrameReport> reports;
+  const Recording output = replay(input, scene, start_at(start), &reports);
+
+  // The engine alone over the same motions (the dropped frame's motion is not applied).
+  CursorState cursor = cursor_at(start);
+  Vec2 engine_sum, output_sum;
+  bool slowed = false, sped_up = false;
+  std::size_t report_index = 0;
+  for (const Frame& frame : frames_of(input.events)) {
+    const FrameReport& report = reports.at(report_index++);
+    if (report.dropped) continue;
+    std::int32_t dx = 0;
+    for (const InputEvent& e : frame.events) dx += is_motion(e) && e.code == ev::kRelX ? e.value : 0;
+    if (dx == 0) continue;
+    const FrameResult moved = advance(scene, cursor, {static_cast<double>(dx), 0.0});
+    engine_sum = engine_sum + moved.display;
+    output_sum = output_sum + Vec2{static_cast<double>(report.out_dx), static_cast<double>(report.out_dy)};
+    ASSERT_EQ(report.cursor, cursor.position);
+    ASSERT_LE(std::abs(output_sum.x - engine_sum.x), 0.5) << "frame at " << report.time;  // carry stays < 1/2
+    ASSERT_EQ(output_sum.y, 0.0);
+    slowed = slowed || report.out_dx < 2;
+    sped_up = sped_up || report.out_dx > 2;
+  }
+  EXPECT_TRUE(slowed);   // up the bump
+  EXPECT_TRUE(sped_up);  // down the other side
+  // And the output events carry exactly the reported motion.
+  std::int64_t emitted = 0;
+  for (const InputEvent& e : output.events) emitted += is_motion(e) && e.code == ev::kRelX ? e.value : 0;
+  std::int64_t reported = 0;
+  for (const FrameReport& r : reports) reported += r.out_dx;
+  EXPECT_EQ(emitted, reported);
+}
+
+TEST(Replay, NonMotionEventsPassThroughInTheirFrame) {
+  const Scene scene = bump_scene();
+  const Recording input = scripted_stroke(300, 3, 1);
+  const Recording output = replay(input, scene, start_at({560.5, 520.5}));
+  const std::vector<Frame> in_frames = frames_of(input.events), out_frames = frames_of(output.events);
+  ASSERT_EQ(in_frames.size(), out_frames.size());
+  int changed = 0;
+  for (std::size_t f = 0; f < in_frames.size(); ++f) {
+    std::vector<InputEvent> in_other, out_other;
+    for (const InputEvent& e : in_frames[f].events) {
+      if (!is_motion(e)) in_other.push_back(e);
+    }
+    for (const InputEvent& e : out_frames[f].events) {
+      if (!is_motion(e)) out_other.push_back(e);
+    }
+    ASSERT_EQ(out_frames[f].events.back(), in_frames[f].events.back()) << "frame " << f;  // same SYN_REPORT
+    ASSERT_EQ(in_other, out_other) << "frame " << f;
+    changed += in_frames[f].events != out_frames[f].events;
+  }
+  EXPECT_GT(changed, 50);  // the texture did change the motion
+}
+
+TEST(Replay, DroppedFrameIsPassedThroughAndNotApplied) {
+  Recording input;
+  input.device = testing::test_mouse();
+  add_frame(input, 1000, {rel(ev::kRelX, 5)});
+  input.events.push_back({2000, ev::kSyn, ev::kSynDropped, 0});
+  input.events.push_back({2001, ev::kRel, ev::kRelX, 40});
+  input.events.push_back({2001, ev::kKey, ev::kBtnLeft, 1});
+  input.events.push_back({2001, ev::kSyn, ev::kSynReport, 0});
+  add_frame(input, 3000, {rel(ev::kRelX, 5)});
+  std::vector<FrameReport> reports;
+  const Recording output = replay(input, bump_scene(), start_at({100.5, 100.5}), &reports);
+  EXPECT_EQ(output.events, input.events);
+  ASSERT_EQ(reports.size(), 3u);
+  EXPECT_TRUE(reports[1].dropped);
+  EXPECT_EQ(reports[2].cursor.x, 110.5);  // 5 + 5, not the dropped 40
+}
+
+TEST(Replay, TrailingEventsWithoutSynReportAreKept) {
+  Recording input;
+  input.device = testing::test_mouse();
+  add_frame(input, 1000, {rel(ev::kRelX, 5)});
+  input.events.push_back({2000, ev::kKey, ev::kBtnLeft, 1});
+  const Recording output = replay(input, Scene{}, PipelineConfig{});
+  EXPECT_EQ(output.events, input.events);
+}
+
+TEST(Replay, AbsoluteModeEmitsPositionsOnlyWithinTheDesktop) {
+  PipelineConfig config = start_at({10.5, 10.5});
+  config.mode = OutputMode::absolute;
+  config.desktop = {0, 0, 800, 600};
+  const Recording input = scripted_stroke(400, -3, 2);
+  const Recording output = replay(input, bump_scene(), config);
+  EXPECT_FALSE(output.device.has(ev::kRel, ev::kRelX));
+  EXPECT_FALSE(output.device.has(ev::kRel, ev::kRelY));
+  EXPECT_TRUE(output.device.has(ev::kRel, ev::kRelWheel));
+  EXPECT_TRUE(output.device.has(ev::kAbs, ev::kAbsX));
+  EXPECT_EQ(output.device.absinfo.at(ev::kAbsX).maximum, 799);
+  int positions = 0;
+  for (const InputEvent& e : output.events) {
+    ASSERT_FALSE(is_motion(e));
+    if (e.type != ev::kAbs) continue;
+    ++positions;
+    ASSERT_GE(e.value, 0);
+    ASSERT_LE(e.value, e.code == ev::kAbsX ? 799 : 599);
+  }
+  EXPECT_GT(positions, 300);
+  // Pushed against the left edge, the model sits on it.
+  Pipeline pipeline(std::make_shared<const Scene>(), config);
+  Frame f;
+  f.events = {{0, ev::kRel, ev::kRelX, -50}, {0, ev::kSyn, ev::kSynReport, 0}};
+  const Frame out = pipeline.process(f);
+  EXPECT_EQ(out.events.front().type, ev::kAbs);
+  EXPECT_EQ(out.events.front().value, 0);
+}
+
+TEST(Replay, RelativeModeCarriesFractions) {
+  // Uphill at a constant C/D of about 2.34, 1 count per frame: the output alternates so that its sum
+  // follows the engine within half a count.
+  std::vector<Region> regions(1);
+  regions[0].name = "slope";
+  regions[0].rect = {0, 0, 1920, 1080};
+  regions[0].fields.gradient = GradientField(1920, 1080, Gradient{0.5f, 0.0f});
+  regions[0].method = std::make_shared<CurvatureMethod>(CurvatureParams{});
+  const Scene scene(std::move(regions));
+  Recording input;
+  input.device = testing::test_mouse();
+  for (int i = 0; i < 1000; ++i) add_frame(input, i * 1000, {rel(ev::kRelX, 1)});
+  std::vector<FrameReport> reports;
+  replay(input, scene, start_at({100.5, 100.5}), &reports);
+  int ones = 0, zeros = 0;
+  for (const FrameReport& r : reports) (r.out_dx == 1 ? ones : zeros) += 1;
+  const double cd = 1.0 + 0.5 / std::sqrt(1.25) * 3.0;
+  EXPECT_NEAR(ones, 1000 / cd, 1.0);
+  EXPECT_EQ(ones + zeros, 1000);
+}
+
+TEST(Replay, IsDeterministic) {
+  const Recording input = scripted_stroke(500, 4, 3);
+  const Scene scene = default_scene();
+  std::ostringstream a, b;
+  write_evemu(a, replay(input, scene, PipelineConfig{}));
+  write_evemu(b, replay(input, default_scene(), PipelineConfig{}));
+  EXPECT_EQ(a.str(), b.str());
+  EXPECT_GT(a.str().size(), 1000u);
+}
+
+TEST(Replay, RealRecordingsOnFlatSceneAreBitIdentical) {
+  const auto files = testing::shared_recordings();
+  if (files.empty()) GTEST_SKIP() << "no shared recordings beside the project";
+  for (const auto& file : files) {
+    const Recording input = read_recording_file(file.string());
+    ASSERT_GT(input.events.size(), 100u);
+    const Recording output = replay(input, Scene{}, PipelineConfig{});
+    EXPECT_EQ(output.events, input.events) << file;
+    // And over the default scene they still keep every non-motion event and every timestamp.
+    const Recording textured = replay(input, default_scene(), PipelineConfig{});
+    std::vector<InputEvent> in_other, out_other;
+    for (const InputEvent& e : input.events) {
+      if (!is_motion(e)) in_other.push_back(e);
+    }
+    for (const InputEvent& e : textured.events) {
+      if (!is_motion(e)) out_other.push_back(e);
+    }
+    EXPECT_EQ(in_other, out_other) << file;
+  }
+}
+
+}  // namespace
+}  // namespace ph
