@@ -1,0 +1,296 @@
+// Cost of ph::advance, the exact per-texel traversal (ALGORITHMS.md section 5), for the curvature and the
+// depth method on the paper's targets: typical frames, fast flicks, a pointer outside every region and a
+// flat region. docs/PERFORMANCE.md explains the figures and how to reproduce them.
+//
+// Every benchmark reports, besides the time per iteration (= per frame, one advance call):
+//   steps_per_frame  texel boundaries crossed inside regions per frame (FrameResult::steps, averaged);
+//   time_per_step    the benchmark's CPU time divided by the number of those steps. It is a Counter on the
+//                    summed step count with kIsRate | kInvert: kIsRate divides the count by the run's CPU
+//                    seconds (the library always uses CPU time for rates), kInvert turns steps per second
+//                    into seconds per step. The value is in seconds; the console prints it with an SI
+//                    prefix ("12.3ns"). It includes the per-frame overhead spread over the frame's steps.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/method_curvature.hpp"
+#include "core/method_depth.hpp"
+#include "core/scene.hpp"
+#include "core/targets.hpp"
+#include "core/traversal.hpp"
+
+namespace {
+
+enum class MethodKind { curvature, depth };
+
+const char* method_name(MethodKind kind) { return kind == MethodKind::curvature ? "curvature" : "depth"; }
+
+constexpr std::int32_t kTargetSize = 500;  // TargetSpec's default: the region is 500 x 500 px at (0, 0)
+constexpr ph::Vec2 kTargetCentre{kTargetSize / 2.0, kTargetSize / 2.0};
+constexpr ph::Rect kTargetRect{0, 0, kTargetSize, kTargetSize};
+
+// ---------------------------------------------------------------------------------------------------
+// Scenes, built in memory once and kept: the benchmark runner calls each function several times.
+
+// One target as one region at (0, 0) with the method's default parameters (as tests/test_traversal.cpp).
+ph::Region target_region(const ph::TargetSpec& spec, MethodKind kind) {
+  ph::Region region;
+  region.name = spec.name();
+  region.rect = kTargetRect;
+  if (kind == MethodKind::depth) {
+    region.fields.depth = ph::target_depth_field(spec);
+    region.method = std::make_shared<ph::DepthMethod>(ph::DepthParams{});
+  } else {
+    region.fields.gradient = ph::target_gradient_field(spec);
+    region.method = std::make_shared<ph::CurvatureMethod>(ph::CurvatureParams{});
+  }
+  return region;
+}
+
+// A region of the same size whose surface is flat (zero gradient, constant depth): every step still
+// samples and computes a C/D, which comes out as 1.
+ph::Region flat_region(ph::Rect rect, MethodKind kind) {
+  ph::Region region;
+  region.name = "flat";
+  region.rect = rect;
+  if (kind == MethodKind::depth) {
+    region.fields.depth = ph::DepthField(rect.w, rect.h, 0.0f);
+    region.method = std::make_shared<ph::DepthMethod>(ph::DepthParams{});
+  } else {
+    region.fields.gradient = ph::GradientField(rect.w, rect.h, ph::Gradient{});
+    region.method = std::make_shared<ph::CurvatureMethod>(ph::CurvatureParams{});
+  }
+  return region;
+}
+
+ph::Scene scene_of(ph::Region region) {
+  std::vector<ph::Region> regions;
+  regions.push_back(std::move(region));
+  return ph::Scene(std::move(regions));
+}
+
+const ph::Scene& target_scene(const ph::TargetSpec& spec, MethodKind kind) {
+  static std::map<std::pair<std::string, MethodKind>, ph::Scene> cache;
+  auto key = std::make_pair(spec.name(), kind);
+  auto it = cache.find(key);
+  if (it == cache.end()) it = cache.emplace(std::move(key), scene_of(target_region(spec, kind))).first;
+  return it->second;
+}
+
+std::vector<const ph::Scene*> all_target_scenes(MethodKind kind) {
+  std::vector<const ph::Scene*> scenes;
+  for (const ph::TargetSpec& spec : ph::all_targets()) scenes.push_back(&target_scene(spec, kind));
+  return scenes;
+}
+
+const ph::Scene& flat_scene(MethodKind kind) {
+  static const ph::Scene curvature = scene_of(flat_region(kTargetRect, MethodKind::curvature));
+  static const ph::Scene depth = scene_of(flat_region(kTargetRect, MethodKind::depth));
+  return kind == MethodKind::curvature ? curvature : depth;
+}
+
+// A 1920 x 1080 screen with a 300 x 300 region in each corner: the cursor in the middle never reaches
+// them, so what they contain does not matter (flat ones are cheapest to build).
+const ph::Scene& far_regions_scene() {
+  static const ph::Scene scene = [] {
+    std::vector<ph::Region> regions;
+    for (ph::Rect rect : {ph::Rect{0, 0, 300, 300}, ph::Rect{1620, 0, 300, 300}, ph::Rect{0, 780, 300, 300},
+                          ph::Rect{1620, 780, 300, 300}}) {
+      regions.push_back(flat_region(rect, MethodKind::curvature));
+    }
+    return ph::Scene(std::move(regions));
+  }();
+  return scene;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Inputs, precomputed so that the timed loop only reads them.
+
+constexpr std::size_t kStreamLength = 4096;  // a power of two: the stream index wraps with a mask
+constexpr std::size_t kStreamMask = kStreamLength - 1;
+
+ph::Vec2 polar(double length, double angle) { return {length * std::cos(angle), length * std::sin(angle)}; }
+
+// Typical mouse frames: 1-10 px of motor travel in uniformly random directions.
+const std::vector<ph::Vec2>& typical_motions() {
+  static const std::vector<ph::Vec2> motions = [] {
+    std::mt19937_64 rng(20240601);
+    std::uniform_real_distribution<double> size(1.0, 10.0);
+    std::uniform_real_distribution<double> angle(0.0, 2.0 * std::numbers::pi);
+    std::vector<ph::Vec2> out(kStreamLength);
+    for (ph::Vec2& m : out) m = polar(size(rng), angle(rng));
+    return out;
+  }();
+  return motions;
+}
+
+struct Flick {
+  ph::CursorState start;
+  ph::Vec2 motor;
+};
+
+// 500 px of motor travel in one frame, starting near the target's edge (240 px from its centre) and aimed
+// across it, within 30 degrees of the centre, so that it crosses most of the relief.
+const std::vector<Flick>& flicks() {
+  static const std::vector<Flick> out = [] {
+    std::mt19937_64 rng(20240602);
+    std::uniform_real_distribution<double> angle(0.0, 2.0 * std::numbers::pi);
+    std::uniform_real_distribution<double> jitter(-std::numbers::pi / 6.0, std::numbers::pi / 6.0);
+    std::vector<Flick> flicks(kStreamLength);
+    for (Flick& flick : flicks) {
+      const double around = angle(rng);
+      const ph::Vec2 start = kTargetCentre + polar(240.0, around);
+      flick = {ph::cursor_at(start), polar(500.0, around + std::numbers::pi + jitter(rng))};
+    }
+    return flicks;
+  }();
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Timed loops.
+
+bool inside(const ph::Rect& box, ph::Vec2 p) {
+  return p.x >= box.x && p.x < box.x + box.w && p.y >= box.y && p.y < box.y + box.h;
+}
+
+void report_steps(benchmark::State& state, std::uint64_t steps) {
+  const auto count = static_cast<double>(steps);
+  state.counters["steps_per_frame"] = benchmark::Counter(count, benchmark::Counter::kAvgIterations);
+  if (steps > 0) {
+    state.counters["time_per_step"] =
+        benchmark::Counter(count, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  }
+}
+
+// Feeds the typical stream frame after frame, as the daemon would (each frame depends on the last). A
+// cursor that leaves `keep_in` goes back to `start`; that check is two compares per frame, under 1 ns, and
+// is left in the timing rather than pausing the timer (PauseTiming costs far more than a frame). With
+// several scenes, the next one takes over from `start` after each pass over the stream.
+void run_typical_frames(benchmark::State& state, std::span<const ph::Scene* const> scenes, ph::Vec2 start,
+                        ph::Rect keep_in) {
+  const std::vector<ph::Vec2>& motions = typical_motions();
+  const ph::CursorState start_cursor = ph::cursor_at(start);
+  ph::CursorState cursor = start_cursor;
+  std::size_t scene_index = 0;
+  std::size_t frame = 0;
+  std::uint64_t steps = 0;
+  for (auto _ : state) {
+    const ph::FrameResult result = ph::advance(*scenes[scene_index], cursor, motions[frame & kStreamMask]);
+    benchmark::DoNotOptimize(result);
+    steps += result.steps;
+    if (!inside(keep_in, cursor.position)) cursor = start_cursor;
+    if ((++frame & kStreamMask) == 0 && scenes.size() > 1) {
+      scene_index = (scene_index + 1) % scenes.size();
+      cursor = start_cursor;
+    }
+  }
+  report_steps(state, steps);
+}
+
+// With several scenes, the next takes over after this many flicks: a 0.5 s run then covers all 24 targets
+// several times, and each field stays in cache for a while as it would during a session.
+constexpr std::size_t kFlicksPerScene = 64;
+
+// Each frame is one flick from its own precomputed start; frames do not depend on each other.
+void run_flicks(benchmark::State& state, std::span<const ph::Scene* const> scenes) {
+  const std::vector<Flick>& all = flicks();
+  std::size_t scene_index = 0;
+  std::size_t frame = 0;
+  std::uint64_t steps = 0;
+  for (auto _ : state) {
+    const Flick& flick = all[frame & kStreamMask];
+    ph::CursorState cursor = flick.start;
+    const ph::FrameResult result = ph::advance(*scenes[scene_index], cursor, flick.motor);
+    benchmark::DoNotOptimize(result);
+    benchmark::DoNotOptimize(cursor);
+    steps += result.steps;
+    if (++frame % kFlicksPerScene == 0 && scenes.size() > 1) scene_index = (scene_index + 1) % scenes.size();
+  }
+  report_steps(state, steps);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Registration.
+
+// Representative targets: the steepest smooth bump, a linear bump with its kink and rim, a shallow hole.
+const char* const kRepresentativeTargets[] = {"bump-gaussian-h1-r200", "bump-linear-h1-r100",
+                                              "hole-polynomial-h0.25-r200"};
+
+ph::TargetSpec target_named(const std::string& name) {
+  for (const ph::TargetSpec& spec : ph::all_targets()) {
+    if (spec.name() == name) return spec;
+  }
+  throw std::invalid_argument("no target named " + name);
+}
+
+// Scenes are built lazily, on the first run of a benchmark, so that a filtered run builds only what it uses.
+using SceneListFn = std::vector<const ph::Scene*> (*)(MethodKind, const std::string&);
+
+void register_pair(const std::string& label, MethodKind kind, SceneListFn make_scenes) {
+  const std::string suffix = std::string(method_name(kind)) + "/" + label;
+  // Shared by the two benchmarks, which the library keeps (and so this list) until the program ends.
+  auto scenes = std::make_shared<std::vector<const ph::Scene*>>();
+  auto scenes_for = [=] {
+    if (scenes->empty()) *scenes = make_scenes(kind, label);
+    return std::span<const ph::Scene* const>(*scenes);
+  };
+  benchmark::RegisterBenchmark(("typical/" + suffix).c_str(), [=](benchmark::State& state) {
+    run_typical_frames(state, scenes_for(), kTargetCentre, kTargetRect);
+  });
+  benchmark::RegisterBenchmark(("flick/" + suffix).c_str(),
+                               [=](benchmark::State& state) { run_flicks(state, scenes_for()); });
+}
+
+std::vector<const ph::Scene*> one_target(MethodKind kind, const std::string& name) {
+  return {&target_scene(target_named(name), kind)};
+}
+std::vector<const ph::Scene*> every_target(MethodKind kind, const std::string&) { return all_target_scenes(kind); }
+std::vector<const ph::Scene*> flat_only(MethodKind kind, const std::string&) { return {&flat_scene(kind)}; }
+
+// The cursor wanders in the middle of a 1920 x 1080 screen, at least 300 px from the far regions.
+constexpr ph::Vec2 kMiddle{960.0, 540.0};
+constexpr ph::Rect kMiddleBox{660, 340, 600, 400};
+
+void register_outside() {
+  static const ph::Scene empty;
+  static const ph::Scene* const empty_list[] = {&empty};
+  static const ph::Scene* const far_list[] = {&far_regions_scene()};
+  benchmark::RegisterBenchmark("typical/outside/empty-scene", [](benchmark::State& state) {
+    run_typical_frames(state, empty_list, kMiddle, kMiddleBox);
+  });
+  benchmark::RegisterBenchmark("typical/outside/4-far-regions", [](benchmark::State& state) {
+    run_typical_frames(state, far_list, kMiddle, kMiddleBox);
+  });
+}
+
+void register_all() {
+  for (MethodKind kind : {MethodKind::curvature, MethodKind::depth}) {
+    for (const char* name : kRepresentativeTargets) register_pair(name, kind, one_target);
+    register_pair("all-24", kind, every_target);
+    register_pair("flat", kind, flat_only);
+  }
+  register_outside();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  register_all();
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
