@@ -1,6 +1,7 @@
 // Reading and writing images, and building a region's fields from files: every bad file gives a
 // FieldError that names it.
 #include "config/image_io.hpp"
+#include "tests/scratch_dir.hpp"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -31,28 +32,6 @@ namespace ph {
 namespace {
 
 namespace fs = std::filesystem;
-
-// A fresh directory for one test, removed with everything in it afterwards.
-class TempDir {
- public:
-  TempDir() {
-    static std::atomic<int> counter{0};
-    const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
-    path_ = fs::temp_directory_path() / ("ph_test_image_io_" + std::to_string(stamp) + "_" + std::to_string(counter++));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
 
 std::vector<char> read_bytes(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -143,7 +122,7 @@ ImageLimits limits(std::int64_t max_pixels, std::int32_t max_side, std::int32_t 
 // --- Round trips ----------------------------------------------------------------------------------
 
 TEST(ImageIo, NormalPng16RoundTrip) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "dome.png";
   const NormalImage normals = dome(37, 23);
   write_normal_png16(path, normals);
@@ -165,7 +144,7 @@ TEST(ImageIo, NormalPng16RoundTrip) {
 }
 
 TEST(ImageIo, GrayPng16RoundTripClamps) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "grey.png";
   Grid<float> values(5, 2);
   values.values = {0.0f, 0.25f, 0.5f, 0.75f, 1.0f, -3.0f, 7.0f, 1.0f / 3.0f, 0.999f, 0.001f};
@@ -178,7 +157,7 @@ TEST(ImageIo, GrayPng16RoundTripClamps) {
 }
 
 TEST(ImageIo, WritingToAMissingDirectoryNamesThePath) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "no" / "such" / "dir.png";
   expect_error_names(
       path, [&] { write_gray_png16(path, Grid<float>(2, 2)); }, "cannot write");
@@ -188,7 +167,7 @@ TEST(ImageIo, WritingToAMissingDirectoryNamesThePath) {
 
 TEST(ImageIo, RgbaPngKeepsColourWhereAlphaIsLow) {
   // OpenImageIO premultiplies PNG colour by alpha unless told not to; a normal map must come back as stored.
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "rgba.png";
   write_float_image(path, 2, 1, 4, {0.5f, 0.5f, 1.0f, 0.0f, 0.8f, 0.5f, 0.9f, 0.25f}, OIIO::TypeDesc::UINT16);
   const RawImage image = read_image(path);
@@ -203,7 +182,7 @@ TEST(ImageIo, RgbaPngKeepsColourWhereAlphaIsLow) {
 }
 
 TEST(ImageIo, ExrNormalMapWithNaNTexelsIsRepaired) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "normals.exr";
   const float nan = std::numeric_limits<float>::quiet_NaN();
   // 3 x 2 signed normals: a tilted column, NaN texels, a flat column.
@@ -226,14 +205,14 @@ TEST(ImageIo, ExrNormalMapWithNaNTexelsIsRepaired) {
 // --- Bad files ------------------------------------------------------------------------------------
 
 TEST(ImageIoErrors, MissingFile) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "missing.png";
   expect_error_names(
       path, [&] { read_image(path); }, "cannot open");
 }
 
 TEST(ImageIoErrors, TextFileNamedPng) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "text.png";
   std::ofstream(path) << "this is not an image\n";
   expect_error_names(
@@ -241,7 +220,7 @@ TEST(ImageIoErrors, TextFileNamedPng) {
 }
 
 TEST(ImageIoErrors, EmptyFile) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "empty.png";
   const std::ofstream empty(path);
   expect_error_names(
@@ -249,7 +228,7 @@ TEST(ImageIoErrors, EmptyFile) {
 }
 
 TEST(ImageIoErrors, TruncatedPng) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "truncated.png";
   write_normal_png16(path, dome(64, 64));
   std::vector<char> bytes = read_bytes(path);
@@ -261,7 +240,7 @@ TEST(ImageIoErrors, TruncatedPng) {
 }
 
 TEST(ImageIoErrors, HeaderClaimingAHugeImageIsRefusedBeforeReading) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "huge.png";
   write_gray_png16(path, Grid<float>(1, 1, 0.5f));
   std::vector<char> bytes = read_bytes(path);
@@ -277,7 +256,7 @@ TEST(ImageIoErrors, HeaderClaimingAHugeImageIsRefusedBeforeReading) {
 }
 
 TEST(ImageIoErrors, LimitsApplyToRealImages) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "small.png";
   write_gray_png16(path, Grid<float>(8, 4, 0.5f));
   expect_error_names(
@@ -292,7 +271,7 @@ TEST(ImageIoErrors, LimitsApplyToRealImages) {
 // --- Region fields --------------------------------------------------------------------------------
 
 TEST(FieldLoader, TwoChannelPngAsNormalMapNamesTheFile) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "grey_alpha.png";
   write_float_image(path, 2, 2, 2, std::vector<float>(8, 0.5f), OIIO::TypeDesc::UINT8);
   FieldLoadReport report;
@@ -302,7 +281,7 @@ TEST(FieldLoader, TwoChannelPngAsNormalMapNamesTheFile) {
 }
 
 TEST(FieldLoader, GradientFromANormalMapCostsEightBytesPerTexel) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "dome.png";
   write_normal_png16(path, dome(40, 30));
   FieldLoadReport report;
@@ -318,7 +297,7 @@ TEST(FieldLoader, GradientFromANormalMapCostsEightBytesPerTexel) {
 }
 
 TEST(FieldLoader, GradientOfATiltedNormalMap) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "tilt.png";
   write_normal_png16(path, NormalImage(4, 4, Normal{0.6f, 0.0f, 0.8f}));  // surface falls toward +x
   FieldLoadReport report;
@@ -330,7 +309,7 @@ TEST(FieldLoader, GradientOfATiltedNormalMap) {
 }
 
 TEST(FieldLoader, GradientFromADepthMapWhenThereIsNoNormalMap) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path path = dir / "ramp.png";
   Grid<float> ramp(10, 4);
   for (std::int32_t y = 0; y < 4; ++y) {
@@ -352,7 +331,7 @@ TEST(FieldLoader, GradientFromADepthMapWhenThereIsNoNormalMap) {
 }
 
 TEST(FieldLoader, ReadsOnlyTheFilesTheMethodNeeds) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path normals = dir / "normals.png";
   const fs::path depth = dir / "depth.png";
   const fs::path missing = dir / "missing.png";
@@ -372,7 +351,7 @@ TEST(FieldLoader, ReadsOnlyTheFilesTheMethodNeeds) {
 }
 
 TEST(FieldLoader, BothFieldsWhenBothAreNeeded) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path normals = dir / "normals.png";
   const fs::path depth = dir / "depth.png";
   write_normal_png16(normals, dome(8, 8));
@@ -387,7 +366,7 @@ TEST(FieldLoader, BothFieldsWhenBothAreNeeded) {
 }
 
 TEST(FieldLoader, MissingMapsAreConfigurationErrors) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path normals = dir / "normals.png";
   write_normal_png16(normals, dome(8, 8));
   FieldLoadReport report;
@@ -408,7 +387,7 @@ TEST(FieldLoader, NothingNeededReadsNothing) {
 }
 
 TEST(FieldLoader, BadFilesNameThePath) {
-  const TempDir dir;
+  const ScratchDir dir;
   const fs::path missing = dir / "missing.png";
   FieldLoadReport report;
   expect_error_names(

@@ -16,35 +16,12 @@
 
 #include "config/target_files.hpp"
 #include "core/targets.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace ph {
 namespace {
 
 namespace fs = std::filesystem;
-
-// A fresh directory for one test, removed with everything in it afterwards.
-class TempDir {
- public:
-  TempDir() {
-    static std::atomic<int> counter{0};
-    const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
-    path_ =
-        fs::temp_directory_path() / ("ph_test_scene_file_" + std::to_string(stamp) + "_" + std::to_string(counter++));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  const fs::path& path() const { return path_; }
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
 
 void write_text(const fs::path& path, std::string_view text) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
@@ -366,7 +343,7 @@ TEST(SceneFileErrors, RegionMustBeAnArrayOfTables) {
 }
 
 TEST(SceneFileErrors, MissingSceneFileIsNamed) {
-  TempDir dir;
+  ScratchDir dir;
   const fs::path missing = dir / "nope.toml";
   try {
     parse_scene_file(missing);
@@ -377,7 +354,7 @@ TEST(SceneFileErrors, MissingSceneFileIsNamed) {
 }
 
 TEST(SceneFileErrors, ErrorsOfAFileNameTheFile) {
-  TempDir dir;
+  ScratchDir dir;
   const fs::path file = dir / "bad.toml";
   write_text(file, "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\nnormal_green = \"up\"\n");
   try {
@@ -392,7 +369,7 @@ TEST(SceneFileErrors, ErrorsOfAFileNameTheFile) {
 // Loading
 
 TEST(SceneFileLoad, MissingImageNamesSceneRegionAndImage) {
-  TempDir dir;
+  ScratchDir dir;
   const fs::path file = dir / "scene.toml";
   write_text(file,
              "[[region]]\nname = \"lonely\"\nwidth = 20\nheight = 10\nnormal_map = \"maps/missing.normal.png\"\n\n"
@@ -418,7 +395,7 @@ TEST(SceneFileLoad, MissingImageNamesSceneRegionAndImage) {
 }
 
 TEST(SceneFileLoad, TargetFilesRoundTrip) {
-  TempDir dir;
+  ScratchDir dir;
   const std::vector<TargetSpec> targets = all_targets();
   const std::vector<fs::path> scenes = write_target_files(dir.path(), targets);
   ASSERT_EQ(scenes.size(), 24u);

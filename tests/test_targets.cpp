@@ -15,6 +15,7 @@
 #include "config/target_files.hpp"
 #include "core/decode.hpp"
 #include "core/targets.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace ph {
 namespace {
@@ -46,25 +47,6 @@ std::string read_text(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
-
-// A fresh directory under the system temp dir, removed with the object.
-class TempDir {
- public:
-  explicit TempDir(const std::string& tag)
-      : path_(std::filesystem::temp_directory_path() / ("ph-test-targets-" + tag + "-" + std::to_string(::getpid()))) {
-    std::filesystem::remove_all(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
 
 TEST(Targets, AllTargetsHaveDistinctNamesInTheStatedOrder) {
   const std::vector<TargetSpec> targets = all_targets();
@@ -231,7 +213,7 @@ TEST(TargetFiles, SceneTextHasTheLoaderFormat) {
 }
 
 TEST(TargetFiles, RoundTripThroughTheWrittenFiles) {
-  const TempDir dir("roundtrip");
+  const ScratchDir dir("roundtrip");
   const std::vector<TargetSpec> targets = {
       make_spec(TargetShape::bump, TargetProfile::gaussian, 1.0, 200.0),
       make_spec(TargetShape::hole, TargetProfile::linear, 0.25, 100.0),

@@ -18,6 +18,7 @@
 
 #include "config/target_files.hpp"
 #include "core/targets.hpp"
+#include "tests/scratch_dir.hpp"
 
 #ifndef PH_TOOL_PATH
 #error "PH_TOOL_PATH must name the pseudohaptic binary (tests/CMakeLists.txt)"
@@ -27,29 +28,6 @@ namespace ph {
 namespace {
 
 namespace fs = std::filesystem;
-
-// A fresh directory for one test, removed with everything in it afterwards.
-class TempDir {
- public:
-  TempDir() {
-    static std::atomic<int> counter{0};
-    const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
-    path_ = fs::temp_directory_path() / ("ph_test_tool_" + std::to_string(stamp) + "_" + std::to_string(counter++));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  const fs::path& path() const { return path_; }
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -73,7 +51,7 @@ struct ToolResult {
 };
 
 // Runs the tool with `args` (already quoted where needed), standard output and error into files of `dir`.
-ToolResult run_tool(const std::string& args, const TempDir& dir) {
+ToolResult run_tool(const std::string& args, const ScratchDir& dir) {
   const fs::path out = dir / "stdout.txt";
   const fs::path err = dir / "stderr.txt";
   const std::string command = quote(std::string(PH_TOOL_PATH)) + " " + args + " >" + quote(out) + " 2>" + quote(err);
@@ -135,7 +113,7 @@ TargetSpec target_named(const std::string& name) {
 }
 
 // Runs a trace into a CSV file and reads it back.
-Csv trace(const std::string& args, const TempDir& dir) {
+Csv trace(const std::string& args, const ScratchDir& dir) {
   const fs::path csv = dir / "trace.csv";
   const ToolResult r = run_tool("trace " + args + " -o " + quote(csv), dir);
   EXPECT_EQ(r.rc, 0) << args << "\n" << r.err;
@@ -228,7 +206,7 @@ void expect_same_cd(const Csv& a, const Csv& b, double relative, double share) {
 // as few times as they can: the whole file stays well under 30 s with the sanitizer.
 
 TEST(Tool, HelpNamesTheCommandsAndEveryTraceFlag) {
-  TempDir dir;
+  ScratchDir dir;
   const ToolResult top = run_tool("--help", dir);
   EXPECT_EQ(top.rc, 0) << top.err;
   for (std::string_view command : {"targets", "trace", "demo"}) EXPECT_TRUE(contains(top.out, command)) << top.out;
@@ -255,14 +233,14 @@ TEST(Tool, HelpNamesTheCommandsAndEveryTraceFlag) {
 }
 
 TEST(Tool, TraceTargetCurvature) {
-  TempDir dir;
+  ScratchDir dir;
   const Csv csv = trace("--target " + kBump, dir);
   expect_trace_shape(csv, Method::curvature, kBump);
   expect_cd_profile(csv, true, kCurvatureStrict);
 }
 
 TEST(Tool, TraceTargetDepthToStandardOutput) {
-  TempDir dir;
+  ScratchDir dir;
   const ToolResult r = run_tool("trace --target " + kBump + " --method depth", dir);  // -o - by default
   ASSERT_EQ(r.rc, 0) << r.err;
   const Csv csv = parse_csv(r.out);
@@ -272,7 +250,7 @@ TEST(Tool, TraceTargetDepthToStandardOutput) {
 }
 
 TEST(Tool, TraceHoleBothMethods) {
-  TempDir dir;
+  ScratchDir dir;
   const Csv curvature = trace("--target " + kHole, dir);
   expect_trace_shape(curvature, Method::curvature, kHole);
   expect_cd_profile(curvature, false, kCurvatureStrict);
@@ -283,7 +261,7 @@ TEST(Tool, TraceHoleBothMethods) {
 
 // The target's files (16-bit maps) traced through a scene file or given as maps give the rows of the exact target.
 TEST(Tool, TraceFilesMatchTarget) {
-  TempDir dir;
+  ScratchDir dir;
   const TargetSpec spec = target_named(kBump);
   const std::vector<fs::path> scenes = write_target_files(dir.path(), {spec});
   ASSERT_EQ(scenes.size(), 1u);
@@ -330,7 +308,7 @@ TEST(Tool, TraceFilesMatchTarget) {
 }
 
 TEST(Tool, TraceErrors) {
-  TempDir dir;
+  ScratchDir dir;
   const std::string out = " -o " + quote(dir / "x.csv");
   {
     SCOPED_TRACE("no texture");
@@ -367,7 +345,7 @@ TEST(Tool, TraceErrors) {
 
 // `targets` writes the 24 targets' files; `demo` reads them (as the daemon would) and prints one row per target.
 TEST(Tool, TargetsAndDemo) {
-  TempDir dir;
+  ScratchDir dir;
   const fs::path folder = dir / "targets";
   const std::vector<TargetSpec> all = all_targets();
   {
