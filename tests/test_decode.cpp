@@ -1,5 +1,6 @@
 // Decoding of normal and depth images and resampling to a region's size (ALGORITHMS.md section 1).
 #include "core/decode.hpp"
+#include "tests/thrown_message.hpp"
 
 #include <gtest/gtest.h>
 
@@ -68,16 +69,6 @@ void expect_normal_near(Normal actual, Normal expected, double tolerance) {
   EXPECT_NEAR(actual.x, expected.x, tolerance);
   EXPECT_NEAR(actual.y, expected.y, tolerance);
   EXPECT_NEAR(actual.z, expected.z, tolerance);
-}
-
-std::string field_error_message(const auto& action) {
-  try {
-    action();
-  } catch (const FieldError& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "no FieldError";
-  return {};
 }
 
 // --- Normals: conventions -------------------------------------------------------------------------
@@ -213,7 +204,7 @@ TEST(DecodeNormals, WrongChannelCountsThrowSayingWhatIsNeeded) {
   DecodeReport report;
   for (const std::int32_t channels : {1, 2, 5}) {
     const RawImage image = raw(2, 2, channels, false, std::vector<float>(4 * channels, 0.5f));
-    const std::string message = field_error_message([&] { decode_normals(image, {}, report); });
+    const std::string message = thrown_message<FieldError>([&] { decode_normals(image, {}, report); });
     EXPECT_NE(message.find("3 (RGB) or 4 (RGBA)"), std::string::npos) << message;
     EXPECT_NE(message.find("has " + std::to_string(channels)), std::string::npos) << message;
   }
@@ -248,7 +239,7 @@ TEST(DecodeDepth, WrongChannelCountsThrow) {
   DecodeReport report;
   for (const std::int32_t channels : {3, 4}) {
     const RawImage image = raw(1, 1, channels, false, std::vector<float>(channels, 0.5f));
-    const std::string message = field_error_message([&] { decode_depth(image, {}, report); });
+    const std::string message = thrown_message<FieldError>([&] { decode_depth(image, {}, report); });
     EXPECT_NE(message.find("1 channel"), std::string::npos) << message;
     EXPECT_NE(message.find("has " + std::to_string(channels)), std::string::npos) << message;
   }

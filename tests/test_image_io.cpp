@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "config/field_loader.hpp"
+#include "tests/thrown_message.hpp"
 
 // OpenImageIO 2.4's PNG reader longjmps out of libpng past a std::string when the data ends early, leaking
 // 31 bytes per truncated file. That leak is theirs: LeakSanitizer ignores it, and records whole stacks so
@@ -71,19 +72,8 @@ NormalImage dome(std::int32_t width, std::int32_t height) {
   return n;
 }
 
-// The message of the FieldError that `action` throws, or a test failure.
-std::string field_error_message(const auto& action) {
-  try {
-    action();
-  } catch (const FieldError& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "no FieldError";
-  return {};
-}
-
 void expect_error_names(const fs::path& path, const auto& action, const std::string& reason) {
-  const std::string message = field_error_message(action);
+  const std::string message = thrown_message<FieldError>(action);
   ::testing::Test::RecordProperty("message", message);
   EXPECT_EQ(message.rfind(path.string() + ": ", 0), 0u) << message;
   EXPECT_NE(message.find(reason), std::string::npos) << message;
@@ -370,10 +360,11 @@ TEST(FieldLoader, MissingMapsAreConfigurationErrors) {
   const fs::path normals = dir / "normals.png";
   write_normal_png16(normals, dome(8, 8));
   FieldLoadReport report;
-  const std::string no_normals = field_error_message([&] { load_region_fields({}, 8, 8, gradient_only, report); });
+  const std::string no_normals =
+      thrown_message<FieldError>([&] { load_region_fields({}, 8, 8, gradient_only, report); });
   EXPECT_NE(no_normals.find("give a normal map or a depth map"), std::string::npos) << no_normals;
   const std::string no_depth =
-      field_error_message([&] { load_region_fields(maps(normals), 8, 8, depth_only, report); });
+      thrown_message<FieldError>([&] { load_region_fields(maps(normals), 8, 8, depth_only, report); });
   EXPECT_NE(no_depth.find("needs a depth map"), std::string::npos) << no_depth;
   EXPECT_NE(no_depth.find("normal map alone is not enough"), std::string::npos) << no_depth;
 }
