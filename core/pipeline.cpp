@@ -127,14 +127,12 @@ Frame Pipeline::process(const Frame& in, FrameReport* report) {
     report->cd_max = moved.cd_max;
     report->cursor = cursor_.position;
   }
-  if (config_.mode == OutputMode::absolute) return emit_absolute(in, report);
+  if (config_.mode == OutputMode::absolute) return emit_absolute(in, dx, dy, report);
   if (dx == 0 && dy == 0) return in;
-  return emit_relative(in, moved.display, report);
+  return emit_relative(in, dx, dy, moved.display, report);
 }
 
-Frame Pipeline::emit_relative(const Frame& in, Vec2 display, FrameReport* report) {
-  std::int64_t dx = 0, dy = 0;
-  sum_motion(in, dx, dy);
+Frame Pipeline::emit_relative(const Frame& in, std::int64_t dx, std::int64_t dy, Vec2 display, FrameReport* report) {
   // Back to device counts; the fractional remainder carries to the next frame (evsieve does the same).
   const double gain = config_.pointer_gain;
   const Vec2 want = carry_ + Vec2{display.x / gain, display.y / gain};
@@ -149,9 +147,7 @@ Frame Pipeline::emit_relative(const Frame& in, Vec2 display, FrameReport* report
   return rewrite_motion(in, dx, dy, out_x, out_y, ev::kRel, ev::kRelX, ev::kRelY);
 }
 
-Frame Pipeline::emit_absolute(const Frame& in, FrameReport* report) {
-  std::int64_t dx = 0, dy = 0;
-  sum_motion(in, dx, dy);
+Frame Pipeline::emit_absolute(const Frame& in, std::int64_t dx, std::int64_t dy, FrameReport* report) {
   const std::int32_t x = static_cast<std::int32_t>(std::floor(cursor_.position.x));
   const std::int32_t y = static_cast<std::int32_t>(std::floor(cursor_.position.y));
   if (report != nullptr) {

@@ -68,8 +68,9 @@ class Pipeline {
   const PipelineConfig& config() const { return config_; }
 
  private:
-  Frame emit_relative(const Frame& in, Vec2 display, FrameReport* report);
-  Frame emit_absolute(const Frame& in, FrameReport* report);
+  // dx, dy: the frame's summed REL_X/REL_Y counts, as process() found them.
+  Frame emit_relative(const Frame& in, std::int64_t dx, std::int64_t dy, Vec2 display, FrameReport* report);
+  Frame emit_absolute(const Frame& in, std::int64_t dx, std::int64_t dy, FrameReport* report);
   void clamp_to_desktop();
 
   std::shared_ptr<const Scene> scene_;
