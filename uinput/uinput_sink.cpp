@@ -1,0 +1,100 @@
+#include "uinput/uinput_sink.hpp"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cstring>
+
+namespace ph {
+
+LibevdevPtr describe(const DeviceDescription& d) {
+  LibevdevPtr dev(libevdev_new());
+  if (!dev) throw UinputError("out of memory creating a libevdev device");
+  libevdev_set_name(dev.get(), d.name.c_str());
+  libevdev_set_id_bustype(dev.get(), d.bustype);
+  libevdev_set_id_vendor(dev.get(), d.vendor);
+  libevdev_set_id_product(dev.get(), d.product);
+  libevdev_set_id_version(dev.get(), d.version);
+  for (unsigned prop = 0; prop < d.properties.size(); ++prop) {
+    if (d.properties.test(prop)) libevdev_enable_property(dev.get(), prop);
+  }
+  // codes[0] is the type mask; every other type lists its codes. EV_SYN is always there.
+  libevdev_enable_event_type(dev.get(), EV_SYN);
+  for (unsigned type = 1; type <= ev::kMaxType; ++type) {
+    if (!d.codes[0].test(type) && d.codes[type].none()) continue;
+    libevdev_enable_event_type(dev.get(), type);
+    for (unsigned code = 0; code <= ev::kMaxCode; ++code) {
+      if (!d.codes[type].test(code)) continue;
+      if (type == EV_ABS) {
+        const auto it = d.absinfo.find(static_cast<std::uint16_t>(code));
+        input_absinfo info{};
+        if (it != d.absinfo.end()) {
+          info = {0, it->second.minimum, it->second.maximum, it->second.fuzz, it->second.flat, it->second.resolution};
+        }
+        libevdev_enable_event_code(dev.get(), type, code, &info);
+      } else if (type == EV_REP) {
+        int value = 0;
+        libevdev_enable_event_code(dev.get(), type, code, &value);
+      } else {
+        libevdev_enable_event_code(dev.get(), type, code, nullptr);
+      }
+    }
+  }
+  return dev;
+}
+
+std::string uinput_error_message(int negative_errno) {
+  const int err = -negative_errno;
+  switch (err) {
+    case ENOENT:
+    case ENODEV:
+    case ENXIO:
+      return "cannot create the virtual pointer: /dev/uinput does not exist. Load the uinput module "
+             "(sudo modprobe uinput; the package's udev rule does it at boot) and try again.";
+    case EACCES:
+    case EPERM:
+      return "cannot create the virtual pointer: no permission to open /dev/uinput. Run pseudohapticd as "
+             "root (the systemd unit does) or give its user write access to /dev/uinput.";
+    default:
+      return fmt::format("cannot create the virtual pointer through /dev/uinput: {}", std::strerror(err));
+  }
+}
+
+UinputSink::UinputSink(const DeviceDescription& description) {
+  const LibevdevPtr dev = describe(description);
+  libevdev_uinput* raw = nullptr;
+  const int rc = libevdev_uinput_create_from_device(dev.get(), LIBEVDEV_UINPUT_OPEN_MANAGED, &raw);
+  if (rc < 0) throw UinputError(uinput_error_message(rc));
+  uidev_.reset(raw);
+}
+
+UinputSink::~UinputSink() {
+  if (!uidev_) return;
+  // Nothing may stay pressed once the device is gone.
+  for (const InputEvent& e : held_.release_all(last_time_).events) {
+    libevdev_uinput_write_event(uidev_.get(), e.type, e.code, e.value);
+  }
+}
+
+void UinputSink::write(const Frame& frame) {
+  for (const InputEvent& e : frame.events) {
+    // The kernel stamps the events itself; a write can only fail if the device is gone.
+    if (libevdev_uinput_write_event(uidev_.get(), e.type, e.code, e.value) < 0) {
+      throw UinputError(fmt::format("writing to the virtual pointer failed: {}", std::strerror(errno)));
+    }
+    held_.observe(e);
+    last_time_ = e.time;
+  }
+}
+
+std::string UinputSink::devnode() const {
+  const char* node = libevdev_uinput_get_devnode(uidev_.get());
+  return node != nullptr ? node : "";
+}
+
+std::string UinputSink::syspath() const {
+  const char* path = libevdev_uinput_get_syspath(uidev_.get());
+  return path != nullptr ? path : "";
+}
+
+}  // namespace ph

@@ -1,0 +1,59 @@
+// The daemon's virtual output device, through libevdev's uinput API (ALGORITHMS.md section 6).
+#pragma once
+
+#include <libevdev/libevdev-uinput.h>
+#include <libevdev/libevdev.h>
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "core/device.hpp"
+#include "core/pipeline.hpp"
+#include "uinput/held_keys.hpp"
+
+namespace ph {
+
+class UinputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct LibevdevFree {
+  void operator()(libevdev* dev) const { libevdev_free(dev); }
+};
+using LibevdevPtr = std::unique_ptr<libevdev, LibevdevFree>;
+
+struct LibevdevUinputDestroy {
+  void operator()(libevdev_uinput* uidev) const { libevdev_uinput_destroy(uidev); }
+};
+using LibevdevUinputPtr = std::unique_ptr<libevdev_uinput, LibevdevUinputDestroy>;
+
+// A libevdev device (not yet a kernel device) with the description's name, ids, properties, event
+// codes and axis ranges: what the virtual device will announce.
+LibevdevPtr describe(const DeviceDescription& description);
+
+// What went wrong creating a uinput device, in words a user can act on.
+std::string uinput_error_message(int negative_errno);
+
+class UinputSink final : public EventSink {
+ public:
+  // Throws UinputError (e.g. no /dev/uinput, permission denied) with a message that says what to do.
+  explicit UinputSink(const DeviceDescription& description);
+  // Releases whatever the stream still holds down, then destroys the device.
+  ~UinputSink() override;
+  UinputSink(const UinputSink&) = delete;
+  UinputSink& operator=(const UinputSink&) = delete;
+
+  void write(const Frame& frame) override;
+  // The /dev/input/eventN node of the virtual device ("" when the kernel did not say).
+  std::string devnode() const;
+  std::string syspath() const;
+
+ private:
+  LibevdevUinputPtr uidev_;
+  HeldKeys held_;
+  TimeUs last_time_ = 0;
+};
+
+}  // namespace ph
