@@ -205,6 +205,77 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   return r;
 }
 
+DaemonSettings parse_daemon(const Reporter& rep, const toml::table& t) {
+  const std::string where = "daemon.";
+  reject_unknown_keys(rep, t, {"devices", "output", "desktop", "pointer_speed"}, where);
+  DaemonSettings d;
+
+  if (const toml::node* node = t.get("devices")) {
+    const char* allowed =
+        "must be \"any\" or a list of matchers like [\"name:Logitech*\", \"usb:046d:c077\", \"id:046d:c077\"]";
+    if (auto any = node->value_exact<std::string>()) {
+      if (*any != "any") rep.fail(node, "daemon.devices", allowed);
+    } else if (const toml::array* arr = node->as_array()) {
+      if (arr->empty()) rep.fail(node, "daemon.devices", fmt::format("is empty; {}", allowed));
+      for (std::size_t i = 0; i < arr->size(); ++i) {
+        const toml::node& item = (*arr)[i];
+        const std::string key = fmt::format("daemon.devices[{}]", i);
+        const auto text = item.value_exact<std::string>();
+        if (!text) rep.fail(&item, key, "must be a string like \"name:Logitech*\" or \"id:046d:c077\"");
+        std::string error;
+        const auto match = parse_device_match(*text, error);
+        if (!match) rep.fail(&item, key, error);
+        d.devices.push_back(*match);
+      }
+    } else {
+      rep.fail(node, "daemon.devices", allowed);
+    }
+  }
+
+  const std::string output = get_string(rep, t, "output", where).value_or("relative");
+  if (output == "relative") {
+    d.output = OutputMode::relative;
+  } else if (output == "absolute") {
+    d.output = OutputMode::absolute;
+  } else {
+    rep.fail(t.get("output"), "daemon.output", "must be \"relative\" or \"absolute\"");
+  }
+
+  if (const toml::node* node = t.get("desktop")) {
+    const char* allowed = "must be \"auto\" or [x, y, width, height] in whole px";
+    if (auto text = node->value_exact<std::string>()) {
+      if (*text != "auto") rep.fail(node, "daemon.desktop", allowed);
+    } else if (const toml::array* arr = node->as_array()) {
+      if (arr->size() != 4) rep.fail(node, "daemon.desktop", allowed);
+      std::int64_t v[4] = {};
+      for (std::size_t i = 0; i < 4; ++i) {
+        const auto n = (*arr)[i].value_exact<std::int64_t>();
+        if (!n) rep.fail(node, "daemon.desktop", allowed);
+        v[i] = *n;
+      }
+      if (v[0] < -kMaxCoordinate || v[0] > kMaxCoordinate || v[1] < -kMaxCoordinate || v[1] > kMaxCoordinate)
+        rep.fail(
+            node, "daemon.desktop",
+            fmt::format("x and y must be between {} and {} (got {}, {})", -kMaxCoordinate, kMaxCoordinate, v[0], v[1]));
+      if (v[2] < 1 || v[2] > kMaxCoordinate || v[3] < 1 || v[3] > kMaxCoordinate)
+        rep.fail(node, "daemon.desktop",
+                 fmt::format("width and height must be between 1 and {} (got {}, {})", kMaxCoordinate, v[2], v[3]));
+      d.desktop = Rect{static_cast<std::int32_t>(v[0]), static_cast<std::int32_t>(v[1]),
+                       static_cast<std::int32_t>(v[2]), static_cast<std::int32_t>(v[3])};
+    } else {
+      rep.fail(node, "daemon.desktop", allowed);
+    }
+  }
+
+  d.pointer_speed = get_number(rep, t, "pointer_speed", where, d.pointer_speed);
+  check_key(
+      rep, t, "pointer_speed", where,
+      [&] { return positive_finite(d.pointer_speed) && d.pointer_speed <= kMaxPointerSpeed; },
+      fmt::format("must be a finite number > 0 and at most {} (screen px per device count at C/D 1)",
+                  kMaxPointerSpeed));
+  return d;
+}
+
 }  // namespace
 
 std::optional<MethodKind> parse_method_kind(std::string_view name) {
@@ -223,9 +294,10 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
   } catch (const toml::parse_error& e) {
     throw ConfigError(fmt::format("{}:{}: {}", origin.string(), e.source().begin.line, e.description()));
   }
-  reject_unknown_keys(rep, root, {"region"}, "");
+  reject_unknown_keys(rep, root, {"daemon", "region"}, "");
   SceneSpec spec;
   spec.file = origin;
+  if (const toml::table* daemon = get_table(rep, root, "daemon", "")) spec.daemon = parse_daemon(rep, *daemon);
   const toml::node* regions = root.get("region");
   if (regions == nullptr) return spec;
   const toml::array* arr = regions->as_array();

@@ -1,5 +1,6 @@
-// Scene files (TOML): regions with their images, method and parameters. Every error names the file,
-// the line and the key, and says what is allowed. Unknown keys are errors: a typo must not pass silently.
+// Scene files (TOML): regions with their images, method and parameters, and the optional [daemon] table
+// (config/daemon_config.hpp); the scene file is the daemon's config file. Every error names the file, the
+// line and the key, and says what is allowed. Unknown keys are errors: a typo must not pass silently.
 #pragma once
 
 #include <filesystem>
@@ -9,12 +10,16 @@
 #include <string_view>
 #include <vector>
 
+#include "config/daemon_config.hpp"
 #include "config/field_loader.hpp"
 #include "core/method_curvature.hpp"
 #include "core/method_depth.hpp"
 #include "core/scene.hpp"
 
 namespace ph {
+
+// Where the daemon reads its scene file when it is given none.
+inline constexpr std::string_view kDefaultSceneFile = "/etc/pseudohaptic/scene.toml";
 
 class ConfigError : public std::runtime_error {
  public:
@@ -40,6 +45,7 @@ struct RegionSpec {
 struct SceneSpec {
   std::filesystem::path file;  // empty for a scene given as text
   std::vector<RegionSpec> regions;
+  DaemonSettings daemon;  // the [daemon] table; its defaults when there is none
 };
 
 // `origin` names the text in errors and is the base for relative image paths.

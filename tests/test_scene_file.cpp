@@ -211,7 +211,7 @@ TEST(SceneFileParse, MethodNamesAndMethods) {
 
 TEST(SceneFileErrors, UnknownTopLevelKey) {
   expect_error("title = \"hills\"\n[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n", 1, "title",
-               {"unknown key", "allowed: region"});
+               {"unknown key", "allowed: daemon, region"});
   expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n[regions]\nx = 1\n", 5, "regions",
                {"unknown key", "region"});
 }

@@ -396,5 +396,57 @@ TEST(Tool, TargetsAndDemo) {
   for (std::size_t i = 0; i < all.size(); ++i) EXPECT_EQ(names[i], all[i].name());
 }
 
+TEST(Tool, CheckConfig) {
+  ScratchDir dir;
+  const TargetSpec target = target_named("bump-gaussian-h1-r100");
+  write_target_files(dir.path(), {target});
+  const TargetFilePaths paths = target_file_paths(dir.path(), target);
+  const fs::path scene = dir / "scene.toml";
+  {
+    std::ofstream out(scene, std::ios::binary);
+    out << "[daemon]\ndevices = [\"name:Logitech*\", \"usb:046d:c077\"]\noutput = \"absolute\"\n"
+           "desktop = [0, 0, 2560, 1440]\npointer_speed = 1.5\n\n"
+        << read_text(paths.scene);
+  }
+  {
+    SCOPED_TRACE("summary");
+    const ToolResult r = run_tool("check-config " + quote(scene), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(r.err.empty()) << r.err;
+    for (std::string_view part :
+         {"name:Logitech*, id:046d:c077", "absolute", "0,0 2560x1440", "1.5", "'bump-gaussian-h1-r100'", "500x500",
+          "curvature", "2000000 bytes", "0 invalid texels repaired"}) {
+      EXPECT_TRUE(contains(r.out, part)) << "expected '" << part << "' in: " << r.out;
+    }
+  }
+  {
+    SCOPED_TRACE("defaults, quiet");
+    const ToolResult r = run_tool("check-config " + quote(paths.scene), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(contains(r.out, "any pointer")) << r.out;
+    EXPECT_TRUE(contains(r.out, "desktop: auto")) << r.out;
+    const ToolResult q = run_tool("check-config --quiet " + quote(scene), dir);
+    EXPECT_EQ(q.rc, 0) << q.err;
+    EXPECT_TRUE(q.out.empty()) << q.out;
+    EXPECT_TRUE(q.err.empty()) << q.err;
+  }
+  {
+    SCOPED_TRACE("bad setting");
+    std::ofstream(dir / "bad.toml", std::ios::binary) << "[daemon]\noutput = \"abs\"\n";
+    const ToolResult r = run_tool("check-config --quiet " + quote(dir / "bad.toml"), dir);
+    EXPECT_EQ(r.rc, 1);
+    expect_clean_failure(r, {"pseudohaptic: ", "bad.toml:2:", "daemon.output", "\"absolute\""});
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+  {
+    SCOPED_TRACE("bad image");
+    fs::remove(paths.normal_map);
+    const ToolResult r = run_tool("check-config " + quote(scene), dir);
+    EXPECT_EQ(r.rc, 1);
+    expect_clean_failure(r, {"scene.toml:", "bump-gaussian-h1-r100", paths.normal_map.filename().string()});
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+}
+
 }  // namespace
 }  // namespace ph

@@ -1,0 +1,43 @@
+// The daemon's settings: the optional [daemon] table of the scene file (parsed in config/scene_file.cpp).
+// Which input devices the daemon takes over, how it emits, the desktop it keeps the cursor in, and the
+// base pointer speed. Pure: matching a device is a function of its name and ids.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/geometry.hpp"
+#include "core/pipeline.hpp"
+
+namespace ph {
+
+// One matcher of `devices`: "name:GLOB" (fnmatch(3), case-sensitive), "usb:VVVV:PPPP" or "id:VVVV:PPPP"
+// (vendor:product, 4 hex digits each; both prefixes mean vendor:product regardless of the bus).
+struct DeviceMatch {
+  std::optional<std::string> name_glob;
+  std::optional<std::uint16_t> vendor, product;
+};
+
+struct DaemonSettings {
+  std::vector<DeviceMatch> devices;  // empty = any pointer
+  OutputMode output = OutputMode::relative;
+  std::optional<Rect> desktop;  // nullopt = auto (the size of the screen)
+  double pointer_speed = 1.0;   // screen px per device count at C/D 1
+};
+
+inline constexpr double kMaxPointerSpeed = 100.0;
+
+// Parses one matcher; on a mistake returns nullopt and sets `error` to what is wrong and what is allowed.
+std::optional<DeviceMatch> parse_device_match(std::string_view text, std::string& error);
+
+// The matcher as it is written in the file ("name:Logitech*", "id:046d:c077").
+std::string format_device_match(const DeviceMatch& match);
+
+// True when the device matches any matcher, or when the settings name none (any pointer: the caller checks
+// that the device is a pointer).
+bool device_matches(const DaemonSettings& settings, std::string_view name, std::uint16_t vendor, std::uint16_t product);
+
+}  // namespace ph
