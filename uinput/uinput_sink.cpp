@@ -4,6 +4,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <thread>
 
 namespace ph {
 
@@ -69,11 +70,13 @@ UinputSink::UinputSink(const DeviceDescription& description) {
 }
 
 UinputSink::~UinputSink() {
-  if (!uidev_) return;
-  // Nothing may stay pressed once the device is gone.
+  if (!uidev_ || !held_.any()) return;
+  // Nothing may stay pressed once the device is gone. The kernel discards what a reader has not read
+  // when the device is removed, so the readers (the compositor) get a moment to read the release.
   for (const InputEvent& e : held_.release_all(last_time_).events) {
     libevdev_uinput_write_event(uidev_.get(), e.type, e.code, e.value);
   }
+  std::this_thread::sleep_for(kReleaseGrace);
 }
 
 void UinputSink::write(const Frame& frame) {

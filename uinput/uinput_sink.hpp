@@ -4,6 +4,7 @@
 #include <libevdev/libevdev-uinput.h>
 #include <libevdev/libevdev.h>
 
+#include <chrono>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -38,9 +39,12 @@ std::string uinput_error_message(int negative_errno);
 
 class UinputSink final : public EventSink {
  public:
+  // How long readers get to read the release of held keys before the device goes away.
+  static constexpr std::chrono::milliseconds kReleaseGrace{50};
+
   // Throws UinputError (e.g. no /dev/uinput, permission denied) with a message that says what to do.
   explicit UinputSink(const DeviceDescription& description);
-  // Releases whatever the stream still holds down, then destroys the device.
+  // Releases whatever the stream still holds down (then waits kReleaseGrace), then destroys the device.
   ~UinputSink() override;
   UinputSink(const UinputSink&) = delete;
   UinputSink& operator=(const UinputSink&) = delete;
