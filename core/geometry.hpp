@@ -43,6 +43,7 @@ struct Rect {
 
   constexpr bool contains(Texel t) const { return t.x >= x && t.x < x + w && t.y >= y && t.y < y + h; }
   constexpr std::int64_t area() const { return std::int64_t{w} * h; }
+  constexpr bool operator==(const Rect&) const = default;
 };
 
 // Time of an input event, microseconds on the source's clock. The core never reads a clock itself.
