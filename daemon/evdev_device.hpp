@@ -1,0 +1,61 @@
+// One physical input device read through libevdev: what the daemon grabs and reads its events from.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "core/device.hpp"
+#include "core/event.hpp"
+#include "uinput/uinput_sink.hpp"  // LibevdevPtr
+
+namespace ph {
+
+class DeviceError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// What a frame of reading found.
+enum class ReadStatus { ok, gone };
+
+class EvdevDevice {
+ public:
+  // Opens a /dev/input/eventN node (non-blocking). Throws DeviceError naming the node and the reason.
+  explicit EvdevDevice(const std::string& node);
+  ~EvdevDevice();
+  EvdevDevice(const EvdevDevice&) = delete;
+  EvdevDevice& operator=(const EvdevDevice&) = delete;
+
+  const std::string& node() const { return node_; }
+  int fd() const { return fd_; }
+  std::string name() const;
+
+  // A pointer the daemon can drive: REL_X, REL_Y and at least one mouse button.
+  bool is_pointer() const;
+  DeviceDescription description() const;
+
+  // Asks the kernel now (EVIOCGKEY) whether any key or button is down: the daemon grabs only when none
+  // is, so that no press is grabbed without its release.
+  bool any_key_held() const;
+
+  // EVIOCGRAB. Throws DeviceError (EBUSY: another program holds the grab).
+  void grab();
+  void ungrab();
+  bool grabbed() const { return grabbed_; }
+
+  // Hands every event that can be read now to `on_event`, in order. A SYN_DROPPED is handed on, then
+  // libevdev's sync mode supplies the state differences as events, ending in SYN_REPORT: the same shape
+  // as a recording's dropped frame, which FrameProcessor passes through without applying its motion.
+  // Returns gone when the device was unplugged.
+  ReadStatus read_available(const std::function<void(const InputEvent&)>& on_event);
+
+ private:
+  std::string node_;
+  int fd_ = -1;
+  LibevdevPtr dev_;
+  bool grabbed_ = false;
+};
+
+}  // namespace ph
