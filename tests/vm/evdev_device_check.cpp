@@ -78,6 +78,7 @@ int main() {
   if (!right_down) return fail("the resync did not deliver the button pressed during the overflow");
   if (got.back().type != ph::ev::kSyn || got.back().code != ph::ev::kSynReport)
     return fail("stream does not end a frame");
+  const std::size_t after_flood = got.size();
 
   physical->write(frame({{0, ph::ev::kKey, ph::ev::kBtnRight, 0}}));
   physical.reset();  // unplug
@@ -86,6 +87,6 @@ int main() {
   std::printf(
       "evdev device check: pointer, held button, exclusive grab, order, SYN_DROPPED resync (%zu events "
       "after the flood), unplug\n",
-      got.size());
+      after_flood);
   return 0;
 }
