@@ -13,25 +13,12 @@
 #include <vector>
 
 #include "core/event.hpp"
+#include "tests/vm/vm_check.hpp"
 #include "uinput/uinput_sink.hpp"
 
 namespace {
 
-int fail(const std::string& what) {
-  std::fprintf(stderr, "uinput sink check: %s\n", what.c_str());
-  return 1;
-}
-
-ph::DeviceDescription mouse() {
-  ph::DeviceDescription d;
-  d.name = "pseudohaptic vm check mouse";
-  d.bustype = 0x03;
-  for (std::uint16_t type : {ph::ev::kSyn, ph::ev::kKey, ph::ev::kRel}) d.enable(ph::ev::kSyn, type);
-  d.enable(ph::ev::kKey, ph::ev::kBtnLeft);
-  d.enable(ph::ev::kKey, ph::ev::kBtnRight);
-  for (std::uint16_t r : {ph::ev::kRelX, ph::ev::kRelY, ph::ev::kRelWheel}) d.enable(ph::ev::kRel, r);
-  return d;
-}
+constexpr const char* kProgram = "uinput sink check";
 
 // Reads events until `count` non-SYN events arrived, the device went away, or 2 s passed.
 std::vector<input_event> read_events(libevdev* dev, int fd, std::size_t count) {
@@ -52,13 +39,13 @@ std::vector<input_event> read_events(libevdev* dev, int fd, std::size_t count) {
 }  // namespace
 
 int main() {
-  auto sink = std::make_unique<ph::UinputSink>(mouse());
+  auto sink = std::make_unique<ph::UinputSink>(ph::vm::vm_mouse("pseudohaptic vm check mouse"));
   const std::string node = sink->devnode();
-  if (node.empty()) return fail("the kernel gave no device node");
+  if (node.empty()) return ph::vm::fail(kProgram, "the kernel gave no device node");
   const int fd = open(node.c_str(), O_RDONLY | O_NONBLOCK);
-  if (fd < 0) return fail("cannot open " + node);
+  if (fd < 0) return ph::vm::fail(kProgram, "cannot open " + node);
   libevdev* raw = nullptr;
-  if (libevdev_new_from_fd(fd, &raw) < 0) return fail("libevdev cannot read " + node);
+  if (libevdev_new_from_fd(fd, &raw) < 0) return ph::vm::fail(kProgram, "libevdev cannot read " + node);
   const ph::LibevdevPtr reader(raw);
 
   ph::Frame frame;
@@ -70,14 +57,14 @@ int main() {
   const auto first = read_events(reader.get(), fd, 3);
   if (first.size() != 3 || first[0].code != REL_X || first[0].value != 5 || first[1].code != REL_Y ||
       first[1].value != -3 || first[2].code != BTN_LEFT || first[2].value != 1) {
-    return fail("the frame did not come out unchanged");
+    return ph::vm::fail(kProgram, "the frame did not come out unchanged");
   }
   // BTN_LEFT is still down. Destroy the sink while reading, as the compositor would be.
   std::thread destroyer([&sink] { sink.reset(); });
   const auto last = read_events(reader.get(), fd, 1);
   destroyer.join();
   if (last.size() != 1 || last[0].type != EV_KEY || last[0].code != BTN_LEFT || last[0].value != 0) {
-    return fail("the held button was not released before the device went away");
+    return ph::vm::fail(kProgram, "the held button was not released before the device went away");
   }
   close(fd);
   std::printf("uinput sink check: frame passed through, held button released on destruction (%s)\n", node.c_str());
