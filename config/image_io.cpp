@@ -79,6 +79,14 @@ void write_png16(const std::filesystem::path& path, std::int32_t width, std::int
 
 }  // namespace
 
+ImageSize read_image_size(const std::filesystem::path& path, const ImageLimits& limits) {
+  const OIIO::ImageSpec config = as_stored_config();
+  auto in = OIIO::ImageInput::open(path.string(), &config);
+  if (!in) throw file_error(path, "cannot open: " + one_line(OIIO::geterror()));
+  check_spec(path, in->spec(), limits);
+  return {in->spec().width, in->spec().height};
+}
+
 RawImage read_image(const std::filesystem::path& path, const ImageLimits& limits) {
   const OIIO::ImageSpec config = as_stored_config();
   auto in = OIIO::ImageInput::open(path.string(), &config);

@@ -16,6 +16,14 @@ struct ImageLimits {
   std::int32_t max_channels = 16;  // normal and depth maps use at most 4
 };
 
+struct ImageSize {
+  std::int32_t width = 0;
+  std::int32_t height = 0;
+};
+
+// The size from the file's header alone, with the same checks and errors as read_image.
+ImageSize read_image_size(const std::filesystem::path& path, const ImageLimits& limits = {});
+
 // Reads every channel as float (integer formats scaled to [0, 1] by OpenImageIO).
 // Throws FieldError("PATH: reason") for a missing, unreadable, truncated, zero-sized or too large image.
 RawImage read_image(const std::filesystem::path& path, const ImageLimits& limits = {});

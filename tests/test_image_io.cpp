@@ -396,3 +396,23 @@ TEST(FieldLoader, BadFilesNameThePath) {
 
 }  // namespace
 }  // namespace ph
+
+namespace ph {
+namespace {
+
+TEST(ImageIo, SizeComesFromTheHeaderWithTheSameChecks) {
+  const ScratchDir dir;
+  const fs::path path = dir / "size.png";
+  write_gray_png16(path, Grid<float>(7, 3, 0.5f));
+  const ImageSize size = read_image_size(path);
+  EXPECT_EQ(size.width, 7);
+  EXPECT_EQ(size.height, 3);
+  ImageLimits tiny;
+  tiny.max_pixels = 20;
+  EXPECT_NE(thrown_message<FieldError>([&] { read_image_size(path, tiny); }).find(path.string()), std::string::npos);
+  EXPECT_NE(thrown_message<FieldError>([&] { read_image_size(dir / "missing.png"); }).find("missing.png"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace ph

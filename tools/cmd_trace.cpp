@@ -52,8 +52,8 @@ SceneSpec scene_from_maps(const TraceOptions& o) {
   r.name = "trace";
   if (!o.normal_map.empty()) r.sources.normal_map = o.normal_map;
   if (!o.depth_map.empty()) r.sources.depth_map = o.depth_map;
-  const RawImage first = read_image(!o.normal_map.empty() ? o.normal_map : o.depth_map);
-  r.rect = {0, 0, first.width, first.height};
+  const ImageSize size = read_image_size(!o.normal_map.empty() ? o.normal_map : o.depth_map);
+  r.rect = {0, 0, size.width, size.height};
   r.sources.normal_options.green = o.normal_green == "directx" ? GreenConvention::directx : GreenConvention::opengl;
   r.sources.normal_options.encoding = o.normal_encoding == "unorm"    ? NormalEncoding::unorm
                                       : o.normal_encoding == "signed" ? NormalEncoding::signed_values
