@@ -313,7 +313,10 @@ class EvemuParser {
     start_description_line('N');
     if (has_name_) at_.fail("second 'N:' line; expected one device per recording");
     has_name_ = true;
-    recording_.device.name = std::string(skip_blanks(rest));
+    const string_view name = skip_blanks(rest);
+    if (name.size() > kMaxDeviceName)
+      at_.fail(fmt::format("device name of {} characters; at most {} are allowed", name.size(), kMaxDeviceName));
+    recording_.device.name = std::string(name);
   }
 
   void parse_id(string_view data) {
@@ -489,6 +492,10 @@ void append_mask_line(Buffer& out, const std::bitset<N>& mask, std::size_t line)
 // write what would not read back, before writing anything.
 void check_writable(const Recording& recording) {
   const DeviceDescription& device = recording.device;
+  if (device.name.size() > kMaxDeviceName) {
+    throw RecordingError(fmt::format("cannot write evemu: the device name has {} characters, more than {}",
+                                     device.name.size(), kMaxDeviceName));
+  }
   for (const char c : device.name) {
     if (is_binary(c)) throw RecordingError("cannot write evemu: the device name contains a control character");
   }

@@ -189,6 +189,10 @@ DeviceDescription read_description(const YAML::Node& evdev, const ErrorSite& sit
   DeviceDescription device;
   const YAML::Node name = require(evdev, "name", "'evdev'", site);
   if (!name.IsScalar()) site.fail(name, "'name' must be a string");
+  if (name.Scalar().size() > kMaxDeviceName) {
+    site.fail(name,
+              fmt::format("'name' has {} characters; at most {} are allowed", name.Scalar().size(), kMaxDeviceName));
+  }
   device.name = name.Scalar();
   read_id(require(evdev, "id", "'evdev'", site), device, site);
   read_codes(require(evdev, "codes", "'evdev'", site), device, site);

@@ -221,6 +221,7 @@ TEST(LibinputRecord, WrongShapesAreErrorsWithTheirLine) {
       {4, "  evdevs:", 3, "'evdev' missing in device 0"},
       {5, "    name: [m]", 5, "'name' must be a string"},
       {5, "    label: m", 5, "'name' missing in 'evdev'"},
+      {5, "    name: " + std::string(kMaxDeviceName + 1, 'n'), 5, "'name' has 1025 characters"},
       {6, "    id: [3, 1, 2]", 6, "'id' must be a list of 4 integers"},
       {6, "    id: [3, 70000, 2, 3]", 6, "vendor 70000 is not in [0, 65535]"},
       {6, "    id: 3", 6, "'id' must be a list of 4 integers"},
