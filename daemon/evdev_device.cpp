@@ -9,6 +9,7 @@
 #include <array>
 #include <cerrno>
 #include <cstring>
+#include <ctime>
 
 namespace ph {
 
@@ -24,15 +25,19 @@ InputEvent to_event(const input_event& e) {
 
 EvdevDevice::EvdevDevice(const std::string& node) : node_(node) {
   fd_ = ::open(node.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-  if (fd_ < 0) throw DeviceError(fmt::format("{}: cannot open: {}", node, std::strerror(errno)));
+  if (fd_ < 0) {
+    const int error = errno;
+    throw DeviceError(fmt::format("{}: cannot open: {}", node, std::strerror(error)), error);
+  }
   libevdev* raw = nullptr;
   const int rc = libevdev_new_from_fd(fd_, &raw);
   if (rc < 0) {
     ::close(fd_);
     fd_ = -1;
-    throw DeviceError(fmt::format("{}: not an evdev device: {}", node, std::strerror(-rc)));
+    throw DeviceError(fmt::format("{}: not an evdev device: {}", node, std::strerror(-rc)), -rc);
   }
   dev_.reset(raw);
+  libevdev_set_clock_id(dev_.get(), CLOCK_MONOTONIC);
 }
 
 EvdevDevice::~EvdevDevice() {

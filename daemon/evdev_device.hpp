@@ -14,7 +14,12 @@ namespace ph {
 
 class DeviceError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit DeviceError(const std::string& what, int error = 0) : std::runtime_error(what), error_(error) {}
+  // The errno behind it (0 when none): EACCES or ENOENT from open() mean "try again later" to hotplug.
+  int error() const { return error_; }
+
+ private:
+  int error_;
 };
 
 // What a frame of reading found.
@@ -22,7 +27,8 @@ enum class ReadStatus { ok, gone };
 
 class EvdevDevice {
  public:
-  // Opens a /dev/input/eventN node (non-blocking). Throws DeviceError naming the node and the reason.
+  // Opens a /dev/input/eventN node (non-blocking). Events carry CLOCK_MONOTONIC times, so that a change of
+  // the wall clock never looks like a pause of the hand. Throws DeviceError naming the node and the reason.
   explicit EvdevDevice(const std::string& node);
   ~EvdevDevice();
   EvdevDevice(const EvdevDevice&) = delete;

@@ -81,6 +81,8 @@ UinputSink::~UinputSink() {
 
 void UinputSink::write(const Frame& frame) {
   for (const InputEvent& e : frame.events) {
+    // SYN_DROPPED describes the source's buffer, not an event of the stream: it is not written.
+    if (e.type == ev::kSyn && e.code == ev::kSynDropped) continue;
     // The kernel stamps the events itself; a write can only fail if the device is gone.
     if (libevdev_uinput_write_event(uidev_.get(), e.type, e.code, e.value) < 0) {
       throw UinputError(fmt::format("writing to the virtual pointer failed: {}", std::strerror(errno)));

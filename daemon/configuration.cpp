@@ -1,0 +1,59 @@
+#include "daemon/configuration.hpp"
+
+#include <fmt/format.h>
+
+#include "config/desktop_geometry.hpp"
+#include "config/scene_file.hpp"
+#include "core/default_scene.hpp"
+
+namespace ph {
+
+namespace {
+
+bool same_matchers(const std::vector<DeviceMatch>& a, const std::vector<DeviceMatch>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (format_device_match(a[i]) != format_device_match(b[i])) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+Configuration load_configuration(const ConfigChoice& choice) {
+  Configuration c;
+  std::optional<std::filesystem::path> file = choice.file;
+  if (!choice.default_scene && !file) {
+    std::error_code ignored;
+    if (std::filesystem::exists(choice.default_file, ignored)) {
+      file = choice.default_file;
+    } else {
+      c.notes.push_back(
+          fmt::format("no scene file at {}; using the embedded default scene (three targets of the "
+                      "curvature paper, see pseudohapticd(8))",
+                      choice.default_file.string()));
+    }
+  }
+  if (file && !choice.default_scene) {
+    const SceneSpec spec = parse_scene_file(*file);
+    c.scene = std::make_shared<const Scene>(load_scene(spec));
+    c.settings = spec.daemon;
+    c.source = file->string();
+  } else {
+    c.scene = std::make_shared<const Scene>(default_scene());
+    c.source = "the embedded default scene";
+  }
+  std::string warning;
+  c.pipeline.desktop = resolve_desktop(c.settings.desktop, choice.drm_dir, warning);
+  if (!warning.empty()) c.warnings.push_back(warning);
+  c.pipeline.mode = c.settings.output;
+  c.pipeline.pointer_gain = c.settings.pointer_speed;
+  return c;
+}
+
+bool only_scene_differs(const Configuration& a, const Configuration& b) {
+  return a.pipeline.desktop == b.pipeline.desktop && a.pipeline.mode == b.pipeline.mode &&
+         a.pipeline.pointer_gain == b.pipeline.pointer_gain && same_matchers(a.settings.devices, b.settings.devices);
+}
+
+}  // namespace ph

@@ -1,0 +1,359 @@
+#include "daemon/daemon.hpp"
+
+#include <fcntl.h>
+#include <sys/epoll.h>
+#include <sys/signalfd.h>
+#include <sys/timerfd.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <string_view>
+
+#include "config/scene_file.hpp"
+
+namespace ph {
+
+namespace {
+
+// How often a mouse with a held button, or a node not yet accessible, is looked at again.
+constexpr long kRetryIntervalNs = 50'000'000;
+// A node that udev has not made accessible after this many tries (5 s) is given up.
+constexpr int kOpenTries = 100;
+// Virtual devices of pseudohapticd, this one or another: never taken.
+constexpr std::string_view kOwnDevicePrefix = "pseudohaptic ";
+
+[[noreturn]] void fail_system(std::string_view what) {
+  throw StartupError(fmt::format("{}: {}", what, std::strerror(errno)));
+}
+
+void watch(int epoll, int fd) {
+  epoll_event event{};
+  event.events = EPOLLIN;
+  event.data.fd = fd;
+  if (::epoll_ctl(epoll, EPOLL_CTL_ADD, fd, &event) < 0) fail_system("cannot watch a file descriptor (epoll)");
+}
+
+void set_timer(int timer, long interval_ns) {
+  itimerspec spec{};
+  spec.it_interval.tv_sec = interval_ns / 1'000'000'000;
+  spec.it_interval.tv_nsec = interval_ns % 1'000'000'000;
+  spec.it_value = spec.it_interval;  // zero disarms
+  ::timerfd_settime(timer, 0, &spec, nullptr);
+}
+
+void drain_timer(int timer) {
+  std::uint64_t expirations = 0;
+  [[maybe_unused]] const ssize_t n = ::read(timer, &expirations, sizeof expirations);
+}
+
+bool retry_later(int error) { return error == EACCES || error == EPERM || error == ENOENT || error == ENXIO; }
+
+std::string quoted_name(const EvdevDevice& device) { return fmt::format("\"{}\"", device.name()); }
+
+sigset_t daemon_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  for (int s : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&set, s);
+  return set;
+}
+
+}  // namespace
+
+void block_daemon_signals() {
+  const sigset_t set = daemon_signals();
+  ::sigprocmask(SIG_BLOCK, &set, nullptr);  // fails only for an invalid `how`
+}
+
+Daemon::Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& notifier)
+    : choice_(std::move(choice)), log_(log), notifier_(notifier), config_(load_configuration(choice_)) {
+  log_notes(config_);
+  // Without /dev/uinput there is nothing to emit through: say so now rather than at the first mouse.
+  if (::access("/dev/uinput", R_OK | W_OK) != 0) throw StartupError(uinput_error_message(-errno));
+
+  const sigset_t handled = daemon_signals();
+  signals_ = UniqueFd(::signalfd(-1, &handled, SFD_NONBLOCK | SFD_CLOEXEC));
+  epoll_ = UniqueFd(::epoll_create1(EPOLL_CLOEXEC));
+  retry_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
+  watchdog_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
+  if (!signals_ || !epoll_ || !retry_timer_ || !watchdog_timer_) fail_system("cannot set up the event loop");
+  for (int fd : {signals_.get(), udev_.fd(), retry_timer_.get(), watchdog_timer_.get()}) watch(epoll_.get(), fd);
+  if (const auto interval = ServiceNotifier::watchdog_interval()) {
+    set_timer(watchdog_timer_.get(), static_cast<long>(interval->count()) * 1000);
+    log_.debug("watchdog ping every {} ms", interval->count() / 1000);
+  }
+
+  start_pipeline();
+  log_.info("scene: {} ({} regions); desktop {}x{}+{}+{}; {} output", config_.source, config_.scene->regions().size(),
+            config_.pipeline.desktop.w, config_.pipeline.desktop.h, config_.pipeline.desktop.x,
+            config_.pipeline.desktop.y, config_.pipeline.mode == OutputMode::relative ? "relative" : "absolute");
+  if (udev_.uses_kernel_events()) log_.info("no udev daemon running; listening to kernel uevents for hotplug");
+  take_present_mice();
+  if (mice_.empty()) log_.notice("no mouse to take yet; waiting for one to be plugged in");
+}
+
+Daemon::~Daemon() = default;
+
+void Daemon::start_pipeline() { pipeline_ = std::make_unique<Pipeline>(config_.scene, config_.pipeline); }
+
+void Daemon::take_present_mice() {
+  for (const std::string& node : udev_.event_nodes()) consider(node);
+}
+
+int Daemon::run() {
+  notifier_.ready(status_line());
+  std::array<epoll_event, 16> events{};
+  while (!stop_) {
+    const int n = ::epoll_wait(epoll_.get(), events.data(), static_cast<int>(events.size()), -1);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail_system("epoll_wait failed");
+    }
+    for (int i = 0; i < n && !stop_; ++i) {
+      const int fd = events[static_cast<std::size_t>(i)].data.fd;
+      if (fd == signals_.get()) {
+        on_signal();
+      } else if (fd == udev_.fd()) {
+        on_hotplug();
+      } else if (fd == retry_timer_.get()) {
+        drain_timer(fd);
+        on_retry_tick();
+      } else if (fd == watchdog_timer_.get()) {
+        drain_timer(fd);
+        notifier_.watchdog();
+      } else {
+        on_mouse_readable(fd);
+      }
+    }
+  }
+  notifier_.stopping();
+  let_go_of_all("stopping");
+  log_.info("stopped");
+  return 0;
+}
+
+void Daemon::consider(const std::string& node) {
+  if (mice_.contains(node) || passed_over_.contains(node)) return;
+  std::unique_ptr<EvdevDevice> device;
+  try {
+    device = std::make_unique<EvdevDevice>(node);
+  } catch (const DeviceError& e) {
+    if (retry_later(e.error())) {
+      // udev may not have set the node's permissions yet: look again shortly.
+      if (unopened_.emplace(node, kOpenTries).second) log_.debug("{}; trying again", e.what());
+      update_retry_timer();
+    } else {
+      log_.debug("{}; not taken", e.what());
+    }
+    return;
+  }
+  unopened_.erase(node);
+  const std::string name = device->name();
+  if (name.starts_with(kOwnDevicePrefix)) {
+    log_.debug("{} {}: a virtual device of pseudohapticd; not taken", node, quoted_name(*device));
+    passed_over_.insert(node);
+    return;
+  }
+  if (!device->is_pointer()) {
+    log_.debug("{} {}: not a pointer (needs REL_X, REL_Y and a button); not taken", node, quoted_name(*device));
+    passed_over_.insert(node);
+    return;
+  }
+  const DeviceDescription description = device->description();
+  if (!device_matches(config_.settings, name, description.vendor, description.product)) {
+    log_.info("{} {} ({:04x}:{:04x}): not in [daemon] devices; not taken", node, quoted_name(*device),
+              description.vendor, description.product);
+    passed_over_.insert(node);
+    return;
+  }
+  auto& mouse = *mice_.emplace(node, std::make_unique<Mouse>()).first->second;
+  mouse.device = std::move(device);
+  try_take(node, mouse);
+}
+
+// The order matters: no press may be grabbed without its release, and nothing the desktop has already
+// seen may be emitted a second time.
+void Daemon::try_take(const std::string& node, Mouse& mouse) {
+  EvdevDevice& device = *mouse.device;
+  if (device.any_key_held()) {
+    if (!mouse.told_waiting) log_.info("{} {}: a button is held; taking it once released", node, quoted_name(device));
+    mouse.told_waiting = true;
+    update_retry_timer();
+    return;
+  }
+  try {
+    mouse.sink = std::make_unique<UinputSink>(output_device(device.description(), pipeline_->config()));
+    // What was queued before the grab went to the desktop as well: read it and let it go.
+    if (device.read_available([](const InputEvent&) {}) == ReadStatus::gone) {
+      let_go(node, "unplugged");
+      return;
+    }
+    device.grab();
+  } catch (const DeviceError& e) {
+    log_.warning("{}; leaving it to the desktop", e.what());
+    passed_over_.insert(node);
+    let_go(node, "");
+    return;
+  } catch (const UinputError& e) {
+    log_.error("{} {}: {}", node, quoted_name(device), e.what());
+    passed_over_.insert(node);
+    let_go(node, "");
+    return;
+  }
+  if (device.any_key_held()) {  // pressed between the check and the grab: the desktop has the press
+    device.ungrab();
+    mouse.sink.reset();
+    update_retry_timer();
+    return;
+  }
+  mouse.frames = std::make_unique<FrameProcessor>(*pipeline_, *mouse.sink);
+  watch(epoll_.get(), device.fd());
+  log_.info("took {} {}; emitting through {} \"{}\"", node, quoted_name(device), mouse.sink->devnode(),
+            output_device(device.description(), pipeline_->config()).name);
+  notifier_.status(status_line());
+  update_retry_timer();
+}
+
+void Daemon::let_go(const std::string& node, std::string_view why) {
+  const auto it = mice_.find(node);
+  if (it == mice_.end()) {
+    unopened_.erase(node);
+    return;
+  }
+  Mouse& mouse = *it->second;
+  const bool taken = mouse.frames != nullptr;
+  if (taken) ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, mouse.device->fd(), nullptr);
+  if (taken && !why.empty()) log_.info("let go of {} {} ({})", node, quoted_name(*mouse.device), why);
+  mice_.erase(it);  // releases held buttons on the virtual device, destroys it, ungrabs
+  if (taken) notifier_.status(status_line());
+  update_retry_timer();
+}
+
+void Daemon::let_go_of_all(std::string_view why) {
+  while (!mice_.empty()) let_go(mice_.begin()->first, why);
+  unopened_.clear();
+  passed_over_.clear();
+}
+
+void Daemon::on_mouse_readable(int fd) {
+  for (auto& [node, mouse] : mice_) {
+    if (mouse->frames == nullptr || mouse->device->fd() != fd) continue;
+    const std::string name = node;  // let_go erases the map entry
+    try {
+      if (mouse->device->read_available([&](const InputEvent& e) { mouse->frames->push(e); }) == ReadStatus::gone) {
+        let_go(name, "unplugged");
+      }
+    } catch (const DeviceError& e) {
+      log_.warning("{}", e.what());
+      let_go(name, "read error");
+    } catch (const UinputError& e) {
+      log_.error("{}", e.what());
+      let_go(name, "virtual device failed");
+    }
+    return;
+  }
+}
+
+void Daemon::on_hotplug() {
+  for (const InputHotplug& hotplug : udev_.receive_all()) {
+    if (hotplug.action == InputHotplug::Action::add) {
+      log_.debug("{} added", hotplug.devnode);
+      passed_over_.erase(hotplug.devnode);  // a new device may reuse the node of one passed over
+      consider(hotplug.devnode);
+    } else {
+      log_.debug("{} removed", hotplug.devnode);
+      passed_over_.erase(hotplug.devnode);
+      let_go(hotplug.devnode, "removed");
+    }
+  }
+}
+
+void Daemon::on_signal() {
+  signalfd_siginfo info{};
+  while (::read(signals_.get(), &info, sizeof info) == static_cast<ssize_t>(sizeof info)) {
+    if (info.ssi_signo == SIGHUP) {
+      reload();
+    } else {
+      log_.info("{} received; stopping", info.ssi_signo == SIGTERM ? "SIGTERM" : "SIGINT");
+      stop_ = true;
+      return;
+    }
+  }
+}
+
+void Daemon::on_retry_tick() {
+  std::vector<std::string> nodes;
+  for (auto& [node, tries] : unopened_) nodes.push_back(node);
+  for (const std::string& node : nodes) {
+    if (--unopened_[node] <= 0) {
+      log_.warning("{}: still not accessible after {} s; not taken", node,
+                   kOpenTries * kRetryIntervalNs / 1'000'000'000);
+      unopened_.erase(node);
+      continue;
+    }
+    consider(node);
+  }
+  std::vector<std::string> waiting;
+  for (const auto& [node, mouse] : mice_) {
+    if (mouse->frames == nullptr) waiting.push_back(node);
+  }
+  for (const std::string& node : waiting) try_take(node, *mice_.at(node));
+  update_retry_timer();
+}
+
+void Daemon::update_retry_timer() {
+  bool needed = !unopened_.empty();
+  for (const auto& [node, mouse] : mice_) needed = needed || mouse->frames == nullptr;
+  if (needed == retry_armed_) return;
+  set_timer(retry_timer_.get(), needed ? kRetryIntervalNs : 0);
+  retry_armed_ = needed;
+}
+
+void Daemon::reload() {
+  notifier_.reloading();
+  log_.info("SIGHUP received; reloading {}", choice_.file ? choice_.file->string() : config_.source);
+  Configuration next;
+  try {
+    next = load_configuration(choice_);
+  } catch (const std::exception& e) {
+    log_.warning("reload failed: {}; keeping the previous scene", e.what());
+    notifier_.ready(status_line());
+    return;
+  }
+  log_notes(next);
+  if (only_scene_differs(config_, next)) {
+    pipeline_->set_scene(next.scene);
+    config_ = std::move(next);
+  } else {
+    // New [daemon] settings: new virtual devices, and the mice chosen again; the cursor stays put.
+    log_.info("the [daemon] settings changed; taking the mice again");
+    const Vec2 cursor = pipeline_->cursor().position;
+    let_go_of_all("settings changed");
+    config_ = std::move(next);
+    config_.pipeline.start = cursor;
+    start_pipeline();
+    take_present_mice();
+  }
+  log_.info("reloaded: {} ({} regions)", config_.source, config_.scene->regions().size());
+  notifier_.ready(status_line());
+}
+
+std::string Daemon::status_line() const {
+  std::string names;
+  std::size_t taken = 0;
+  for (const auto& [node, mouse] : mice_) {
+    if (mouse->frames == nullptr) continue;
+    names += (taken++ == 0 ? "" : ", ") + mouse->device->name();
+  }
+  const std::string mice = taken == 0 ? std::string("waiting for a mouse") : fmt::format("{} mice: {}", taken, names);
+  return fmt::format("{}; scene: {} ({} regions)", mice, config_.source, config_.scene->regions().size());
+}
+
+void Daemon::log_notes(const Configuration& configuration) const {
+  for (const std::string& note : configuration.notes) log_.notice("{}", note);
+  for (const std::string& warning : configuration.warnings) log_.warning("{}", warning);
+}
+
+}  // namespace ph

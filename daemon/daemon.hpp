@@ -1,0 +1,83 @@
+// pseudohapticd's event loop: one epoll over the grabbed mice, the udev monitor, a signalfd and two
+// timers. Every mouse it takes gets its own virtual device and frame assembler; all share one pipeline,
+// so one cursor model, however many mice move it (ALGORITHMS.md section 6).
+#pragma once
+
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+
+#include "core/pipeline.hpp"
+#include "daemon/configuration.hpp"
+#include "daemon/evdev_device.hpp"
+#include "daemon/log.hpp"
+#include "daemon/service_notifier.hpp"
+#include "daemon/udev_watch.hpp"
+#include "daemon/unique_fd.hpp"
+#include "uinput/uinput_sink.hpp"
+
+namespace ph {
+
+class StartupError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Blocks SIGTERM, SIGINT and SIGHUP so that they wait for the event loop's signalfd. Call it first
+// thing in main: a SIGHUP during a long start-up must not kill the daemon.
+void block_daemon_signals();
+
+class Daemon {
+ public:
+  // Loads the configuration and takes the mice present now. Expects block_daemon_signals() to have run.
+  // Throws StartupError, ConfigError or UdevError with a message for the user.
+  Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& notifier);
+  ~Daemon();
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+
+  // Runs until SIGTERM or SIGINT; then lets go of every mouse. Returns the exit status.
+  int run();
+
+ private:
+  // A mouse the daemon has opened: waiting for its buttons to be released, or taken (grabbed, with its
+  // virtual device and frame assembler). Members are destroyed in reverse: the assembler, then the
+  // virtual device (which releases held buttons), then the grab and the node.
+  struct Mouse {
+    std::unique_ptr<EvdevDevice> device;
+    std::unique_ptr<UinputSink> sink;
+    std::unique_ptr<FrameProcessor> frames;
+    bool told_waiting = false;
+  };
+
+  void start_pipeline();
+  void take_present_mice();
+  void consider(const std::string& node);
+  void try_take(const std::string& node, Mouse& mouse);
+  void let_go(const std::string& node, std::string_view why);
+  void let_go_of_all(std::string_view why);
+  void on_mouse_readable(int fd);
+  void on_hotplug();
+  void on_signal();
+  void on_retry_tick();
+  void reload();
+  void update_retry_timer();
+  std::string status_line() const;
+  void log_notes(const Configuration& configuration) const;
+
+  ConfigChoice choice_;
+  const Logger& log_;
+  const ServiceNotifier& notifier_;
+  Configuration config_;
+  std::unique_ptr<Pipeline> pipeline_;
+  UdevWatch udev_;
+  UniqueFd epoll_, signals_, retry_timer_, watchdog_timer_;
+  std::map<std::string, std::unique_ptr<Mouse>> mice_;  // by node
+  std::map<std::string, int> unopened_;                 // node -> tries left (not yet accessible)
+  std::set<std::string> passed_over_;                   // not a pointer, not matched, ours, busy
+  bool retry_armed_ = false;
+  bool stop_ = false;
+};
+
+}  // namespace ph

@@ -1,0 +1,55 @@
+// pseudohapticd: the system-wide service. Takes the mice, rescales their motion over the scene's
+// textures and re-emits it through virtual devices until SIGTERM; SIGHUP reloads the scene file.
+#include <fmt/core.h>
+
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <optional>
+#include <string>
+
+#include "config/scene_file.hpp"
+#include "daemon/daemon.hpp"
+#include "daemon/log.hpp"
+#include "daemon/service_notifier.hpp"
+
+int main(int argc, char** argv) {
+  ph::block_daemon_signals();
+  CLI::App app{
+      "pseudohapticd: pseudo-haptic textures for an ordinary mouse, system-wide.\n"
+      "Grabs the mice, changes the control/display ratio of their motion over the textures of a scene and\n"
+      "re-emits it through a virtual device named \"pseudohaptic <mouse name>\". Runs in the foreground;\n"
+      "the systemd unit pseudohapticd.service runs it as a service. SIGHUP reloads the scene file;\n"
+      "SIGTERM or SIGINT lets go of the mice and exits. See pseudohapticd(8)."};
+  std::string config;
+  bool default_scene = false;
+  bool verbose = false;
+  app.add_option("-c,--config", config,
+                 fmt::format("Scene file (TOML; check it with `pseudohaptic check-config FILE`). Default: {} if it "
+                             "exists, else the embedded default scene",
+                             ph::kDefaultSceneFile));
+  app.add_flag("--default-scene", default_scene,
+               "Use the embedded default scene (three targets of the curvature paper) and no file")
+      ->excludes(app.get_option("--config"));
+  app.add_flag("-v,--verbose", verbose, "Also log debug messages (every device seen, every hotplug)");
+  app.set_version_flag("--version", "pseudohapticd 0.1.0");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  const ph::Logger log(verbose, ph::Logger::stderr_is_journal());
+  const ph::ServiceNotifier notifier;
+  ph::ConfigChoice choice;
+  if (!config.empty()) choice.file = config;
+  choice.default_scene = default_scene;
+  choice.default_file = std::string(ph::kDefaultSceneFile);
+  try {
+    ph::Daemon daemon(choice, log, notifier);
+    return daemon.run();
+  } catch (const std::exception& e) {
+    log.error("{}", e.what());
+    notifier.status(std::string("failed: ") + e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,198 @@
+// The daemon's pieces that need no device: its log lines, its configuration (file, embedded default,
+// reload decisions) and its messages to systemd.
+#include <gtest/gtest.h>
+#include <stdlib.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "config/scene_file.hpp"
+#include "daemon/configuration.hpp"
+#include "daemon/log.hpp"
+#include "daemon/service_notifier.hpp"
+#include "daemon/unique_fd.hpp"
+#include "tests/scratch_dir.hpp"
+
+namespace ph {
+namespace {
+
+// What a Logger writes, through a temporary FILE.
+class CapturedLog {
+ public:
+  CapturedLog() : file_(std::tmpfile()) {}
+  ~CapturedLog() { std::fclose(file_); }
+  CapturedLog(const CapturedLog&) = delete;
+  CapturedLog& operator=(const CapturedLog&) = delete;
+  std::FILE* file() const { return file_; }
+  std::string text() const {
+    std::rewind(file_);
+    std::string out;
+    for (int c = std::fgetc(file_); c != EOF; c = std::fgetc(file_)) out.push_back(static_cast<char>(c));
+    return out;
+  }
+
+ private:
+  std::FILE* file_;
+};
+
+TEST(DaemonLog, PlainLinesNameTheProgramAndLevel) {
+  const CapturedLog out;
+  const Logger log(false, false, out.file());
+  log.warning("{} is {}", "x", 3);
+  log.info("two\nlines");
+  log.debug("hidden without --verbose");
+  EXPECT_EQ(out.text(), "pseudohapticd: warning: x is 3\npseudohapticd: info: two lines\n");
+}
+
+TEST(DaemonLog, JournalLinesCarryTheSyslogPriority) {
+  const CapturedLog out;
+  const Logger log(true, true, out.file());
+  log.error("e");
+  log.notice("n");
+  log.debug("d");
+  EXPECT_EQ(out.text(), "<3>e\n<5>n\n<7>d\n");
+}
+
+TEST(DaemonLog, StderrIsTheJournalOnlyWhenJournalStreamNamesIt) {
+  ::unsetenv("JOURNAL_STREAM");
+  EXPECT_FALSE(Logger::stderr_is_journal());
+  ::setenv("JOURNAL_STREAM", "1:2", 1);  // some other file
+  EXPECT_FALSE(Logger::stderr_is_journal());
+  ::unsetenv("JOURNAL_STREAM");
+}
+
+ConfigChoice choice_in(const ScratchDir& dir) {
+  ConfigChoice choice;
+  choice.default_file = dir / "scene.toml";  // absent unless a test writes it
+  choice.drm_dir = dir / "drm";              // no displays
+  return choice;
+}
+
+TEST(DaemonConfiguration, MissingDefaultFileMeansTheEmbeddedScene) {
+  const ScratchDir dir("daemon-config");
+  const Configuration c = load_configuration(choice_in(dir));
+  EXPECT_EQ(c.source, "the embedded default scene");
+  EXPECT_EQ(c.scene->regions().size(), 3u);
+  ASSERT_EQ(c.notes.size(), 1u);
+  EXPECT_NE(c.notes[0].find("no scene file at"), std::string::npos) << c.notes[0];
+  ASSERT_EQ(c.warnings.size(), 1u);  // no display found: 1920 x 1080 assumed
+  EXPECT_EQ(c.pipeline.desktop, (Rect{0, 0, 1920, 1080}));
+}
+
+TEST(DaemonConfiguration, TheDefaultFileIsReadWhenItExists) {
+  const ScratchDir dir("daemon-config");
+  std::ofstream(dir / "scene.toml") << "[daemon]\noutput = \"absolute\"\ndesktop = [0, 0, 800, 600]\n"
+                                       "pointer_speed = 2.5\n";
+  const Configuration c = load_configuration(choice_in(dir));
+  EXPECT_EQ(c.source, (dir / "scene.toml").string());
+  EXPECT_TRUE(c.scene->regions().empty());
+  EXPECT_TRUE(c.notes.empty());
+  EXPECT_TRUE(c.warnings.empty());
+  EXPECT_EQ(c.pipeline.mode, OutputMode::absolute);
+  EXPECT_EQ(c.pipeline.desktop, (Rect{0, 0, 800, 600}));
+  EXPECT_EQ(c.pipeline.pointer_gain, 2.5);
+}
+
+TEST(DaemonConfiguration, DefaultSceneFlagIgnoresTheFile) {
+  const ScratchDir dir("daemon-config");
+  std::ofstream(dir / "scene.toml") << "[daemon]\npointer_speed = 2.5\n";
+  ConfigChoice choice = choice_in(dir);
+  choice.default_scene = true;
+  const Configuration c = load_configuration(choice);
+  EXPECT_EQ(c.scene->regions().size(), 3u);
+  EXPECT_EQ(c.pipeline.pointer_gain, 1.0);
+}
+
+TEST(DaemonConfiguration, AnExplicitFileMustExistAndBeValid) {
+  const ScratchDir dir("daemon-config");
+  ConfigChoice choice = choice_in(dir);
+  choice.file = dir / "missing.toml";
+  EXPECT_THROW(load_configuration(choice), ConfigError);
+  std::ofstream(dir / "bad.toml") << "[daemon]\npointer_sped = 2\n";
+  choice.file = dir / "bad.toml";
+  try {
+    load_configuration(choice);
+    FAIL() << "no error for an unknown key";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.toml:2"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DaemonConfiguration, ReloadKeepsThePipelineWhenOnlyTheSceneChanged) {
+  const ScratchDir dir("daemon-config");
+  const Configuration base = load_configuration(choice_in(dir));
+  Configuration other_scene = base;
+  other_scene.scene = std::make_shared<const Scene>();
+  EXPECT_TRUE(only_scene_differs(base, other_scene));
+  Configuration faster = base;
+  faster.pipeline.pointer_gain = 2.0;
+  EXPECT_FALSE(only_scene_differs(base, faster));
+  Configuration absolute = base;
+  absolute.pipeline.mode = OutputMode::absolute;
+  EXPECT_FALSE(only_scene_differs(base, absolute));
+  Configuration wider = base;
+  wider.pipeline.desktop.w = 3840;
+  EXPECT_FALSE(only_scene_differs(base, wider));
+  Configuration pickier = base;
+  std::string error;
+  pickier.settings.devices.push_back(*parse_device_match("name:Logitech*", error));
+  EXPECT_FALSE(only_scene_differs(base, pickier));
+}
+
+// A datagram socket standing in for systemd's notification socket.
+class NotifySocket {
+ public:
+  explicit NotifySocket(const ScratchDir& dir) : path_((dir / "notify").string()) {
+    socket_ = UniqueFd(::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0));
+    sockaddr_un address{};
+    address.sun_family = AF_UNIX;
+    path_.copy(address.sun_path, sizeof address.sun_path - 1);
+    EXPECT_EQ(::bind(socket_.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address), 0);
+    ::setenv("NOTIFY_SOCKET", path_.c_str(), 1);
+  }
+  ~NotifySocket() { ::unsetenv("NOTIFY_SOCKET"); }
+  NotifySocket(const NotifySocket&) = delete;
+  NotifySocket& operator=(const NotifySocket&) = delete;
+
+  std::string next() const {
+    char buffer[1024];
+    const ssize_t n = ::recv(socket_.get(), buffer, sizeof buffer, MSG_DONTWAIT);
+    return n > 0 ? std::string(buffer, static_cast<std::size_t>(n)) : std::string("(nothing)");
+  }
+
+ private:
+  std::string path_;
+  UniqueFd socket_;
+};
+
+TEST(DaemonNotifier, SendsTheStatesSystemdWaitsFor) {
+  const ScratchDir dir("notify");
+  const NotifySocket socket(dir);
+  const ServiceNotifier notifier;
+  notifier.ready("1 mice: M\nX");
+  EXPECT_EQ(socket.next(), "READY=1\nSTATUS=1 mice: M X");
+  notifier.reloading();
+  const std::string reloading = socket.next();
+  EXPECT_EQ(reloading.rfind("RELOADING=1\nMONOTONIC_USEC=", 0), 0u) << reloading;
+  notifier.watchdog();
+  EXPECT_EQ(socket.next(), "WATCHDOG=1");
+  notifier.stopping();
+  EXPECT_EQ(socket.next().rfind("STOPPING=1", 0), 0u);
+}
+
+TEST(DaemonNotifier, WatchdogPingsAtHalfTheInterval) {
+  ::unsetenv("WATCHDOG_PID");
+  ::unsetenv("WATCHDOG_USEC");
+  EXPECT_FALSE(ServiceNotifier::watchdog_interval().has_value());
+  ::setenv("WATCHDOG_USEC", "10000000", 1);
+  const auto interval = ServiceNotifier::watchdog_interval();
+  ASSERT_TRUE(interval.has_value());
+  EXPECT_EQ(interval->count(), 5'000'000);
+  ::unsetenv("WATCHDOG_USEC");
+}
+
+}  // namespace
+}  // namespace ph
