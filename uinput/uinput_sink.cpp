@@ -51,11 +51,13 @@ std::string uinput_error_message(int negative_errno) {
     case ENODEV:
     case ENXIO:
       return "cannot create the virtual pointer: /dev/uinput does not exist. Load the uinput module "
-             "(sudo modprobe uinput; the package's udev rule does it at boot) and try again.";
+             "(sudo modprobe uinput; once installed, modules-load.d/pseudohaptic.conf loads it at boot) and "
+             "try again.";
     case EACCES:
     case EPERM:
       return "cannot create the virtual pointer: no permission to open /dev/uinput. Run pseudohapticd as "
-             "root (the systemd unit does) or give its user write access to /dev/uinput.";
+             "root, or as a member of the group uinput once 60-pseudohaptic.rules gives /dev/uinput to that "
+             "group (the systemd unit does so).";
     default:
       return fmt::format("cannot create the virtual pointer through /dev/uinput: {}", std::strerror(err));
   }
