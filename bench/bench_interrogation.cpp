@@ -1,0 +1,149 @@
+// Cost of recomputing a region's gravity-well data when the light, the levels or a tolerance change on
+// reload (core/patterns.hpp, core/distance_transform.hpp), for a full-HD region. docs/PERFORMANCE.md
+// ("Surface interrogation: pattern fields") gives the figures and the command.
+//
+// Counters: time_per_texel (CPU seconds per texel, printed with an SI prefix), pattern_fraction (share of
+// texels in the mask), bytes_per_texel (of the stored nearest-pattern field).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <random>
+
+#include "core/distance_transform.hpp"
+#include "core/field.hpp"
+#include "core/patterns.hpp"
+
+namespace {
+
+constexpr std::int32_t kW = 1920;
+constexpr std::int32_t kH = 1080;
+constexpr float kRadius = 64.0f;  // a generous radius of influence, px
+
+// Smooth relief with bumps, a hole and a ripple, heights in px: many closed and open contours.
+const ph::DepthField& relief() {
+  static const ph::DepthField d = [] {
+    ph::DepthField f(kW, kH);
+    for (std::int32_t y = 0; y < kH; ++y) {
+      for (std::int32_t x = 0; x < kW; ++x) {
+        auto bump = [&](double cx, double cy, double s, double a) {
+          const double dx = x - cx;
+          const double dy = y - cy;
+          return a * std::exp(-(dx * dx + dy * dy) / (2.0 * s * s));
+        };
+        const double ripple = 8.0 * std::sin(x / 53.0) * std::cos(y / 41.0);
+        f.at(x, y) =
+            static_cast<float>(bump(480, 400, 150, 60) + bump(1300, 600, 220, 45) + bump(900, 250, 90, -35) + ripple);
+      }
+    }
+    return f;
+  }();
+  return d;
+}
+
+const ph::GradientField& relief_gradient() {
+  static const ph::GradientField g = ph::gradient_from_depth(relief());
+  return g;
+}
+
+ph::Grid<std::uint8_t> random_mask(double density) {
+  std::mt19937 rng(42);
+  std::bernoulli_distribution set(density);
+  ph::Grid<std::uint8_t> m(kW, kH, 0);
+  for (auto& v : m.values) v = set(rng) ? 1 : 0;
+  return m;
+}
+
+const ph::Grid<std::uint8_t>& sparse_mask() {
+  static const auto m = random_mask(0.001);
+  return m;
+}
+const ph::Grid<std::uint8_t>& dense_mask() {
+  static const auto m = random_mask(0.5);
+  return m;
+}
+const ph::Grid<std::uint8_t>& contour_mask() {
+  static const auto m = ph::contour_mask(relief(), ph::ContourParams{});
+  return m;
+}
+
+double fraction(const ph::Grid<std::uint8_t>& m) {
+  std::size_t n = 0;
+  for (auto v : m.values) n += v != 0;
+  return static_cast<double>(n) / static_cast<double>(m.values.size());
+}
+
+void report(benchmark::State& state, double pattern_fraction, bool stores_field) {
+  state.counters["time_per_texel"] = benchmark::Counter(static_cast<double>(state.iterations()) * kW * kH,
+                                                        benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["pattern_fraction"] = pattern_fraction;
+  state.counters["bytes_per_texel"] = stores_field ? static_cast<double>(sizeof(ph::PatternOffset)) : 1.0;
+}
+
+void edt(benchmark::State& state, const ph::Grid<std::uint8_t>& mask, float radius) {
+  for (auto _ : state) {
+    ph::PatternField f = ph::make_pattern_field(mask, radius);
+    benchmark::DoNotOptimize(f.offsets.values.data());
+  }
+  report(state, fraction(mask), true);
+}
+
+void BM_EdtSparse(benchmark::State& state) { edt(state, sparse_mask(), ph::kMaxPatternRadius); }
+void BM_EdtSparseR64(benchmark::State& state) { edt(state, sparse_mask(), kRadius); }
+void BM_EdtDense(benchmark::State& state) { edt(state, dense_mask(), ph::kMaxPatternRadius); }
+void BM_EdtContourMask(benchmark::State& state) { edt(state, contour_mask(), ph::kMaxPatternRadius); }
+void BM_EdtContourMaskR64(benchmark::State& state) { edt(state, contour_mask(), kRadius); }
+
+void BM_IsophoteMask(benchmark::State& state) {
+  const ph::IsophoteParams params;
+  double f = 0.0;
+  for (auto _ : state) {
+    ph::Grid<std::uint8_t> m = ph::isophote_mask(relief_gradient(), params);
+    benchmark::DoNotOptimize(m.values.data());
+    f = fraction(m);
+  }
+  report(state, f, false);
+}
+
+void BM_ContourMask(benchmark::State& state) {
+  const ph::ContourParams params;  // 8 evenly spaced levels, crossing rule
+  for (auto _ : state) {
+    ph::Grid<std::uint8_t> m = ph::contour_mask(relief(), params);
+    benchmark::DoNotOptimize(m.values.data());
+  }
+  report(state, fraction(contour_mask()), false);
+}
+
+// Everything a reload redoes for one region: the mask from the stored field, then its EDT.
+void BM_RecomputeIsophote(benchmark::State& state) {
+  const ph::IsophoteParams params;
+  for (auto _ : state) {
+    ph::PatternField f = ph::isophote_field(relief_gradient(), params, kRadius);
+    benchmark::DoNotOptimize(f.offsets.values.data());
+  }
+  report(state, fraction(ph::isophote_mask(relief_gradient(), params)), true);
+}
+
+void BM_RecomputeContour(benchmark::State& state) {
+  const ph::ContourParams params;
+  for (auto _ : state) {
+    ph::PatternField f = ph::contour_field(relief(), params, kRadius);
+    benchmark::DoNotOptimize(f.offsets.values.data());
+  }
+  report(state, fraction(contour_mask()), true);
+}
+
+}  // namespace
+
+BENCHMARK(BM_EdtSparse)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EdtSparseR64)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EdtDense)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EdtContourMask)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EdtContourMaskR64)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_IsophoteMask)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ContourMask)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RecomputeIsophote)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RecomputeContour)->Unit(benchmark::kMillisecond);
+
+BENCHMARK_MAIN();
