@@ -64,17 +64,22 @@ std::uint16_t unorm16(double v) {
   return static_cast<std::uint16_t>(std::lround(std::clamp(v, 0.0, 1.0) * 65535.0));
 }
 
-void write_png16(const std::filesystem::path& path, std::int32_t width, std::int32_t height, int channels,
-                 const std::vector<std::uint16_t>& codes) {
+// Writes pixels of the given type in the given format, whatever the file name says.
+void write_pixels(const std::filesystem::path& path, const char* format, std::int32_t width, std::int32_t height,
+                  int channels, OIIO::TypeDesc type, const void* pixels) {
   if (width <= 0 || height <= 0) throw file_error(path, "cannot write an image of zero size");
-  // The format is always PNG, whatever the file name says.
-  auto out = OIIO::ImageOutput::create("png");
+  auto out = OIIO::ImageOutput::create(format);
   if (!out) throw file_error(path, "cannot write: " + one_line(OIIO::geterror()));
-  const OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT16);
+  const OIIO::ImageSpec spec(width, height, channels, type);
   if (!out->open(path.string(), spec)) throw file_error(path, "cannot write: " + one_line(out->geterror()));
-  const bool written = out->write_image(OIIO::TypeDesc::UINT16, codes.data());
+  const bool written = out->write_image(type, pixels);
   const bool closed = out->close();
   if (!written || !closed) throw file_error(path, "cannot write: " + one_line(out->geterror()));
+}
+
+void write_png16(const std::filesystem::path& path, std::int32_t width, std::int32_t height, int channels,
+                 const std::vector<std::uint16_t>& codes) {
+  write_pixels(path, "png", width, height, channels, OIIO::TypeDesc::UINT16, codes.data());
 }
 
 }  // namespace
@@ -84,7 +89,9 @@ ImageSize read_image_size(const std::filesystem::path& path, const ImageLimits& 
   auto in = OIIO::ImageInput::open(path.string(), &config);
   if (!in) throw file_error(path, "cannot open: " + one_line(OIIO::geterror()));
   check_spec(path, in->spec(), limits);
-  return {in->spec().width, in->spec().height};
+  const OIIO::TypeDesc format = in->spec().format;
+  const std::uint32_t code_max = format == OIIO::TypeDesc::UINT8 ? 255 : format == OIIO::TypeDesc::UINT16 ? 65535 : 0;
+  return {in->spec().width, in->spec().height, code_max};
 }
 
 RawImage read_image(const std::filesystem::path& path, const ImageLimits& limits) {
@@ -127,6 +134,17 @@ void write_gray_png16(const std::filesystem::path& path, const Grid<float>& valu
   codes.reserve(values.values.size());
   for (const float v : values.values) codes.push_back(unorm16(v));
   write_png16(path, values.width, values.height, 1, codes);
+}
+
+void write_float_exr(const std::filesystem::path& path, const Grid<float>& values) {
+  write_pixels(path, "openexr", values.width, values.height, 1, OIIO::TypeDesc::FLOAT, values.values.data());
+}
+
+void write_rgb_png8(const std::filesystem::path& path, std::int32_t width, std::int32_t height,
+                    const std::vector<std::uint8_t>& rgb) {
+  if (rgb.size() != static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0)) * 3)
+    throw file_error(path, "cannot write: pixel count does not match the size");
+  write_pixels(path, "png", width, height, 3, OIIO::TypeDesc::UINT8, rgb.data());
 }
 
 }  // namespace ph

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <vector>
 
 #include "core/decode.hpp"
 #include "core/field.hpp"
@@ -19,6 +20,7 @@ struct ImageLimits {
 struct ImageSize {
   std::int32_t width = 0;
   std::int32_t height = 0;
+  std::uint32_t code_max = 0;  // 255 or 65535 for 8- and 16-bit images, 0 for float or other formats
 };
 
 // The size from the file's header alone, with the same checks and errors as read_image.
@@ -33,5 +35,12 @@ void write_normal_png16(const std::filesystem::path& path, const NormalImage& no
 
 // 16-bit grey PNG of values in [0, 1] (clamped), c = round(v * 65535).
 void write_gray_png16(const std::filesystem::path& path, const Grid<float>& values);
+
+// One-channel 32-bit float OpenEXR image of the values as they are (e.g. Gaussian curvature in 1/px^2).
+void write_float_exr(const std::filesystem::path& path, const Grid<float>& values);
+
+// 8-bit RGB PNG; rgb holds width * height * 3 bytes, row-major (false-colour pictures).
+void write_rgb_png8(const std::filesystem::path& path, std::int32_t width, std::int32_t height,
+                    const std::vector<std::uint8_t>& rgb);
 
 }  // namespace ph

@@ -10,6 +10,8 @@ namespace ph::tools {
 using Run = std::function<int()>;
 
 Run add_targets_command(CLI::App& app);
+Run add_surfaces_command(CLI::App& app);
+Run add_inspect_command(CLI::App& app);
 Run add_trace_command(CLI::App& app);
 Run add_demo_command(CLI::App& app);
 Run add_replay_command(CLI::App& app);

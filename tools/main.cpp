@@ -21,6 +21,10 @@ int main(int argc, char** argv) {
   };
   add("targets", "Write the 24 targets of the curvature paper (normal maps, depth maps, scene files)",
       ph::tools::add_targets_command);
+  add("surfaces", "Write the analytic test surfaces of the second paper (normal maps, depth maps, exact K, scenes)",
+      ph::tools::add_surfaces_command);
+  add("inspect", "Write curvature, curvature classes, isophotes and contours of a texture as false-colour PNGs",
+      ph::tools::add_inspect_command);
   add("trace", "Move the cursor along a straight stroke across a texture and write one CSV row per texel step",
       ph::tools::add_trace_command);
   add("replay", "Push a recorded mouse stream through the daemon's pipeline and write what it would emit",

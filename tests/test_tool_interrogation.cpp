@@ -1,0 +1,189 @@
+// End-to-end tests of `pseudohaptic surfaces` and `pseudohaptic inspect`: run the built binary, read what it writes.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include "config/field_loader.hpp"
+#include "config/image_io.hpp"
+#include "core/curvature_class.hpp"
+#include "core/surfaces.hpp"
+#include "core/targets.hpp"
+#include "tests/scratch_dir.hpp"
+
+#ifndef PH_TOOL_PATH
+#error "PH_TOOL_PATH must name the pseudohaptic binary (tests/CMakeLists.txt)"
+#endif
+
+namespace ph {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+std::string quote(const fs::path& path) {
+  std::string quoted = "'";
+  for (char c : path.string()) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+struct ToolResult {
+  int rc = -1;
+  std::string out, err;
+};
+
+ToolResult run_tool(const std::string& args, const ScratchDir& dir) {
+  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string command = quote(PH_TOOL_PATH) + " " + args + " >" + quote(out) + " 2>" + quote(err);
+  const int status = std::system(command.c_str());
+  ToolResult result;
+  if (status != -1) result.rc = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  result.out = read_text(out);
+  result.err = read_text(err);
+  return result;
+}
+
+TEST(ToolInterrogation, SurfacesWritesMapsCurvatureAndScenes) {
+  ScratchDir dir;
+  const fs::path folder = dir / "surfaces";
+  const ToolResult r = run_tool("surfaces --size 64 " + quote(folder), dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("wrote 9 surfaces"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("[9/9] monkey-saddle"), std::string::npos) << r.err;
+  for (const SurfaceSpec& spec : all_surfaces(64)) {
+    SCOPED_TRACE(spec.name());
+    const RawImage normal = read_image(folder / (spec.name() + ".normal.png"));
+    EXPECT_EQ(normal.width, 64);
+    EXPECT_EQ(normal.height, 64);
+    EXPECT_EQ(normal.channels, 3);
+    EXPECT_EQ(normal.code_max, 65535u);
+    const RawImage depth = read_image(folder / (spec.name() + ".depth.png"));
+    EXPECT_EQ(depth.channels, 1);
+    EXPECT_EQ(depth.code_max, 65535u);
+    const RawImage k = read_image(folder / (spec.name() + ".K.exr"));
+    ASSERT_EQ(k.channels, 1);
+    ASSERT_TRUE(k.is_float);
+    const Grid<float> exact = surface_curvature_fields(spec).gaussian;
+    ASSERT_EQ(k.pixels.size(), exact.values.size());
+    for (std::size_t i = 0; i < k.pixels.size(); ++i) EXPECT_EQ(k.pixels[i], exact.values[i]);
+    // The scene loads as the daemon loads it, and its depth map gives back the exact heights.
+    const fs::path scene = folder / (spec.name() + ".toml");
+    const ToolResult check = run_tool("check-config --quiet " + quote(scene), dir);
+    EXPECT_EQ(check.rc, 0) << check.err;
+    FieldSources sources;
+    sources.depth_map = folder / (spec.name() + ".depth.png");
+    sources.depth_options = {0.5, 2 * spec.relief_px()};
+    FieldLoadReport report;
+    const RegionFields fields = load_region_fields(sources, 64, 64, {false, true}, report);
+    const DepthField want = surface_depth_field(spec);
+    for (std::size_t i = 0; i < want.values.size(); ++i)
+      ASSERT_NEAR(fields.depth->values[i], want.values[i], 2 * spec.relief_px() / 65535.0);
+  }
+}
+
+// The class colours `inspect` prints in its legend, by class name.
+std::map<std::string, std::array<int, 3>> legend(const std::string& out) {
+  std::map<std::string, std::array<int, 3>> colours;
+  std::istringstream in(out);
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream words(line);
+    std::string name, hex;
+    if (!(words >> name >> hex) || hex.size() != 7 || hex[0] != '#') continue;
+    const unsigned long v = std::stoul(hex.substr(1), nullptr, 16);
+    colours[name] = {int(v >> 16), int((v >> 8) & 255), int(v & 255)};
+  }
+  return colours;
+}
+
+// A Gaussian bump has every class: elliptic top, hyperbolic flank, parabolic in between, planar outside.
+TEST(ToolInterrogation, InspectWritesPicturesWhoseClassColoursMatchTheClassMap) {
+  ScratchDir dir;
+  TargetSpec bump;
+  bump.size = 120;
+  bump.radius = 50;
+  const fs::path normal_map = dir / "bump.normal.png";
+  write_normal_png16(normal_map, target_normal_image(bump));
+  Grid<float> depth = target_depth_field(bump);
+  for (float& v : depth.values) v = static_cast<float>(v / 200.0 + 0.5);
+  const fs::path depth_map = dir / "bump.depth.png";
+  write_gray_png16(depth_map, depth);
+  const fs::path out = dir / "inspect";
+  const ToolResult r = run_tool("inspect --normal-map " + quote(normal_map) + " --depth-map " + quote(depth_map) +
+                                    " --depth-zero 0.5 --relief-px 200 " + quote(out),
+                                dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  for (const char* name : {"K.png", "H.png", "class.png", "isophotes.png", "contours.png"}) {
+    SCOPED_TRACE(name);
+    const RawImage image = read_image(out / name);
+    EXPECT_EQ(image.width, 120);
+    EXPECT_EQ(image.height, 120);
+    EXPECT_EQ(image.channels, 3);
+    EXPECT_EQ(image.code_max, 255u);
+  }
+  const auto colours = legend(r.out);
+  ASSERT_EQ(colours.size(), 4u) << r.out;
+
+  // The class map the tool should have drawn: same loader, filter and tolerances (the defaults for 16-bit maps).
+  FieldSources sources;
+  sources.normal_map = normal_map;
+  FieldLoadReport report;
+  const RegionFields fields = load_region_fields(sources, 120, 120, {true, false}, report);
+  const Grid<std::uint8_t> classes =
+      class_map(curvature_from_gradient(*fields.gradient, DerivativeFilter::recommended(false, 16)),
+                ClassTolerances::recommended(16));
+  const RawImage picture = read_image(out / "class.png");
+  std::array<std::size_t, 4> seen{};
+  for (std::size_t i = 0; i < classes.values.size(); ++i) {
+    const auto want = colours.at(class_name(static_cast<CurvatureClass>(classes.values[i])));
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(std::lround(picture.pixels[i * 3 + c] * 255.0), want[c]) << "texel " << i;
+    ++seen[classes.values[i]];
+  }
+  for (std::size_t n : seen) EXPECT_GT(n, 0u) << "every class appears on the bump";
+}
+
+TEST(ToolInterrogation, InspectOptionsAndErrors) {
+  ScratchDir dir;
+  const SurfaceSpec saddle{SurfaceKind::simple_saddle, 64};
+  const fs::path depth_map = dir / "saddle.depth.png";
+  Grid<float> depth = surface_depth_field(saddle);
+  for (float& v : depth.values) v = static_cast<float>(v / (2 * saddle.relief_px()) + 0.5);
+  write_gray_png16(depth_map, depth);
+  const fs::path out = dir / "out";
+  {
+    // Depth only, resampled to another size, explicit radius and tolerances.
+    const ToolResult r = run_tool("inspect --depth-map " + quote(depth_map) +
+                                      " --depth-zero 0.5 --relief-px 16 --size 80,40 --radius 4 "
+                                      "--planar-curvedness 1e-4 --parabolic-ratio 0.2 " +
+                                      quote(out),
+                                  dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_NE(r.out.find("depth map (16-bit), filter radius 4"), std::string::npos) << r.out;
+    const RawImage k = read_image(out / "K.png");
+    EXPECT_EQ(k.width, 80);
+    EXPECT_EQ(k.height, 40);
+    EXPECT_TRUE(fs::exists(out / "contours.png"));
+  }
+  for (const std::string& args : {std::string("inspect ") + quote(dir / "x"),
+                                  "inspect --from normal --depth-map " + quote(depth_map) + " " + quote(dir / "x"),
+                                  "inspect --normal-map " + quote(dir / "missing.png") + " " + quote(dir / "x")}) {
+    SCOPED_TRACE(args);
+    const ToolResult r = run_tool(args, dir);
+    EXPECT_EQ(r.rc, 1);
+    EXPECT_NE(r.err.find("pseudohaptic: "), std::string::npos) << r.err;
+  }
+}
+
+}  // namespace
+}  // namespace ph

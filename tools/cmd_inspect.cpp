@@ -1,0 +1,191 @@
+// `pseudohaptic inspect`: what the surface-interrogation methods see in a normal or depth map, as false-colour
+// pictures (docs/INTERROGATION.md).
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+
+#include "config/field_loader.hpp"
+#include "config/image_io.hpp"
+#include "core/curvature_class.hpp"
+#include "core/curvature_field.hpp"
+#include "core/patterns.hpp"
+#include "tools/commands.hpp"
+
+namespace ph::tools {
+namespace {
+
+using Rgb = std::array<std::uint8_t, 3>;
+
+struct InspectOptions {
+  std::string outdir, normal_map, depth_map;
+  std::string normal_green = "opengl", normal_encoding = "auto", from;
+  double depth_zero = 0.0, relief_px = 100.0;
+  std::vector<std::int32_t> size;
+  std::optional<std::int32_t> radius;
+  std::optional<double> planar_curvedness, parabolic_ratio;
+  std::vector<double> light;
+  std::optional<double> cos_alpha;
+  std::optional<std::int32_t> contours;
+};
+
+// Fixed class colours, indexed by CurvatureClass.
+constexpr std::array<Rgb, 4> kClassColours = {{{200, 200, 200}, {240, 190, 40}, {215, 48, 39}, {69, 117, 180}}};
+
+// Blue (negative), white (0), red (positive); t in [-1, 1].
+Rgb diverging(double t) {
+  const Rgb end = t < 0 ? Rgb{59, 76, 192} : Rgb{180, 4, 38};
+  const double a = std::min(std::abs(t), 1.0);
+  Rgb out;
+  for (int i = 0; i < 3; ++i) out[i] = static_cast<std::uint8_t>(std::lround(255.0 + a * (end[i] - 255.0)));
+  return out;
+}
+
+// The 99th percentile of |v|: a robust scale that a few spikes (steps, walls) cannot flatten into white.
+double robust_scale(const Grid<float>& values) {
+  std::vector<float> magnitudes;
+  magnitudes.reserve(values.values.size());
+  for (float v : values.values) magnitudes.push_back(std::abs(v));
+  if (magnitudes.empty()) return 1.0;
+  const std::size_t k = std::min(magnitudes.size() - 1, magnitudes.size() * 99 / 100);
+  std::nth_element(magnitudes.begin(), magnitudes.begin() + k, magnitudes.end());
+  return magnitudes[k] > 0.0f ? magnitudes[k] : 1.0;
+}
+
+template <typename T, typename F>
+void write_picture(const std::filesystem::path& path, const Grid<T>& grid, F colour) {
+  std::vector<std::uint8_t> rgb;
+  rgb.reserve(grid.values.size() * 3);
+  for (const T& v : grid.values) {
+    const Rgb c = colour(v);
+    rgb.insert(rgb.end(), c.begin(), c.end());
+  }
+  write_rgb_png8(path, grid.width, grid.height, rgb);
+}
+
+double write_diverging(const std::filesystem::path& path, const Grid<float>& values) {
+  const double scale = robust_scale(values);
+  write_picture(path, values, [&](float v) { return diverging(v / scale); });
+  return scale;
+}
+
+void write_mask(const std::filesystem::path& path, const Grid<std::uint8_t>& mask) {
+  write_picture(path, mask, [](std::uint8_t m) { return m ? Rgb{0, 0, 0} : Rgb{255, 255, 255}; });
+}
+
+int run_inspect(const InspectOptions& o) {
+  if (o.normal_map.empty() && o.depth_map.empty()) throw std::invalid_argument("give --normal-map or --depth-map");
+  const bool from_depth = o.from.empty() ? o.normal_map.empty() : o.from == "depth";
+  if (from_depth && o.depth_map.empty()) throw std::invalid_argument("--from depth needs --depth-map");
+  if (!from_depth && o.normal_map.empty()) throw std::invalid_argument("--from normal needs --normal-map");
+
+  // Decoded as `trace` and the daemon decode them (config/field_loader).
+  FieldSources sources;
+  if (!o.normal_map.empty()) sources.normal_map = o.normal_map;
+  if (!o.depth_map.empty()) sources.depth_map = o.depth_map;
+  sources.normal_options.green = o.normal_green == "directx" ? GreenConvention::directx : GreenConvention::opengl;
+  sources.normal_options.encoding = o.normal_encoding == "unorm"    ? NormalEncoding::unorm
+                                    : o.normal_encoding == "signed" ? NormalEncoding::signed_values
+                                                                    : NormalEncoding::automatic;
+  sources.depth_options = {o.depth_zero, o.relief_px};
+  const ImageSize image = read_image_size(from_depth ? o.depth_map : o.normal_map);
+  const std::int32_t width = o.size.size() == 2 ? o.size[0] : image.width;
+  const std::int32_t height = o.size.size() == 2 ? o.size[1] : image.height;
+  FieldLoadReport report;
+  const RegionFields fields = load_region_fields(sources, width, height, {true, !o.depth_map.empty()}, report);
+
+  const int bits = image.code_max == 255 ? 8 : 16;
+  const DerivativeFilter filter =
+      o.radius ? DerivativeFilter{*o.radius} : DerivativeFilter::recommended(from_depth, bits);
+  ClassTolerances tolerances = ClassTolerances::recommended(bits);
+  if (o.planar_curvedness) tolerances.planar_curvedness = *o.planar_curvedness;
+  if (o.parabolic_ratio) tolerances.parabolic_ratio = *o.parabolic_ratio;
+  const CurvatureFields curvature =
+      from_depth ? curvature_from_depth(*fields.depth, filter) : curvature_from_gradient(*fields.gradient, filter);
+  const Grid<std::uint8_t> classes = class_map(curvature, tolerances);
+
+  const std::filesystem::path out = o.outdir;
+  std::filesystem::create_directories(out);
+  const double k_scale = write_diverging(out / "K.png", curvature.gaussian);
+  const double h_scale = write_diverging(out / "H.png", curvature.mean);
+  write_picture(out / "class.png", classes, [](std::uint8_t c) { return kClassColours[c & 3]; });
+  IsophoteParams isophotes;
+  if (o.light.size() == 3) isophotes.light = {o.light[0], o.light[1], o.light[2]};
+  if (o.cos_alpha) isophotes.cos_alpha = *o.cos_alpha;
+  write_mask(out / "isophotes.png", isophote_mask(*fields.gradient, isophotes));
+  if (fields.depth) {
+    ContourParams contours;
+    if (o.contours) contours.count = *o.contours;
+    write_mask(out / "contours.png", contour_mask(*fields.depth, contours));
+  }
+
+  fmt::print("{} x {} texels, curvature from the {} map ({}-bit), filter radius {}\n", width, height,
+             from_depth ? "depth" : "normal", image.code_max == 0 ? 32 : bits, filter.radius);
+  fmt::print("K.png: K in 1/px^2, blue < 0 < red, full colour at +-{:.4g} (99th percentile of |K|)\n", k_scale);
+  fmt::print("H.png: H in 1/px, blue < 0 < red (a bump is blue), full colour at +-{:.4g}\n", h_scale);
+  fmt::print("class.png: planar below curvedness {:g} /px, parabolic below |k_small|/|k_large| {:g}\n",
+             tolerances.planar_curvedness, tolerances.parabolic_ratio);
+  std::array<std::size_t, 4> counts{};
+  for (std::uint8_t c : classes.values) ++counts[c & 3];
+  for (std::uint8_t c = 0; c < 4; ++c) {
+    const Rgb rgb = kClassColours[c];
+    fmt::print("  {:<10} #{:02x}{:02x}{:02x} {:6.2f}%\n", class_name(static_cast<CurvatureClass>(c)), rgb[0], rgb[1],
+               rgb[2], 100.0 * counts[c] / std::max<std::size_t>(classes.values.size(), 1));
+  }
+  fmt::print("isophotes.png{}: pattern texels black\n", fields.depth ? ", contours.png" : "");
+  if (report.normals.invalid_texels + report.depth.invalid_texels > 0) {
+    fmt::print(stderr, "repaired {} invalid texels\n", report.normals.invalid_texels + report.depth.invalid_texels);
+  }
+  return 0;
+}
+
+}  // namespace
+
+Run add_inspect_command(CLI::App& app) {
+  auto o = std::make_shared<InspectOptions>();
+  app.description(
+      "Write what the surface-interrogation methods see in a texture as false-colour PNGs into OUTDIR:\n"
+      "K.png (Gaussian curvature), H.png (mean curvature), class.png (planar / parabolic / elliptic /\n"
+      "hyperbolic; the legend goes to standard output), isophotes.png and, with a depth map, contours.png.");
+  app.add_option("OUTDIR", o->outdir, "Folder to write into (created if needed)")->required();
+  app.add_option("--normal-map", o->normal_map, "Normal map image (PNG, TIFF, EXR)");
+  app.add_option("--depth-map", o->depth_map, "Depth map image (one channel)");
+  app.add_option("--from", o->from, "Curvature from the normal or the depth map (default: normal when given)")
+      ->check(CLI::IsMember({"normal", "depth"}));
+  app.add_option("--normal-green", o->normal_green, "Green channel convention of the normal map")
+      ->check(CLI::IsMember({"opengl", "directx"}))
+      ->capture_default_str();
+  app.add_option("--normal-encoding", o->normal_encoding, "auto: unorm for integer images, signed for float ones")
+      ->check(CLI::IsMember({"auto", "unorm", "signed"}))
+      ->capture_default_str();
+  app.add_option("--depth-zero", o->depth_zero, "Depth map value of height 0")->capture_default_str();
+  app.add_option("--relief-px", o->relief_px, "Screen px of height per unit of depth map value")->capture_default_str();
+  app.add_option("--size", o->size, "W,H region size in px the maps are resampled to (default: the image's size)")
+      ->delimiter(',')
+      ->expected(2)
+      ->check(CLI::Range(1, 32768));
+  app.add_option("--radius", o->radius,
+                 "Derivative filter radius r, a (2r+1)^2 least-squares window (default: 3 for 16-bit normal maps, "
+                 "8 for 16-bit depth maps, 16 for 8-bit maps)")
+      ->check(CLI::Range(1, 256));
+  app.add_option("--planar-curvedness", o->planar_curvedness,
+                 "Planar below this curvedness, 1/px (default 5e-5; 1e-4 for 8-bit maps)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--parabolic-ratio", o->parabolic_ratio,
+                 "Parabolic below this |k_small|/|k_large| (default 0.1; 0.25 for 8-bit maps)")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--light", o->light, "X,Y,Z light direction for isophotes (default -1,-1,2: top left)")
+      ->delimiter(',')
+      ->expected(3);
+  app.add_option("--cos-alpha", o->cos_alpha, "Isophote value n.l (default 0.95)")->check(CLI::Range(-1.0, 1.0));
+  app.add_option("--contours", o->contours, "Number of evenly spaced contour levels (default 8)")
+      ->check(CLI::Range(0, 4096));
+  return [o] { return run_inspect(*o); };
+}
+
+}  // namespace ph::tools
