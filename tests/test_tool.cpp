@@ -19,49 +19,14 @@
 #include "config/target_files.hpp"
 #include "core/targets.hpp"
 #include "tests/scratch_dir.hpp"
-
-#ifndef PH_TOOL_PATH
-#error "PH_TOOL_PATH must name the pseudohaptic binary (tests/CMakeLists.txt)"
-#endif
+#include "tests/tool_runner.hpp"
 
 namespace ph {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 bool contains(const std::string& text, std::string_view part) { return text.find(part) != std::string::npos; }
-
-// A word for the shell, single-quoted.
-std::string quote(const std::string& word) {
-  std::string quoted = "'";
-  for (char c : word) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
-}
-std::string quote(const fs::path& path) { return quote(path.string()); }
-
-struct ToolResult {
-  int rc = -1;  // exit status; 128 + N when killed by signal N
-  std::string out;
-  std::string err;
-};
-
-// Runs the tool with `args` (already quoted where needed), standard output and error into files of `dir`.
-ToolResult run_tool(const std::string& args, const ScratchDir& dir) {
-  const fs::path out = dir / "stdout.txt";
-  const fs::path err = dir / "stderr.txt";
-  const std::string command = quote(std::string(PH_TOOL_PATH)) + " " + args + " >" + quote(out) + " 2>" + quote(err);
-  const int status = std::system(command.c_str());
-  ToolResult result;
-  if (status != -1) result.rc = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  result.out = read_text(out);
-  result.err = read_text(err);
-  return result;
-}
 
 // A failure the tool reports itself: a non-zero status, a message on stderr, no crash and no stack trace.
 void expect_clean_failure(const ToolResult& r, std::initializer_list<std::string_view> names) {

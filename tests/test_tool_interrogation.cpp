@@ -18,42 +18,12 @@
 #include "core/surfaces.hpp"
 #include "core/targets.hpp"
 #include "tests/scratch_dir.hpp"
-
-#ifndef PH_TOOL_PATH
-#error "PH_TOOL_PATH must name the pseudohaptic binary (tests/CMakeLists.txt)"
-#endif
+#include "tests/tool_runner.hpp"
 
 namespace ph {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-std::string quote(const fs::path& path) {
-  std::string quoted = "'";
-  for (char c : path.string()) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
-}
-
-struct ToolResult {
-  int rc = -1;
-  std::string out, err;
-};
-
-ToolResult run_tool(const std::string& args, const ScratchDir& dir) {
-  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string command = quote(PH_TOOL_PATH) + " " + args + " >" + quote(out) + " 2>" + quote(err);
-  const int status = std::system(command.c_str());
-  ToolResult result;
-  if (status != -1) result.rc = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  result.out = read_text(out);
-  result.err = read_text(err);
-  return result;
-}
 
 TEST(ToolInterrogation, SurfacesWritesMapsCurvatureAndScenes) {
   ScratchDir dir;
