@@ -1,0 +1,866 @@
+// Run inside the VM (tests/vm/run-in-vm), as root: end-to-end checks of the real pseudohapticd. It creates
+// uinput test mice, starts the daemon (argv[1]) as a child with NOTIFY_SOCKET pointing at a socket of its
+// own, drives it and reads what comes out of its virtual devices. Where the daemon rescales motion, the
+// expected output is what ph::Pipeline computes here for the same frames, so every frame is checked
+// exactly. One PASS or FAIL line per case; the exit status is 1 when any failed.
+//
+//   daemon_e2e DAEMON [--cycles N] [--latency-frames N] [-v]
+//
+// --cycles: hotplug create/destroy cycles (100); --latency-frames: frames per latency figure (500); -v
+// passes -v to the daemon (its debug lines are printed when a case fails) and traces the hotplug cycles.
+//
+// Three parts, each with a fresh daemon (or none): latency of the test mouse's own node; the daemon with a
+// flat config file (held button at start, identity, latency, SIGHUP reloads, SIGTERM with a held button);
+// the daemon with the embedded default scene (grab exclusivity, the offline pipeline's output over a
+// texture, latency, hotplug, two mice, SYN_DROPPED, SIGTERM). Numbers in brackets are the items of the
+// issue's "VM end-to-end tests".
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "config/scene_file.hpp"
+#include "config/target_files.hpp"
+#include "core/default_scene.hpp"
+#include "core/pipeline.hpp"
+#include "core/targets.hpp"
+#include "tests/vm/e2e_support.hpp"
+
+namespace {
+
+using namespace ph::e2e;
+using ph::Frame;
+namespace ev = ph::ev;
+
+struct Options {
+  std::string daemon;
+  int cycles = 100;
+  int latency_frames = 500;
+  bool verbose = false;  // pass -v to the daemon
+  std::filesystem::path scratch;
+};
+
+// What the desktop, mode and gain of every daemon run here are: the daemon's defaults with the
+// 1920 x 1080 desktop the configs name (and that --default-scene falls back to without DRM connectors).
+ph::PipelineConfig pipeline_config() {
+  ph::PipelineConfig config;
+  config.pointer_gain = 1.0;
+  config.mode = ph::OutputMode::relative;
+  config.desktop = {0, 0, 1920, 1080};
+  return config;
+}
+
+// ---- verdicts -------------------------------------------------------------------------------------------
+
+// The failures and notes of one case.
+class Check {
+ public:
+  // Records `what` (expected ..., got ...) when !ok; the first few are printed, the rest counted.
+  bool expect(bool ok, const std::string& what) {
+    if (!ok) {
+      if (failures_.size() < kShown) failures_.push_back(what);
+      ++failed_;
+    }
+    return ok;
+  }
+  void note(const std::string& text) { notes_ += (notes_.empty() ? "" : "; ") + text; }
+
+  bool ok() const { return failed_ == 0; }
+  std::string failures() const {
+    std::string text;
+    for (const std::string& f : failures_) text += (text.empty() ? "" : "\n    ") + f;
+    if (failed_ > failures_.size()) text += fmt::format("\n    ... and {} more", failed_ - failures_.size());
+    return text;
+  }
+  const std::string& notes() const { return notes_; }
+
+ private:
+  static constexpr std::size_t kShown = 4;
+  std::vector<std::string> failures_;
+  std::size_t failed_ = 0;
+  std::string notes_;
+};
+
+class Report {
+ public:
+  void record(const std::string& name, const Check& check, double seconds) {
+    if (check.ok()) {
+      ++passed_;
+      std::printf("PASS %s (%.1f s): %s\n", name.c_str(), seconds, check.notes().c_str());
+    } else {
+      ++failed_;
+      std::printf("FAIL %s (%.1f s):\n    %s\n", name.c_str(), seconds, check.failures().c_str());
+      if (!check.notes().empty()) std::printf("    (%s)\n", check.notes().c_str());
+    }
+    std::fflush(stdout);
+  }
+  void not_run(const std::string& name, const std::string& why) {
+    ++failed_;
+    std::printf("FAIL %s: not run (%s)\n", name.c_str(), why.c_str());
+    std::fflush(stdout);
+  }
+  int passed() const { return passed_; }
+  int failed() const { return failed_; }
+
+ private:
+  int passed_ = 0, failed_ = 0;
+};
+
+// The cases run against one daemon, which the session owns. A Fatal (or any other exception) in a case
+// fails it and stops the session: its later cases are reported as not run. When anything failed, the
+// daemon's stderr and its sd_notify lines are printed at the end.
+class Session {
+ public:
+  Session(Report& report, std::string title) : report_(report), title_(std::move(title)) {
+    std::printf("== %s\n", title_.c_str());
+    std::fflush(stdout);
+  }
+  ~Session() {
+    if (!any_failed_ || daemon == nullptr) return;
+    if (daemon->running()) {  // where it is, in case it hangs
+      const std::string proc = "/proc/" + std::to_string(daemon->pid());
+      std::fprintf(stderr, "---- %s: daemon still running, wchan %s, kernel stack:\n%s", title_.c_str(),
+                   read_text_file(proc + "/wchan").c_str(), read_text_file(proc + "/stack").c_str());
+    }
+    std::fprintf(stderr, "---- %s: daemon output (%s) ----\n%s", title_.c_str(), daemon->log_path().c_str(),
+                 daemon->log().c_str());
+    if (notify != nullptr) {
+      std::string lines;
+      for (const std::string& line : notify->history()) lines += (lines.empty() ? "" : " | ") + line;
+      std::fprintf(stderr, "---- %s: sd_notify lines: %s\n", title_.c_str(), lines.c_str());
+    }
+    std::fprintf(stderr, "---- end of %s ----\n", title_.c_str());
+  }
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  template <class Body>
+  void run(const std::string& name, Body body) {
+    if (!stopped_.empty()) {
+      report_.not_run(name, stopped_);
+      any_failed_ = true;
+      return;
+    }
+    Check check;
+    const auto start = Clock::now();
+    try {
+      body(check);
+    } catch (const std::exception& e) {
+      check.expect(false, e.what());
+      stopped_ = "an earlier case of this daemon stopped: " + std::string(e.what());
+    }
+    any_failed_ = any_failed_ || !check.ok();
+    report_.record(name, check, std::chrono::duration<double>(Clock::now() - start).count());
+  }
+
+ private:
+  Report& report_;
+  std::string title_;
+  std::string stopped_;
+  bool any_failed_ = false;
+
+ public:
+  // The daemon's sd_notify socket and the daemon (killed, if still running, after the output is printed).
+  std::unique_ptr<NotifySocket> notify;
+  std::unique_ptr<ChildProcess> daemon;
+};
+
+// With -v: a time-stamped line on stderr, for finding where time goes.
+void trace(const Options& options, const std::string& what) {
+  static const auto start = Clock::now();
+  if (!options.verbose) return;
+  std::fprintf(stderr, "[%9.3f] %s\n", std::chrono::duration<double>(Clock::now() - start).count(), what.c_str());
+}
+
+// ---- driving the daemon ------------------------------------------------------------------------------------
+
+constexpr auto kFrameTimeout = 5s;    // a frame through the daemon (TCG is 10-50x slower than native)
+constexpr auto kDeviceTimeout = 10s;  // a virtual device appearing or going away
+
+std::unique_ptr<ChildProcess> start_daemon(const Options& options, const std::vector<std::string>& args,
+                                           const NotifySocket& notify, const std::string& log_name) {
+  std::vector<std::string> argv{options.daemon};
+  if (options.verbose) argv.emplace_back("-v");
+  argv.insert(argv.end(), args.begin(), args.end());
+  return std::make_unique<ChildProcess>(
+      argv,
+      std::vector<std::string>{"NOTIFY_SOCKET=" + notify.path(), "PATH=/usr/sbin:/usr/bin:/sbin:/bin", "LANG=C.UTF-8"},
+      (options.scratch / log_name).string());
+}
+
+// Waits for READY=1 while the daemon runs: false on timeout, Fatal when it exited.
+bool wait_ready(NotifySocket& notify, ChildProcess& daemon, Clock::duration timeout) {
+  const auto deadline = Clock::now() + timeout;
+  while (Clock::now() < deadline) {
+    if (notify.expect("READY=1", 250ms)) return true;
+    if (const std::optional<int> status = daemon.wait_exit(0s)) {
+      throw Fatal("the daemon exited before READY=1: " + describe_wait_status(*status));
+    }
+  }
+  return false;
+}
+
+// Sends `in` through the test mouse and checks that what comes out of `out` is what the offline pipeline
+// makes of it. Returns what came out (nullopt when nothing did, or nothing was expected).
+std::optional<Frame> expect_through(Check& check, TestMouse& mouse, EventReader& out, ph::Pipeline& model,
+                                    const Frame& in, const std::string& label) {
+  const Frame expected = untimed(model.process(in));
+  mouse.send(in);
+  if (!delivers_something(expected)) return std::nullopt;
+  std::optional<Frame> got = out.next_frame(kFrameTimeout);
+  if (!got) {
+    check.expect(false, fmt::format("{}: sent [{}], expected [{}], got nothing within {} s{}", label, describe(in),
+                                    describe(expected), kFrameTimeout.count(), out.gone() ? " (device gone)" : ""));
+    return std::nullopt;
+  }
+  check.expect(same_events(*got, expected), fmt::format("{}: sent [{}], expected [{}] (offline pipeline), got [{}]",
+                                                        label, describe(in), describe(expected), describe(*got)));
+  return got;
+}
+
+// The daemon creates a mouse's virtual device just before it grabs the mouse, and drops what the mouse
+// queued before the grab: a frame sent in between goes to the mouse's other readers only. Sends a wheel
+// notch every 200 ms until one comes out of `out`, then a horizontal one and reads up to it, so that no
+// notch is left to read. The grab holds from then on. (Frames without motion leave the cursor model alone.)
+bool wait_taken(TestMouse& mouse, EventReader& out, Clock::duration timeout) {
+  const auto deadline = Clock::now() + timeout;
+  bool through = false;
+  while (!through && Clock::now() < deadline) {
+    mouse.send(make_frame({rel(ev::kRelWheel, 1)}));
+    through = out.next_frame(200ms).has_value();
+  }
+  if (!through) return false;
+  const Frame marker = make_frame({rel(ev::kRelHWheel, 1)});
+  mouse.send(marker);
+  while (const std::optional<Frame> got = out.next_frame(kFrameTimeout)) {
+    if (same_events(*got, marker)) return true;
+  }
+  return false;
+}
+
+std::string keys_text(const std::vector<std::uint16_t>& keys) {
+  std::string text;
+  for (std::uint16_t code : keys) text += (text.empty() ? "" : ", ") + event_name({0, ev::kKey, code, 0});
+  return text.empty() ? "none" : text;
+}
+
+std::string grab_text(int err) { return err == 0 ? "success" : errno_text(err); }
+
+void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
+  const std::filesystem::path next = path.string() + ".new";
+  {
+    std::ofstream out(next, std::ios::binary | std::ios::trunc);
+    out << text;
+    if (!out) throw Fatal("cannot write " + next.string());
+  }
+  std::filesystem::rename(next, path);
+}
+
+// The [daemon] table of every config here: only the test mice, the default desktop spelled out.
+std::string daemon_table() {
+  return "[daemon]\n"
+         "devices = [\"name:ph-e2e*\"]\n"
+         "output = \"relative\"\n"
+         "desktop = [0, 0, 1920, 1080]\n"
+         "pointer_speed = 1.0\n";
+}
+
+ph::TargetSpec hole_target() {
+  for (const ph::TargetSpec& spec : ph::all_targets()) {
+    if (spec.name() == "hole-polynomial-h1-r200") return spec;
+  }
+  throw Fatal("no target hole-polynomial-h1-r200");
+}
+
+// The daemon table and one region: the hole target's files (in the config's folder) where the default
+// scene has it, at (710, 290).
+std::string region_config(const ph::TargetSpec& spec) {
+  std::string region = ph::target_scene_text(spec);
+  const std::string at_origin = "x = 0\ny = 0\n";
+  const auto pos = region.find(at_origin);
+  if (pos == std::string::npos) throw Fatal("unexpected target scene text:\n" + region);
+  region.replace(pos, at_origin.size(), "x = 710\ny = 290\n");
+  return daemon_table() + "\n" + region;
+}
+
+// A stroke: `count` frames moving `dx` per frame (and 1 px down every fourth), with buttons, wheel and
+// hi-res wheel events in some frames, and two frames without motion.
+std::vector<Frame> stroke(int count, std::int32_t dx) {
+  std::vector<Frame> frames;
+  for (int i = 0; i < count; ++i) {
+    std::vector<ph::InputEvent> events;
+    if (i == 8) events.push_back(key(ev::kBtnLeft, 1));  // a button before the motion
+    events.push_back(rel(ev::kRelX, dx));
+    if (i % 4 == 3) events.push_back(rel(ev::kRelY, 1));
+    if (i == 3) events.push_back(key(ev::kBtnLeft, 1));
+    if (i == 6) events.push_back(key(ev::kBtnLeft, 0));
+    if (i == 10) events.insert(events.end(), {rel(ev::kRelWheel, 1), rel(ev::kRelWheelHiRes, 120)});
+    if (i == 14) events.push_back(key(ev::kBtnLeft, 0));
+    if (i == 17) events.insert(events.end(), {rel(ev::kRelHWheel, -1), rel(ev::kRelHWheelHiRes, -120)});
+    if (i == 21) events.push_back(rel(ev::kRelWheelHiRes, -40));
+    if (i == 24) events.insert(events.end(), {key(ev::kBtnRight, 1), key(ev::kBtnMiddle, 1)});
+    if (i == 25) events.push_back(key(ev::kBtnRight, 0));
+    frames.push_back(make_frame(std::move(events)));
+    if (i == 26) {
+      frames.push_back(make_frame({key(ev::kBtnMiddle, 0)}));
+      frames.push_back(make_frame({rel(ev::kRelWheel, -1), rel(ev::kRelWheelHiRes, -120)}));
+    }
+  }
+  return frames;
+}
+
+struct StrokeResult {
+  std::vector<std::pair<Frame, Frame>> frames;  // sent, came out
+  int differing = 0;                            // frames that came out changed
+};
+
+StrokeResult run_stroke(Check& check, TestMouse& mouse, EventReader& out, ph::Pipeline& model,
+                        const std::vector<Frame>& frames, const std::string& label) {
+  StrokeResult result;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const std::optional<Frame> got =
+        expect_through(check, mouse, out, model, frames[i], fmt::format("{} frame {}", label, i));
+    if (!got) continue;
+    result.frames.emplace_back(frames[i], *got);
+    if (!same_events(*got, frames[i])) ++result.differing;
+  }
+  return result;
+}
+
+// ---- latency ----------------------------------------------------------------------------------------------
+
+struct Latency {
+  std::string label;
+  std::vector<double> us;  // write into the test mouse -> read from the output node
+  int skipped = 0;         // frames the pipeline turned into nothing (no output to wait for)
+};
+
+double percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0;
+  std::sort(values.begin(), values.end());
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size())));
+  return values[std::clamp<std::size_t>(rank, 1, values.size()) - 1];
+}
+
+std::string latency_text(const Latency& l) {
+  return fmt::format("median {:.0f} us, p99 {:.0f} us, max {:.0f} us over {} frames{}", percentile(l.us, 0.5),
+                     percentile(l.us, 0.99), l.us.empty() ? 0.0 : *std::max_element(l.us.begin(), l.us.end()),
+                     l.us.size(), l.skipped > 0 ? fmt::format(" ({} without output skipped)", l.skipped) : "");
+}
+
+// One motion frame at a time (REL_X +4 and -4 in turn, so the cursor stays put): from just before
+// writing it into the test mouse to just after reading it from `out`. With a model, the output must be
+// what the model computes.
+void measure_latency(Check& check, TestMouse& mouse, EventReader& out, ph::Pipeline* model, int frames,
+                     Latency& result) {
+  for (int i = 0; i < frames; ++i) {
+    const Frame in = make_frame({rel(ev::kRelX, i % 2 == 0 ? 4 : -4)});
+    const Frame expected = model != nullptr ? untimed(model->process(in)) : in;
+    const auto start = Clock::now();
+    mouse.send(in);
+    if (!delivers_something(expected)) {
+      ++result.skipped;
+      continue;
+    }
+    const std::optional<Frame> got = out.next_frame(kFrameTimeout);
+    const auto end = Clock::now();
+    if (!got) throw Fatal(fmt::format("latency frame {}: nothing came out within {} s", i, kFrameTimeout.count()));
+    if (!check.expect(same_events(*got, expected), fmt::format("latency frame {}: expected [{}], got [{}]", i,
+                                                               describe(expected), describe(*got)))) {
+      continue;
+    }
+    result.us.push_back(std::chrono::duration<double, std::micro>(end - start).count());
+  }
+  check.note(latency_text(result));
+}
+
+// ---- part 1: no daemon -------------------------------------------------------------------------------------
+
+void passthrough_part(Report& report, const Options& options, Latency& latency) {
+  Session session(report, "no daemon: the test mouse's own node");
+  session.run("[10a] latency, passthrough (no daemon)", [&](Check& check) {
+    TestMouse mouse("ph-e2e passthrough");
+    EventReader own(mouse.node());
+    measure_latency(check, mouse, own, nullptr, options.latency_frames, latency);
+  });
+}
+
+// ---- part 2: a config file with a flat scene ---------------------------------------------------------------
+
+void flat_part(Report& report, const Options& options, Latency& latency) {
+  Session session(report, "daemon with a flat config file (-c)");
+  const UeventMonitor uevents;
+  const std::filesystem::path config = options.scratch / "daemon.toml";
+  const std::string virtual_name = "pseudohaptic ph-e2e mouse";
+  std::optional<TestMouse> mouse;
+  std::optional<EventReader> own, out;  // the test mouse's own node; the virtual device
+  std::unique_ptr<NotifySocket>& notify = session.notify;
+  std::unique_ptr<ChildProcess>& daemon = session.daemon;
+  ph::Pipeline model(std::make_shared<const ph::Scene>(), pipeline_config());
+  const ph::TargetSpec hole = hole_target();
+
+  session.run("[5] button held at start: no grab until it is released", [&](Check& check) {
+    ph::write_target_files(options.scratch, {hole});  // for the reload below
+    write_file_atomically(config, daemon_table());
+    mouse.emplace("ph-e2e mouse");
+    own.emplace(mouse->node());
+    const Frame press = make_frame({key(ev::kBtnLeft, 1)}), release = make_frame({key(ev::kBtnLeft, 0)});
+    mouse->send(press);
+    const std::optional<Frame> pressed = own->next_frame(kFrameTimeout);
+    if (!pressed || !same_events(*pressed, press)) throw Fatal("the press did not come out of the test mouse's node");
+    notify = std::make_unique<NotifySocket>((options.scratch / "notify-flat.sock").string());
+    daemon = start_daemon(options, {"-c", config.string()}, *notify, "daemon-flat.log");
+    // READY=1 may come before the grab (the mouse is waited for) or only after it.
+    bool ready = wait_ready(*notify, *daemon, 5s);
+    const bool ready_while_held = ready;
+    if (!daemon->running()) throw Fatal("the daemon exited: " + describe_wait_status(*daemon->wait_exit(0s)));
+    const std::string early = wait_for_device(virtual_name, ready ? 1500ms : 0ms, uevents);
+    check.expect(early.empty(), "expected no virtual device while BTN_LEFT is held, got " + early);
+    const std::vector<ph::InputEvent> meanwhile = own->read_now();
+    check.expect(meanwhile.empty(), fmt::format("expected nothing more on the test mouse's node before the release, "
+                                                "got {} events",
+                                                meanwhile.size()));
+    mouse->send(release);
+    const std::optional<Frame> released = own->next_frame(kFrameTimeout);
+    check.expect(released && same_events(*released, release),
+                 "expected the release on the test mouse's own node (not grabbed yet), got [" +
+                     (released ? describe(*released) : std::string("nothing")) + "]");
+    const std::string node = wait_for_device(virtual_name, kDeviceTimeout, uevents);
+    if (node.empty()) throw Fatal("no virtual device '" + virtual_name + "' within 10 s of the release");
+    out.emplace(node);
+    if (!wait_taken(*mouse, *out, kDeviceTimeout)) throw Fatal("nothing came out of " + node + " within 10 s");
+    own->read_now();  // wheel notches sent before the grab went to the other readers only
+    if (!ready) ready = notify->expect("READY=1", kDeviceTimeout);
+    check.expect(ready, "expected READY=1 from the daemon, got none");
+    expect_through(check, *mouse, *out, model, make_frame({rel(ev::kRelX, 4), rel(ev::kRelY, 2)}), "after the grab");
+    const std::vector<ph::InputEvent> leaked = own->read_now();
+    check.expect(
+        leaked.empty(),
+        fmt::format("expected nothing on the test mouse's own node after the grab, got {} events", leaked.size()));
+    check.note(
+        fmt::format("READY=1 {}; no virtual device while held; press and release seen by another reader of the "
+                    "mouse; then taken, motion came out of {} and not of the mouse's node",
+                    ready_while_held ? "while the button was held" : "after the release", node));
+  });
+
+  session.run("[2] flat scene: frames come out unchanged", [&](Check& check) {
+    const std::vector<Frame> frames = {
+        make_frame({rel(ev::kRelX, 3), rel(ev::kRelY, -2)}),
+        make_frame({key(ev::kBtnLeft, 1)}),
+        make_frame({rel(ev::kRelX, -7), rel(ev::kRelY, 11), key(ev::kBtnLeft, 0)}),
+        make_frame({rel(ev::kRelWheel, 1), rel(ev::kRelWheelHiRes, 120)}),
+        make_frame({rel(ev::kRelHWheel, -1), rel(ev::kRelHWheelHiRes, -120)}),
+        make_frame({rel(ev::kRelX, 1), key(ev::kBtnRight, 1), rel(ev::kRelWheel, -1), rel(ev::kRelWheelHiRes, -120)}),
+        make_frame({key(ev::kBtnRight, 0), key(ev::kBtnMiddle, 1)}),
+        make_frame({key(ev::kBtnMiddle, 0), rel(ev::kRelY, 5)}),
+        make_frame({rel(ev::kRelWheelHiRes, 30)}),
+        make_frame({rel(ev::kRelHWheelHiRes, 45)}),
+        make_frame({rel(ev::kRelX, 100), rel(ev::kRelY, -100)}),
+        make_frame({rel(ev::kRelX, -100), rel(ev::kRelY, 100), key(ev::kBtnLeft, 1), key(ev::kBtnRight, 1)}),
+        make_frame({key(ev::kBtnLeft, 0), key(ev::kBtnRight, 0), rel(ev::kRelY, -1)}),
+    };
+    int same = 0;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      ph::Pipeline probe = model;  // the offline pipeline agrees that a flat scene changes nothing
+      check.expect(same_events(probe.process(frames[i]), frames[i]),
+                   fmt::format("frame {}: offline pipeline not identity", i));
+      const std::optional<Frame> got =
+          expect_through(check, *mouse, *out, model, frames[i], fmt::format("frame {}", i));
+      if (got && same_events(*got, frames[i])) ++same;
+    }
+    check.expect(own->read_now().empty(), "expected nothing on the grabbed test mouse's own node");
+    check.note(fmt::format("{} of {} frames (motion, buttons, wheel, hi-res wheel) came out unchanged, in order", same,
+                           frames.size()));
+  });
+
+  session.run("[10b] latency, daemon over a flat scene",
+              [&](Check& check) { measure_latency(check, *mouse, *out, &model, options.latency_frames, latency); });
+
+  session.run("[7] SIGHUP with a valid changed config: reloads, the region takes effect", [&](Check& check) {
+    // Put the cursor at (900, 540), left of the hole's centre, while the scene is still flat.
+    const ph::Vec2 at = model.cursor().position;
+    const auto dx = static_cast<std::int32_t>(std::lround(900 - at.x));
+    const auto dy = static_cast<std::int32_t>(std::lround(540 - at.y));
+    std::vector<ph::InputEvent> move;
+    if (dx != 0) move.push_back(rel(ev::kRelX, dx));
+    if (dy != 0) move.push_back(rel(ev::kRelY, dy));
+    if (!move.empty()) expect_through(check, *mouse, *out, model, make_frame(move), "positioning");
+    write_file_atomically(config, region_config(hole));
+    notify->clear();
+    const auto start = Clock::now();
+    daemon->signal(SIGHUP);
+    check.expect(notify->expect("RELOADING=1", 10s), "expected RELOADING=1 after SIGHUP, got none within 10 s");
+    check.expect(notify->expect("READY=1", 60s), "expected READY=1 after RELOADING=1, got none within 60 s");
+    const double reload_s = std::chrono::duration<double>(Clock::now() - start).count();
+    if (!check.ok()) throw Fatal("no reload");
+    model.set_scene(std::make_shared<const ph::Scene>(ph::load_scene(ph::parse_scene_file(config))));
+    const StrokeResult result = run_stroke(check, *mouse, *out, model, stroke(30, 5), "stroke");
+    check.expect(result.differing > 0, "expected the region to change the output, got every frame unchanged");
+    check.note(
+        fmt::format("RELOADING=1 then READY=1 {:.2f} s after SIGHUP; {} frames from x=900, {} changed by the "
+                    "region, all equal to the offline pipeline; cursor now at x={:.1f}",
+                    reload_s, result.frames.size(), result.differing, model.cursor().position.x));
+  });
+
+  session.run("[7] SIGHUP with an invalid config: keeps the previous scene", [&](Check& check) {
+    write_file_atomically(config, region_config(hole) + "bogus_key = 1\n");
+    notify->clear();
+    const std::size_t log_before = daemon->log().size();
+    daemon->signal(SIGHUP);
+    check.expect(notify->expect("RELOADING=1", 10s), "expected RELOADING=1 after SIGHUP, got none within 10 s");
+    check.expect(notify->expect("READY=1", 30s), "expected READY=1 after the failed reload, got none within 30 s");
+    if (!daemon->running()) throw Fatal("the daemon exited: " + describe_wait_status(*daemon->wait_exit(0s)));
+    std::string said;
+    const bool logged = wait_until(
+        [&] {
+          said = daemon->log().substr(std::min(log_before, daemon->log().size()));
+          return said.find("keeping the previous scene") != std::string::npos;
+        },
+        5s);
+    check.expect(logged, "expected a log line with 'keeping the previous scene', got: " + said);
+    const StrokeResult result = run_stroke(check, *mouse, *out, model, stroke(30, -5), "stroke back");
+    check.expect(result.differing > 0, "expected the previous region to still change the output, got none changed");
+    // The line that says it, for the note.
+    const std::size_t at = said.find("keeping the previous scene");
+    if (at != std::string::npos) {
+      const std::size_t begin = said.rfind('\n', at), end = said.find('\n', at);
+      said = said.substr(begin == std::string::npos ? 0 : begin + 1, end == std::string::npos ? end : end - begin - 1);
+    }
+    check.note(fmt::format("still running; said \"{}\"; {} frames back, {} changed, all as the previous scene", said,
+                           result.frames.size(), result.differing));
+  });
+
+  session.run("[8] SIGTERM: exit 0, held button released first, device gone, mouse ungrabbed", [&](Check& check) {
+    expect_through(check, *mouse, *out, model, make_frame({key(ev::kBtnLeft, 1)}), "press before SIGTERM");
+    notify->clear();
+    daemon->signal(SIGTERM);
+    bool released = false;
+    std::string seen;
+    while (std::optional<Frame> frame = out->next_frame(kDeviceTimeout)) {
+      seen += (seen.empty() ? "" : " | ") + describe(*frame);
+      for (const ph::InputEvent& e : frame->events) {
+        released = released || (e.type == ev::kKey && e.code == ev::kBtnLeft && e.value == 0);
+      }
+    }
+    check.expect(released, "expected BTN_LEFT 0 from the virtual device before it went away, got [" + seen + "]");
+    check.expect(out->gone(), "expected the virtual device to go away within 10 s of SIGTERM");
+    const std::optional<int> status = daemon->wait_exit(15s);
+    check.expect(
+        status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0,
+        "expected exit status 0, got " + (status ? describe_wait_status(*status) : "still running after 15 s"));
+    check.expect(notify->expect("STOPPING=1", 1s), "expected STOPPING=1, got none");
+    check.expect(wait_for_device_gone(virtual_name, kDeviceTimeout, uevents), "the virtual device is still there");
+    const int grab = try_grab(mouse->node());
+    check.expect(grab == 0, "EVIOCGRAB on the test mouse after the exit: expected success, got " + grab_text(grab));
+    own->read_now();
+    mouse->send(make_frame({rel(ev::kRelX, 1)}));
+    check.expect(own->next_frame(kFrameTimeout).has_value(),
+                 "the test mouse's own node delivers nothing after the exit");
+    check.note(fmt::format("released before removal: [{}]; {}; EVIOCGRAB on the test mouse succeeds", seen,
+                           status ? describe_wait_status(*status) : "?"));
+  });
+}
+
+// ---- part 3: the embedded default scene --------------------------------------------------------------------
+
+void default_scene_part(Report& report, const Options& options, Latency& latency) {
+  Session session(report, "daemon with the embedded default scene (--default-scene)");
+  const UeventMonitor uevents;
+  const std::string name_a = "ph-e2e mouse A", virtual_a = "pseudohaptic ph-e2e mouse A";
+  std::optional<TestMouse> mouse;
+  std::optional<EventReader> before, out;  // opened on the test mouse before the daemon; the virtual device
+  std::unique_ptr<NotifySocket>& notify = session.notify;
+  std::unique_ptr<ChildProcess>& daemon = session.daemon;
+  std::shared_ptr<const ph::Scene> scene;
+  std::optional<ph::Pipeline> model;
+  StrokeResult over_texture;
+
+  session.run("default scene: the daemon starts and takes the mouse", [&](Check& check) {
+    auto start = Clock::now();
+    scene = std::make_shared<const ph::Scene>(ph::default_scene());
+    model.emplace(scene, pipeline_config());
+    const double model_s = std::chrono::duration<double>(Clock::now() - start).count();
+    mouse.emplace(name_a);
+    before.emplace(mouse->node());
+    notify = std::make_unique<NotifySocket>((options.scratch / "notify-default.sock").string());
+    start = Clock::now();
+    daemon = start_daemon(options, {"--default-scene"}, *notify, "daemon-default.log");
+    if (!wait_ready(*notify, *daemon, 90s)) throw Fatal("no READY=1 within 90 s");
+    const double ready_s = std::chrono::duration<double>(Clock::now() - start).count();
+    const std::string node = wait_for_device(virtual_a, kDeviceTimeout, uevents);
+    if (node.empty()) throw Fatal("no virtual device '" + virtual_a + "'");
+    out.emplace(node);
+    check.note(
+        fmt::format("READY=1 {:.2f} s after the start, virtual device {}, daemon VmRSS {} KiB (the offline "
+                    "default scene took {:.2f} s here)",
+                    ready_s, node, rss_kib(daemon->pid()), model_s));
+  });
+
+  session.run("[1] grab exclusivity", [&](Check& check) {
+    const int grab = try_grab(mouse->node());
+    check.expect(grab == EBUSY, "EVIOCGRAB on the test mouse: expected EBUSY, got " + grab_text(grab));
+    EventReader late(mouse->node());
+    before->read_now();
+    expect_through(check, *mouse, *out, *model, make_frame({rel(ev::kRelX, 2)}), "frame");
+    // Once the frame came out of the virtual device the kernel had handed it to every reader of the mouse.
+    const std::size_t early = before->read_now().size(), later = late.read_now().size();
+    check.expect(early == 0 && later == 0,
+                 fmt::format("expected nothing for the other readers of the test mouse, got {} (opened before the "
+                             "daemon) and {} (opened after)",
+                             early, later));
+    check.note("EVIOCGRAB fails with EBUSY; two other readers got nothing while the frame came out");
+  });
+
+  session.run("[3] texture: the output differs from the input and equals the offline pipeline", [&](Check& check) {
+    const ph::Vec2 from = model->cursor().position;
+    over_texture = run_stroke(check, *mouse, *out, *model, stroke(40, 6), "stroke");
+    check.expect(over_texture.differing > 0, "expected the hole to change the output, got every frame unchanged");
+    check.note(
+        fmt::format("{} frames from ({:.0f}, {:.0f}) to ({:.1f}, {:.1f}), {} changed, every one equal to "
+                    "ph::Pipeline over ph::default_scene()",
+                    over_texture.frames.size(), from.x, from.y, model->cursor().position.x, model->cursor().position.y,
+                    over_texture.differing));
+  });
+
+  session.run("[4] texture: buttons, wheel and hi-res wheel pass unchanged in their frames", [&](Check& check) {
+    int with_others = 0;
+    for (const auto& [in, got] : over_texture.frames) {
+      const Frame others_in = without_motion(in), others_out = without_motion(got);
+      check.expect(same_events(others_in, others_out),
+                   fmt::format("sent [{}], got [{}]: the other events changed", describe(in), describe(got)));
+      if (others_in.events.size() > 1) ++with_others;
+    }
+    check.expect(with_others >= 10,
+                 fmt::format("expected at least 10 frames with buttons or wheels, got {}", with_others));
+    check.note(fmt::format("{} frames with buttons or wheels: the same events, in the same order", with_others));
+  });
+
+  session.run("[10c] latency, daemon over the default scene's texture", [&](Check& check) {
+    const ph::Vec2 at = model->cursor().position;
+    const std::optional<std::size_t> region = scene->owner(model->cursor().texel);
+    if (!region) throw Fatal(fmt::format("the cursor ({:.1f}, {:.1f}) is not over a region", at.x, at.y));
+    measure_latency(check, *mouse, *out, &*model, options.latency_frames, latency);
+    check.note(fmt::format("at ({:.1f}, {:.1f}) in region {}", at.x, at.y, scene->regions()[*region].name));
+  });
+
+  session.run(
+      fmt::format("[6] hotplug: {} create/destroy cycles, no fd or memory leak", options.cycles), [&](Check& check) {
+        const std::string name = "ph-e2e hotplug", virtual_name = "pseudohaptic ph-e2e hotplug";
+        const pid_t pid = daemon->pid();
+        const int fds_before = open_fd_count(pid);
+        int fds_first = -1, fds_last = -1;
+        long rss_first = -1, rss_last = -1;
+        int done = 0;
+        const auto start = Clock::now();
+        for (int cycle = 1; cycle <= options.cycles; ++cycle) {
+          trace(options, fmt::format("cycle {}: creating the mouse", cycle));
+          {
+            TestMouse hot(name);
+            trace(options, "created " + hot.node());
+            const std::string node = wait_for_device(virtual_name, kDeviceTimeout, uevents);
+            trace(options, "virtual device " + node);
+            if (!check.expect(!node.empty(), fmt::format("cycle {}: no virtual device within 10 s", cycle))) break;
+            if (cycle == 1) {
+              EventReader hot_out(node);
+              check.expect(wait_taken(hot, hot_out, kDeviceTimeout), "nothing came out of " + node);
+              expect_through(check, hot, hot_out, *model, make_frame({rel(ev::kRelY, 3)}), "hotplugged mouse");
+              const int grab = try_grab(hot.node());
+              check.expect(grab == EBUSY, "EVIOCGRAB on the hotplugged mouse: expected EBUSY, got " + grab_text(grab));
+            }
+          }
+          trace(options, "destroyed the mouse");
+          if (!check.expect(wait_for_device_gone(virtual_name, kDeviceTimeout, uevents),
+                            fmt::format("cycle {}: the virtual device stayed after its mouse went away", cycle))) {
+            break;
+          }
+          ++done;
+          if (cycle == 1) {
+            wait_until([&] { return open_fd_count(pid) <= fds_before; }, 2s);
+            fds_first = open_fd_count(pid);
+            rss_first = rss_kib(pid);
+          }
+        }
+        const double per_cycle = std::chrono::duration<double>(Clock::now() - start).count() / std::max(done, 1);
+        if (done == options.cycles) {
+          wait_until([&] { return open_fd_count(pid) <= fds_first; }, 5s);
+          fds_last = open_fd_count(pid);
+          rss_last = rss_kib(pid);
+          check.expect(fds_last == fds_first,
+                       fmt::format("open fds: {} after cycle 1, {} after cycle {}", fds_first, fds_last, done));
+          constexpr long kRssSlackKib = 256;
+          check.expect(rss_last - rss_first <= kRssSlackKib,
+                       fmt::format("VmRSS grew from {} KiB after cycle 1 to {} KiB after cycle {} (allowed: "
+                                   "{} KiB)",
+                                   rss_first, rss_last, done, kRssSlackKib));
+        }
+        check.expect(daemon->running(), "the daemon exited during the cycles");
+        check.note(
+            fmt::format("{} cycles, {:.0f} ms each; open fds {} before, {} after cycle 1, {} after the "
+                        "last; VmRSS {} KiB after cycle 1, {} KiB after the last",
+                        done, per_cycle * 1000, fds_before, fds_first, fds_last, rss_first, rss_last));
+      });
+
+  session.run("[6] two mice at once: both taken, one shared cursor model", [&](Check& check) {
+    const std::string virtual_b = "pseudohaptic ph-e2e mouse B";
+    {
+      TestMouse mouse_b("ph-e2e mouse B");
+      const std::string node = wait_for_device(virtual_b, kDeviceTimeout, uevents);
+      if (node.empty()) throw Fatal("no virtual device '" + virtual_b + "' for the second mouse");
+      EventReader out_b(node);
+      if (!wait_taken(mouse_b, out_b, kDeviceTimeout)) throw Fatal("nothing came out of " + node + " within 10 s");
+      check.expect(!find_input_node(virtual_a).empty(), "the first mouse's virtual device went away");
+      int differing = 0;
+      for (int i = 0; i < 24; ++i) {
+        const bool on_b = i % 2 == 1;
+        const Frame in = on_b ? make_frame({rel(ev::kRelX, -3), rel(ev::kRelY, -2)})
+                              : make_frame({rel(ev::kRelX, -5), rel(ev::kRelY, 2)});
+        EventReader& from = on_b ? out_b : *out;
+        EventReader& other = on_b ? *out : out_b;
+        const std::optional<Frame> got = expect_through(check, on_b ? mouse_b : *mouse, from, *model, in,
+                                                        fmt::format("frame {} on mouse {}", i, on_b ? "B" : "A"));
+        if (got && !same_events(*got, in)) ++differing;
+        const std::size_t stray = other.read_now().size();
+        check.expect(stray == 0,
+                     fmt::format("frame {}: {} events came out of the other mouse's virtual device", i, stray));
+      }
+      const int grab = try_grab(mouse_b.node());
+      check.expect(grab == EBUSY, "EVIOCGRAB on the second mouse: expected EBUSY, got " + grab_text(grab));
+      check.expect(differing > 0, "expected the texture to change some frames, got none changed");
+      check.note(
+          fmt::format("24 frames alternating A and B, {} changed by the texture, all equal to one offline "
+                      "pipeline fed the interleaved frames",
+                      differing));
+    }
+    check.expect(wait_for_device_gone(virtual_b, kDeviceTimeout, uevents),
+                 "the second mouse's virtual device stayed after the mouse went away");
+  });
+
+  session.run("[9] SYN_DROPPED: the daemon survives an overflow, no button stays stuck", [&](Check& check) {
+    expect_through(check, *mouse, *out, *model, make_frame({key(ev::kBtnLeft, 1)}), "press before the flood");
+    daemon->signal(SIGSTOP);
+    if (!daemon->wait_stopped()) throw Fatal("the daemon exited instead of stopping");
+    constexpr int kFlood = 4000;
+    for (int i = 0; i < kFlood; ++i) {
+      std::vector<ph::InputEvent> events{rel(ev::kRelX, 1)};
+      if (i == 1000) events.push_back(key(ev::kBtnLeft, 0));  // the release of the press above
+      if (i == 2000) events.push_back(key(ev::kBtnRight, 1));
+      if (i == 2500) events.push_back(key(ev::kBtnRight, 0));
+      mouse->send(make_frame(std::move(events)));
+    }
+    daemon->signal(SIGCONT);
+    // What comes out first is the resync (libevdev discards what was queued behind the SYN_DROPPED and
+    // reports the state differences): BTN_LEFT's release.
+    int frames = 0;
+    bool left_released = false;
+    std::string seen;
+    while (!left_released) {
+      const std::optional<Frame> frame = out->next_frame(20s);
+      if (!frame) break;
+      if (++frames <= 4) seen += (seen.empty() ? "" : " | ") + describe(*frame);
+      for (const ph::InputEvent& e : frame->events) {
+        left_released = left_released || (e.type == ev::kKey && e.code == ev::kBtnLeft && e.value == 0);
+      }
+    }
+    check.expect(daemon->running(), "the daemon did not survive the overflow");
+    check.expect(left_released,
+                 "expected BTN_LEFT 0 from the resync (it was released in the lost part), got [" + seen + "]");
+    check.expect(frames < kFlood, fmt::format("expected the daemon's reader to overflow (fewer than {} frames out), "
+                                              "got {}",
+                                              kFlood, frames));
+    const std::vector<std::uint16_t> held = out->keys_down();
+    check.expect(held.empty(),
+                 "EVIOCGKEY on the virtual device after the flood: expected nothing held, got " + keys_text(held));
+    // A dropped frame does not move the cursor model, so the daemon's model is still the offline one.
+    int moved = 0;
+    for (int i = 0; i < 6; ++i) {
+      std::vector<ph::InputEvent> events{rel(ev::kRelX, -10)};
+      if (i == 0) events.push_back(rel(ev::kRelWheel, 1));
+      const std::optional<Frame> got = expect_through(check, *mouse, *out, *model, make_frame(std::move(events)),
+                                                      fmt::format("frame {} after the flood", i));
+      if (got && std::any_of(got->events.begin(), got->events.end(),
+                             [](const ph::InputEvent& e) { return e.type == ev::kRel && e.code == ev::kRelX; })) {
+        ++moved;
+      }
+    }
+    check.expect(moved > 0, "expected motion out of the virtual device after the flood, got none");
+    check.note(
+        fmt::format("{} frame(s) of {} came out: [{}]; held on the virtual device: {}; {} of 6 later frames "
+                    "moved, all equal to the offline pipeline",
+                    frames, kFlood, seen, keys_text(held), moved));
+  });
+
+  session.run("[8] SIGTERM: exit 0, devices gone, mouse ungrabbed", [&](Check& check) {
+    daemon->signal(SIGTERM);
+    const std::optional<int> status = daemon->wait_exit(15s);
+    check.expect(
+        status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0,
+        "expected exit status 0, got " + (status ? describe_wait_status(*status) : "still running after 15 s"));
+    check.expect(notify->expect("STOPPING=1", 1s), "expected STOPPING=1, got none");
+    const bool gone = wait_until([] { return input_devices_named("pseudohaptic ").empty(); }, kDeviceTimeout, &uevents);
+    check.expect(gone, "expected no 'pseudohaptic ...' device after the exit");
+    const int grab = try_grab(mouse->node());
+    check.expect(grab == 0, "EVIOCGRAB on the test mouse after the exit: expected success, got " + grab_text(grab));
+    check.note((status ? describe_wait_status(*status) : "?") + ", no virtual device left, the mouse can be grabbed");
+  });
+}
+
+int usage() {
+  std::fprintf(stderr, "usage: daemon_e2e DAEMON [--cycles N] [--latency-frames N] [-v]\n");
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  Options options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if ((arg == "--cycles" || arg == "--latency-frames") && i + 1 < argc) {
+      (arg == "--cycles" ? options.cycles : options.latency_frames) = std::atoi(argv[++i]);
+    } else if (arg == "-v" || arg == "--verbose") {
+      options.verbose = true;
+    } else if (!arg.empty() && arg[0] != '-' && options.daemon.empty()) {
+      options.daemon = arg;
+    } else {
+      return usage();
+    }
+  }
+  if (options.daemon.empty() || options.cycles < 1 || options.latency_frames < 1) return usage();
+  options.daemon = std::filesystem::absolute(options.daemon).string();
+  const char* tmpdir = std::getenv("TMPDIR");
+  options.scratch = std::filesystem::path(tmpdir != nullptr && *tmpdir != '\0' ? tmpdir : "/tmp") / "ph-e2e";
+  std::filesystem::create_directories(options.scratch);
+  ::signal(SIGPIPE, SIG_IGN);
+
+  std::printf("daemon e2e: %s, %d hotplug cycles, %d frames per latency figure\n", options.daemon.c_str(),
+              options.cycles, options.latency_frames);
+  const auto start = Clock::now();
+  Report report;
+  Latency passthrough{"passthrough (the test mouse's own node, no daemon)", {}, 0};
+  Latency flat{"daemon, flat scene", {}, 0};
+  Latency texture{"daemon, default scene's texture", {}, 0};
+  try {
+    passthrough_part(report, options, passthrough);
+    flat_part(report, options, flat);
+    default_scene_part(report, options, texture);
+  } catch (const std::exception& e) {
+    report.not_run("the rest", e.what());
+  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  std::printf(
+      "latency, write into the test mouse -> read from the output node (guest clock under TCG: emulated "
+      "times, compare only within one run):\n");
+  for (const Latency* l : {&passthrough, &flat, &texture}) {
+    std::printf("  %-52s %s\n", l->label.c_str(), l->us.empty() ? "not measured" : latency_text(*l).c_str());
+  }
+  std::printf("daemon e2e: %d passed, %d failed, %.1f s\n", report.passed(), report.failed(), seconds);
+  return report.failed() == 0 ? 0 : 1;
+}
