@@ -109,7 +109,11 @@ void Pipeline::clamp_to_desktop() {
   // again whenever the pointer is pushed to an edge). The last pixel's far edge is excluded.
   const double x = std::clamp(cursor_.position.x, static_cast<double>(d.x), std::nextafter(d.x + d.w, d.x));
   const double y = std::clamp(cursor_.position.y, static_cast<double>(d.y), std::nextafter(d.y + d.h, d.y));
-  if (x != cursor_.position.x || y != cursor_.position.y) cursor_ = cursor_at({x, y});
+  if (x != cursor_.position.x || y != cursor_.position.y) {
+    const EffectState effect = cursor_.effect;  // pushing against the edge is still the same hand
+    cursor_ = cursor_at({x, y});
+    cursor_.effect = effect;
+  }
 }
 
 Frame Pipeline::process(const Frame& in, FrameReport* report) {
@@ -119,7 +123,7 @@ Frame Pipeline::process(const Frame& in, FrameReport* report) {
   FrameResult moved;
   if (dx != 0 || dy != 0) {
     const Vec2 motor{static_cast<double>(dx) * config_.pointer_gain, static_cast<double>(dy) * config_.pointer_gain};
-    moved = advance(*scene_, cursor_, motor);
+    moved = advance(*scene_, cursor_, motor, frame_time(in));
     clamp_to_desktop();
   }
   if (report != nullptr) {

@@ -17,6 +17,9 @@ void check_region(const Region& region) {
   const std::string who = "region '" + region.name + "': ";
   if (region.rect.w <= 0 || region.rect.h <= 0) throw std::invalid_argument(who + "width and height must be > 0");
   if (!region.method) throw std::invalid_argument(who + "no method");
+  for (const EffectPtr& effect : region.effects) {
+    if (!effect) throw std::invalid_argument(who + "an empty effect");
+  }
   const FieldNeeds needs = region.method->needs();
   if (needs.gradient && !matches(region.fields.gradient, region.rect)) {
     throw std::invalid_argument(who + "the method needs normals matching the region's size");
@@ -46,12 +49,16 @@ Scene::Scene(std::vector<Region> regions) : regions_(std::move(regions)) {
   for (Region& region : regions_) {
     check_region(region);
     flatten_non_finite(region.fields);
+    has_effects_ = has_effects_ || !region.effects.empty();
   }
 }
 
 std::size_t Scene::bytes() const {
   std::size_t total = 0;
-  for (const Region& region : regions_) total += region.fields.bytes();
+  for (const Region& region : regions_) {
+    total += region.fields.bytes();
+    for (const EffectPtr& effect : region.effects) total += effect->bytes();
+  }
   return total;
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/effect.hpp"
 #include "core/field.hpp"
 #include "core/geometry.hpp"
 #include "core/method.hpp"
@@ -18,6 +19,7 @@ struct Region {
   Rect rect;  // on screen; the fields are exactly rect.w x rect.h texels
   RegionFields fields;
   MethodPtr method;
+  std::vector<EffectPtr> effects;  // applied in order to each frame that starts in the region
 
   // Texel of the region's fields under a screen texel the region contains.
   Texel local(Texel screen) const { return {screen.x - rect.x, screen.y - rect.y}; }
@@ -32,6 +34,7 @@ class Scene {
 
   const std::vector<Region>& regions() const { return regions_; }
   bool empty() const { return regions_.empty(); }
+  bool has_effects() const { return has_effects_; }
 
   // Index of the topmost region containing the texel, or nullopt on the flat outside.
   std::optional<std::size_t> owner(Texel t) const {
@@ -45,6 +48,7 @@ class Scene {
 
  private:
   std::vector<Region> regions_;
+  bool has_effects_ = false;
 };
 
 }  // namespace ph

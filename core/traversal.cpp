@@ -235,7 +235,7 @@ class Walker {
     Vec2 p = position();
     p.x = std::clamp(p.x, static_cast<double>(texel_.x), static_cast<double>(texel_.x) + 1.0);
     p.y = std::clamp(p.y, static_cast<double>(texel_.y), static_cast<double>(texel_.y) + 1.0);
-    return {p, texel_, from_};
+    return {p, texel_, from_, {}};
   }
 
   const Scene& scene_;
@@ -278,13 +278,37 @@ double clamp_to_world(double v) { return std::isfinite(v) ? std::clamp(v, -kWorl
 CursorState cursor_at(Vec2 position) {
   position = {clamp_to_world(position.x), clamp_to_world(position.y)};
   const Texel t = texel_at(position);
-  return {position, t, t};
+  return {position, t, t, {}};
 }
 
-FrameResult advance(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserver* observer) {
+namespace {
+
+// Runs the effects of the region under the cursor on the frame's motor displacement; returns the
+// factor by which they changed its length (1 when none acted).
+double apply_effects(const Scene& scene, CursorState& cursor, Vec2& motor, TimeUs time) {
+  const std::optional<std::size_t> owner = scene.owner(cursor.texel);
+  if (!owner) return 1.0;
+  const Region& region = scene.regions()[*owner];
+  if (region.effects.empty()) return 1.0;
+  const double before = fast_length(motor.x, motor.y);
+  for (const EffectPtr& effect : region.effects) {
+    if (cursor.effect.owner != effect.get()) cursor.effect = EffectState{true, 0.0, kNoTime, effect.get()};
+    const EffectInput in{motor, time, cursor.position, region.local(cursor.texel)};
+    const Vec2 out = effect->apply(in, cursor.effect);
+    // The promise of every effect, kept here too: finite, and never more than its bounds allow.
+    const double length = fast_length(out.x, out.y);
+    if (is_finite(out) && length <= before * effect->max_gain() * (1.0 + 1e-12) &&
+        length >= before * effect->min_gain() * (1.0 - 1e-12)) {
+      motor = out;
+    }
+  }
+  const double after = fast_length(motor.x, motor.y);
+  return before > 0.0 ? after / before : 1.0;
+}
+
+// The traversal proper: walks `motor` (finite, not zero) through the texels from the cursor.
+FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserver* observer) {
   FrameResult result;
-  if (!is_finite(motor)) return result;
-  if (motor.x == 0.0 && motor.y == 0.0) return result;
   if (crosses_only_flat(scene, cursor, motor)) {
     // C/D is 1 all the way: the display moves by the motor displacement itself, with no walk at all.
     const Vec2 end = cursor.position + motor;
@@ -318,7 +342,23 @@ FrameResult advance(const Scene& scene, CursorState& cursor, Vec2 motor, StepObs
   }
   if (result.cd_min > result.cd_max) result.cd_min = result.cd_max = 1.0;
   result.display = walker.all_unit() && end.position == start + motor ? motor : end.position - start;
+  end.effect = cursor.effect;
   cursor = end;
+  return result;
+}
+
+}  // namespace
+
+FrameResult advance(const Scene& scene, CursorState& cursor, Vec2 motor, TimeUs time, StepObserver* observer) {
+  if (!is_finite(motor) || (motor.x == 0.0 && motor.y == 0.0)) return {};
+  const double gain = scene.has_effects() ? apply_effects(scene, cursor, motor, time) : 1.0;
+  if (motor.x == 0.0 && motor.y == 0.0) return {};
+  FrameResult result = walk(scene, cursor, motor, observer);
+  if (gain != 1.0) {
+    // The hand's motor travel was the frame's; the effects let only `gain` of it reach the walk.
+    result.cd_min /= gain;
+    result.cd_max /= gain;
+  }
   return result;
 }
 

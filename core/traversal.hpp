@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 
+#include "core/effect.hpp"
 #include "core/geometry.hpp"
 #include "core/method.hpp"
 #include "core/scene.hpp"
@@ -17,7 +18,8 @@ namespace ph {
 struct CursorState {
   Vec2 position;
   Texel texel;
-  Texel came_from;  // == texel when there is no history (start, or after a flat stretch)
+  Texel came_from;     // == texel when there is no history (start, or after a flat stretch)
+  EffectState effect;  // what the frame effects of the region under the cursor remember
 };
 
 // A cursor with no history at a position (clamped to the world; a non-finite coordinate becomes 0).
@@ -52,9 +54,16 @@ inline constexpr double kMaxMotorPx = 1.0e7;
 // The cursor model never leaves [-kWorldLimitPx, kWorldLimitPx]^2, so texel indices always fit.
 inline constexpr double kWorldLimitPx = 1.0e9;
 
-// Moves the cursor by one frame's motor displacement (device counts x base gain, px at C/D = 1).
-// A non-finite or zero displacement leaves the cursor where it is. The result is always finite; a
-// frame whose every segment had C/D exactly 1 returns `motor` itself, bit for bit.
-FrameResult advance(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserver* observer = nullptr);
+// Moves the cursor by one frame's motor displacement (device counts x base gain, px at C/D = 1) at the
+// frame's event time (kNoTime when unknown). The effects of the region under the cursor first rescale
+// the displacement (core/effect.hpp); then the traversal walks it. A non-finite or zero displacement
+// leaves the cursor where it is. The result is always finite; a frame whose every segment had C/D
+// exactly 1 and met no effect returns `motor` itself, bit for bit.
+FrameResult advance(const Scene& scene, CursorState& cursor, Vec2 motor, TimeUs time, StepObserver* observer = nullptr);
+
+// The same with no time (traces, benchmarks): effects see kNoTime.
+inline FrameResult advance(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserver* observer = nullptr) {
+  return advance(scene, cursor, motor, kNoTime, observer);
+}
 
 }  // namespace ph
