@@ -3,9 +3,11 @@
 #include <fmt/format.h>
 
 #include <toml++/toml.h>
+
 #include <fstream>
 #include <set>
 #include <sstream>
+#include "core/method_flat.hpp"
 
 namespace ph {
 
@@ -164,7 +166,8 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   const std::string method = get_string(rep, t, "method", where).value_or("curvature");
   const auto kind = parse_method_kind(method);
   if (!kind)
-    rep.fail(t.get("method"), where + "method", fmt::format("unknown method '{}' (allowed: curvature, depth)", method));
+    rep.fail(t.get("method"), where + "method",
+             fmt::format("unknown method '{}' (allowed: curvature, depth, none)", method));
   r.method = *kind;
 
   if (auto p = get_string(rep, t, "normal_map", where)) r.sources.normal_map = resolve(base_dir, *p);
@@ -281,10 +284,21 @@ DaemonSettings parse_daemon(const Reporter& rep, const toml::table& t) {
 std::optional<MethodKind> parse_method_kind(std::string_view name) {
   if (name == "curvature") return MethodKind::curvature;
   if (name == "depth") return MethodKind::depth;
+  if (name == "none") return MethodKind::none;
   return std::nullopt;
 }
 
-std::string_view method_kind_name(MethodKind kind) { return kind == MethodKind::depth ? "depth" : "curvature"; }
+std::string_view method_kind_name(MethodKind kind) {
+  switch (kind) {
+    case MethodKind::depth:
+      return "depth";
+    case MethodKind::none:
+      return "none";
+    case MethodKind::curvature:
+      break;
+  }
+  return "curvature";
+}
 
 SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& origin) {
   const Reporter rep(origin.string());
@@ -318,6 +332,7 @@ SceneSpec parse_scene_file(const std::filesystem::path& file) {
 
 MethodPtr make_method(const RegionSpec& region) {
   if (region.method == MethodKind::depth) return std::make_shared<DepthMethod>(region.depth);
+  if (region.method == MethodKind::none) return std::make_shared<FlatMethod>();
   return std::make_shared<CurvatureMethod>(region.curvature);
 }
 

@@ -26,7 +26,8 @@ class ConfigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-enum class MethodKind { curvature, depth };
+// none: C/D 1 (a region rendered by its effects only: materials, gravity wells).
+enum class MethodKind { curvature, depth, none };
 
 std::optional<MethodKind> parse_method_kind(std::string_view name);
 std::string_view method_kind_name(MethodKind kind);

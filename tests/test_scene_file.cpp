@@ -204,6 +204,16 @@ TEST(SceneFileParse, MethodNamesAndMethods) {
   EXPECT_EQ(depth->name(), "depth");
   EXPECT_DOUBLE_EQ(depth->cd_upper_bound(), 3.0);
   EXPECT_DOUBLE_EQ(depth->cd_lower_bound(), 0.5);
+  // "none": C/D 1, for a region rendered by its effects alone; it reads no field.
+  EXPECT_EQ(parse_method_kind("none"), MethodKind::none);
+  EXPECT_EQ(method_kind_name(MethodKind::none), "none");
+  RegionSpec as_none = spec.regions[0];
+  as_none.method = MethodKind::none;
+  const MethodPtr none = make_method(as_none);
+  EXPECT_EQ(none->name(), "none");
+  EXPECT_EQ(none->cd_lower_bound(), 1.0);
+  EXPECT_EQ(none->cd_upper_bound(), 1.0);
+  EXPECT_FALSE(none->needs().gradient || none->needs().depth);
 }
 
 // ---------------------------------------------------------------------------------------------------------------
