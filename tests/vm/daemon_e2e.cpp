@@ -21,6 +21,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -536,6 +537,65 @@ void flat_part(Report& report, const Options& options, Latency& latency) {
     check.note(fmt::format("still running; said \"{}\"; {} frames back, {} changed, all as the previous scene", said,
                            result.frames.size(), result.differing));
   });
+
+  session.run(
+      "[3b] SIGHUP to absolute output: a tablet-like device replaces the relative one, cursor kept", [&](Check& check) {
+        std::string text = region_config(hole);
+        const std::string relative = "output = \"relative\"";
+        text.replace(text.find(relative), relative.size(), "output = \"absolute\"");
+        write_file_atomically(config, text);
+        notify->clear();
+        daemon->signal(SIGHUP);
+        check.expect(notify->expect("READY=1", 60s), "expected READY=1 after the reload, got none");
+        // READY=1 comes once the mice are taken again: the old device is gone by now.
+        const std::string node = wait_for_device(virtual_name, kDeviceTimeout, uevents);
+        if (node.empty()) throw Fatal("no virtual device after switching to absolute output");
+        out.emplace(node);
+        unsigned long abs_bits = 0, rel_bits = 0;
+        ::ioctl(out->fd(), EVIOCGBIT(EV_ABS, sizeof abs_bits), &abs_bits);
+        ::ioctl(out->fd(), EVIOCGBIT(EV_REL, sizeof rel_bits), &rel_bits);
+        input_absinfo x{}, y{};
+        ::ioctl(out->fd(), EVIOCGABS(ABS_X), &x);
+        ::ioctl(out->fd(), EVIOCGABS(ABS_Y), &y);
+        check.expect((abs_bits & 3UL) == 3UL, "expected ABS_X and ABS_Y on the absolute device");
+        check.expect((rel_bits & 3UL) == 0UL, "expected no REL_X/REL_Y next to ABS_X/ABS_Y");
+        check.expect(x.minimum == 0 && x.maximum == 1919 && y.minimum == 0 && y.maximum == 1079,
+                     fmt::format("expected ABS ranges 0..1919 x 0..1079, got {}..{} x {}..{}", x.minimum, x.maximum,
+                                 y.minimum, y.maximum));
+        ph::PipelineConfig absolute = pipeline_config();
+        absolute.mode = ph::OutputMode::absolute;
+        absolute.start = model.cursor().position;  // the daemon keeps its cursor across the switch
+        model = ph::Pipeline(std::make_shared<const ph::Scene>(ph::load_scene(ph::parse_scene_file(config))), absolute);
+        if (!wait_taken(*mouse, *out, kDeviceTimeout)) throw Fatal("nothing came out of " + node);
+        // The kernel drops an absolute value equal to the axis' current one (a stroke along x leaves
+        // ABS_Y out); the offline pipeline writes both axes. Compare with what the kernel passes on.
+        std::map<std::uint16_t, std::int32_t> axis = {{ev::kAbsX, 0}, {ev::kAbsY, 0}};
+        int frames = 0, moved = 0;
+        for (const Frame& in : stroke(20, 6)) {
+          const Frame computed = untimed(model.process(in));
+          Frame expected;
+          for (const ph::InputEvent& e : computed.events) {
+            if (e.type == ev::kAbs && axis.count(e.code) != 0) {
+              if (axis[e.code] == e.value) continue;
+              axis[e.code] = e.value;
+              ++moved;
+            }
+            expected.events.push_back(e);
+          }
+          mouse->send(in);
+          if (!delivers_something(expected)) continue;
+          const std::optional<Frame> got = out->next_frame(kFrameTimeout);
+          check.expect(got && same_events(*got, expected),
+                       fmt::format("absolute frame {}: sent [{}], expected [{}], got [{}]", frames, describe(in),
+                                   describe(expected), got ? describe(*got) : std::string("nothing")));
+          ++frames;
+        }
+        check.expect(moved > 0, "expected ABS_X/ABS_Y events in place of the REL motion, got none");
+        check.note(
+            fmt::format("{} has ABS_X 0..1919, ABS_Y 0..1079, no REL_X/Y; {} frames equal to the offline "
+                        "absolute pipeline started at the kept cursor",
+                        node, frames));
+      });
 
   session.run("[8] SIGTERM: exit 0, held button released first, device gone, mouse ungrabbed", [&](Check& check) {
     expect_through(check, *mouse, *out, model, make_frame({key(ev::kBtnLeft, 1)}), "press before SIGTERM");
