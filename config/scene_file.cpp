@@ -140,6 +140,151 @@ DepthParams parse_depth(const Reporter& rep, const toml::table& t, std::string_v
   return p;
 }
 
+// A named choice among `names` ("a", "b" or "c" in the message).
+template <typename T, typename Parse>
+T get_choice(const Reporter& rep, const toml::table& t, std::string_view key, std::string_view where, T fallback,
+             Parse parse, std::string_view allowed) {
+  const std::optional<std::string> text = get_string(rep, t, key, where);
+  if (!text) return fallback;
+  const auto value = parse(*text);
+  if (!value)
+    rep.fail(t.get(key), fmt::format("{}{}", where, key), fmt::format("unknown '{}' (allowed: {})", *text, allowed));
+  return *value;
+}
+
+void get_number_into(const Reporter& rep, const toml::table& t, std::string_view key, std::string_view where,
+                     double& value) {
+  value = get_number(rep, t, key, where, value);
+}
+
+// A parameter struct's own check, reported at its table: the message names the parameter and its range.
+void check_params(const Reporter& rep, const toml::table& t, std::string_view where, const std::string& problem) {
+  if (!problem.empty()) rep.fail(&t, std::string(where.substr(0, where.size() - 1)), problem);
+}
+
+// Bit depth of the map a region's classes come from: 8-bit maps get the wider filter and tolerances.
+int class_map_bit_depth(const FieldSources& sources, const MaterialsParams& params) {
+  const bool from_depth = params.source == ClassSource::depth || !sources.normal_map;
+  const std::optional<std::filesystem::path>& map = from_depth ? sources.depth_map : sources.normal_map;
+  if (!map) return 16;
+  return read_image_size(*map).code_max == 255 ? 8 : 16;
+}
+
+MaterialsParams parse_materials(const Reporter& rep, const toml::table& t, std::string_view where) {
+  reject_unknown_keys(rep, t,
+                      {"source", "filter_radius", "planar_curvedness", "parabolic_ratio", "planar", "parabolic",
+                       "elliptic", "hyperbolic", "damping", "friction", "stick_slip"},
+                      where);
+  MaterialsParams m;
+  m.source = get_choice(rep, t, "source", where, m.source, parse_class_source, "auto, normals, depth");
+  m.filter_radius = get_int(rep, t, "filter_radius", where, 0, 0, 64);
+  if (t.get("planar_curvedness") != nullptr) m.planar_curvedness = get_number(rep, t, "planar_curvedness", where, 0.0);
+  if (t.get("parabolic_ratio") != nullptr) m.parabolic_ratio = get_number(rep, t, "parabolic_ratio", where, 0.0);
+  const char* const classes[] = {"planar", "parabolic", "elliptic", "hyperbolic"};
+  for (std::size_t i = 0; i < 4; ++i) {
+    m.materials[i] =
+        get_choice(rep, t, classes[i], where, m.materials[i], parse_material, "none, damping, friction, stick_slip");
+  }
+  if (const toml::table* d = get_table(rep, t, "damping", where)) {
+    const std::string w = std::string(where) + "damping.";
+    reject_unknown_keys(rep, *d, {"k", "cd_max", "fallback_interval_ms"}, w);
+    get_number_into(rep, *d, "k", w, m.damping.k);
+    get_number_into(rep, *d, "cd_max", w, m.damping.cd_max);
+    get_number_into(rep, *d, "fallback_interval_ms", w, m.damping.fallback_interval_ms);
+  }
+  if (const toml::table* f = get_table(rep, t, "friction", where)) {
+    const std::string w = std::string(where) + "friction.";
+    reject_unknown_keys(rep, *f, {"stuck_cd", "breakaway_px", "slip_cd", "rest_ms"}, w);
+    get_number_into(rep, *f, "stuck_cd", w, m.friction.stuck_cd);
+    get_number_into(rep, *f, "breakaway_px", w, m.friction.breakaway_px);
+    get_number_into(rep, *f, "slip_cd", w, m.friction.slip_cd);
+    get_number_into(rep, *f, "rest_ms", w, m.friction.rest_ms);
+  }
+  if (const toml::table* s = get_table(rep, t, "stick_slip", where)) {
+    const std::string w = std::string(where) + "stick_slip.";
+    reject_unknown_keys(rep, *s, {"stuck_cd", "breakaway_px", "slip_cd", "slip_px", "rest_ms"}, w);
+    get_number_into(rep, *s, "stuck_cd", w, m.stick_slip.stuck_cd);
+    get_number_into(rep, *s, "breakaway_px", w, m.stick_slip.breakaway_px);
+    get_number_into(rep, *s, "slip_cd", w, m.stick_slip.slip_cd);
+    get_number_into(rep, *s, "slip_px", w, m.stick_slip.slip_px);
+    get_number_into(rep, *s, "rest_ms", w, m.stick_slip.rest_ms);
+  }
+  check_params(rep, t, where, validate(m));
+  return m;
+}
+
+std::optional<WellPattern> parse_well_pattern(std::string_view name) {
+  if (name == "isophotes") return WellPattern::isophotes;
+  if (name == "contours") return WellPattern::contours;
+  return std::nullopt;
+}
+
+std::optional<PatternRule> parse_pattern_rule(std::string_view name) {
+  if (name == "crossing") return PatternRule::crossing;
+  if (name == "band") return PatternRule::band;
+  return std::nullopt;
+}
+
+WellsParams parse_wells(const Reporter& rep, const toml::table& t, std::string_view where) {
+  reject_unknown_keys(rep, t,
+                      {"pattern", "radius_px", "strength", "max_gain", "min_gain", "snap_px", "snap_fraction", "light",
+                       "cos_alpha", "levels", "rule", "tolerance"},
+                      where);
+  WellsParams w;
+  w.pattern = get_choice(rep, t, "pattern", where, w.pattern, parse_well_pattern, "isophotes, contours");
+  get_number_into(rep, t, "radius_px", where, w.radius_px);
+  get_number_into(rep, t, "strength", where, w.strength);
+  get_number_into(rep, t, "max_gain", where, w.max_gain);
+  get_number_into(rep, t, "min_gain", where, w.min_gain);
+  get_number_into(rep, t, "snap_px", where, w.snap_px);
+  get_number_into(rep, t, "snap_fraction", where, w.snap_fraction);
+  const bool isophotes = w.pattern == WellPattern::isophotes;
+  const PatternRule rule =
+      get_choice(rep, t, "rule", where, PatternRule::crossing, parse_pattern_rule, "crossing, band");
+  if (isophotes) {
+    w.isophotes.rule = rule;
+    get_number_into(rep, t, "tolerance", where, w.isophotes.tol);
+    get_number_into(rep, t, "cos_alpha", where, w.isophotes.cos_alpha);
+    if (const toml::node* light = t.get("light")) {
+      const toml::array* a = light->as_array();
+      if (a == nullptr || a->size() != 3 || !(*a)[0].value<double>() || !(*a)[1].value<double>() ||
+          !(*a)[2].value<double>()) {
+        rep.fail(light, std::string(where) + "light", "must be three numbers [x, y, z] (toward the light, y down)");
+      }
+      w.isophotes.light = {*(*a)[0].value<double>(), *(*a)[1].value<double>(), *(*a)[2].value<double>()};
+    }
+    for (const char* key : {"levels"}) {
+      if (t.get(key) != nullptr) rep.fail(t.get(key), std::string(where) + key, "is for pattern = \"contours\"");
+    }
+  } else {
+    w.contours.rule = rule;
+    get_number_into(rep, t, "tolerance", where, w.contours.tol);
+    if (const toml::node* levels = t.get("levels")) {
+      if (auto count = levels->value_exact<std::int64_t>()) {
+        if (*count < 0 || *count > kMaxContourLevels) {
+          rep.fail(levels, std::string(where) + "levels", fmt::format("must be between 0 and {}", kMaxContourLevels));
+        }
+        w.contours.count = static_cast<std::int32_t>(*count);
+      } else if (const toml::array* a = levels->as_array()) {
+        for (const toml::node& level : *a) {
+          const auto v = level.value<double>();
+          if (!v || !std::isfinite(*v))
+            rep.fail(&level, std::string(where) + "levels", "levels must be finite numbers");
+          w.contours.levels.push_back(*v);
+        }
+      } else {
+        rep.fail(levels, std::string(where) + "levels",
+                 "must be a count of evenly spaced levels or a list of heights (px)");
+      }
+    }
+    for (const char* key : {"light", "cos_alpha"}) {
+      if (t.get(key) != nullptr) rep.fail(t.get(key), std::string(where) + key, "is for pattern = \"isophotes\"");
+    }
+  }
+  check_params(rep, t, where, validate(w));
+  return w;
+}
+
 std::filesystem::path resolve(const std::filesystem::path& base_dir, const std::string& path) {
   const std::filesystem::path p(path);
   return p.is_absolute() ? p : base_dir / p;
@@ -153,7 +298,7 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   const std::string where = fmt::format("region[{}].", index);
   reject_unknown_keys(rep, t,
                       {"name", "x", "y", "width", "height", "method", "normal_map", "normal_green", "normal_encoding",
-                       "depth_map", "depth_zero", "relief_px", "curvature", "depth"},
+                       "depth_map", "depth_zero", "relief_px", "curvature", "depth", "materials", "wells"},
                       where);
   RegionSpec r;
   r.line = static_cast<int>(t.source().begin.line);
@@ -205,6 +350,20 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   if (const toml::table* c = get_table(rep, t, "curvature", where))
     r.curvature = parse_curvature(rep, *c, where + "curvature.");
   if (const toml::table* d = get_table(rep, t, "depth", where)) r.depth = parse_depth(rep, *d, where + "depth.");
+  if (const toml::table* m = get_table(rep, t, "materials", where)) {
+    r.materials = parse_materials(rep, *m, where + "materials.");
+    const bool needs_depth = r.materials->source == ClassSource::depth;
+    const bool needs_normals = r.materials->source == ClassSource::normals;
+    if ((needs_depth && !r.sources.depth_map) || (needs_normals && !r.sources.normal_map && !r.sources.depth_map)) {
+      rep.fail(m, where + "materials.source", "the region has no map to compute the classes from");
+    }
+  }
+  if (const toml::table* w = get_table(rep, t, "wells", where)) {
+    r.wells = parse_wells(rep, *w, where + "wells.");
+    if (r.wells->pattern == WellPattern::contours && !r.sources.depth_map) {
+      rep.fail(w, where + "wells.pattern", "contour wells need a depth_map (heights)");
+    }
+  }
   return r;
 }
 
@@ -343,12 +502,33 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report) {
     region.name = r.name;
     region.rect = r.rect;
     region.method = make_method(r);
+    const FieldNeeds method_needs = region.method->needs();
+    FieldNeeds needs = method_needs;
+    if (r.materials) {
+      const FieldNeeds m =
+          materials_needs(*r.materials, r.sources.normal_map.has_value(), r.sources.depth_map.has_value());
+      needs = {needs.gradient || m.gradient, needs.depth || m.depth};
+    }
+    if (r.wells) {
+      const FieldNeeds w = wells_needs(*r.wells);
+      needs = {needs.gradient || w.gradient, needs.depth || w.depth};
+    }
     FieldLoadReport field_report;
     try {
-      region.fields = load_region_fields(r.sources, r.rect.w, r.rect.h, region.method->needs(), field_report);
+      region.fields = load_region_fields(r.sources, r.rect.w, r.rect.h, needs, field_report);
+      // Effects keep what they precompute (a class map, a nearest-pattern field), not the fields.
+      if (r.materials) {
+        region.effects.push_back(make_materials_effect(region.fields, r.rect.w, r.rect.h, *r.materials,
+                                                       class_map_bit_depth(r.sources, *r.materials)));
+      }
+      if (r.wells) region.effects.push_back(make_wells_effect(region.fields, r.rect.w, r.rect.h, *r.wells));
     } catch (const FieldError& e) {
       throw ConfigError(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, e.what()));
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, e.what()));
     }
+    if (!method_needs.gradient) region.fields.gradient.reset();
+    if (!method_needs.depth) region.fields.depth.reset();
     if (report != nullptr) report->regions.push_back(field_report);
     regions.push_back(std::move(region));
   }

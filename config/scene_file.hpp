@@ -12,6 +12,8 @@
 
 #include "config/daemon_config.hpp"
 #include "config/field_loader.hpp"
+#include "core/effect_materials.hpp"
+#include "core/effect_wells.hpp"
 #include "core/method_curvature.hpp"
 #include "core/method_depth.hpp"
 #include "core/scene.hpp"
@@ -40,7 +42,9 @@ struct RegionSpec {
   FieldSources sources;  // paths already resolved against the scene file's folder
   CurvatureParams curvature;
   DepthParams depth;
-  int line = 0;  // where the region starts in the file
+  std::optional<MaterialsParams> materials;  // [region.materials]: curvature classes as materials
+  std::optional<WellsParams> wells;          // [region.wells]: isophote or contour gravity wells
+  int line = 0;                              // where the region starts in the file
 };
 
 struct SceneSpec {

@@ -463,5 +463,105 @@ TEST(SceneFileLoad, TargetFilesRoundTrip) {
   }
 }
 
+// ---------------------------------------------------------------------------------------------------------------
+// Surface interrogation: [region.materials] and [region.wells]
+
+constexpr std::string_view kInterrogationHead =
+    "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\ndepth_map = \"d.png\"\nmethod = \"none\"\n";
+
+TEST(SceneFileInterrogation, MaterialsAndWellsTablesAreRead) {
+  const std::string text = std::string(kInterrogationHead) +
+                           "[region.materials]\nsource = \"depth\"\nfilter_radius = 4\nplanar_curvedness = 0.001\n"
+                           "elliptic = \"damping\"\nhyperbolic = \"none\"\n"
+                           "[region.materials.friction]\nstuck_cd = 8\nbreakaway_px = 20\n"
+                           "[region.materials.stick_slip]\nslip_px = 9\n"
+                           "[region.wells]\npattern = \"contours\"\nlevels = [1.5, 10]\nradius_px = 24\n"
+                           "strength = 0.5\nrule = \"band\"\ntolerance = 0.25\n";
+  const SceneSpec spec = parse_scene_text(text, kOrigin);
+  ASSERT_EQ(spec.regions.size(), 1u);
+  const RegionSpec& r = spec.regions[0];
+  EXPECT_EQ(r.method, MethodKind::none);
+  ASSERT_TRUE(r.materials);
+  EXPECT_EQ(r.materials->source, ClassSource::depth);
+  EXPECT_EQ(r.materials->filter_radius, 4);
+  EXPECT_EQ(r.materials->planar_curvedness, 0.001);
+  EXPECT_FALSE(r.materials->parabolic_ratio);
+  EXPECT_EQ(r.materials->material(CurvatureClass::planar), Material::none);
+  EXPECT_EQ(r.materials->material(CurvatureClass::parabolic), Material::damping);
+  EXPECT_EQ(r.materials->material(CurvatureClass::elliptic), Material::damping);
+  EXPECT_EQ(r.materials->material(CurvatureClass::hyperbolic), Material::none);
+  EXPECT_EQ(r.materials->friction.stuck_cd, 8.0);
+  EXPECT_EQ(r.materials->friction.breakaway_px, 20.0);
+  EXPECT_EQ(r.materials->friction.rest_ms, FrictionParams{}.rest_ms);
+  EXPECT_EQ(r.materials->stick_slip.slip_px, 9.0);
+  ASSERT_TRUE(r.wells);
+  EXPECT_EQ(r.wells->pattern, WellPattern::contours);
+  EXPECT_EQ(r.wells->contours.levels, (std::vector<double>{1.5, 10.0}));
+  EXPECT_EQ(r.wells->contours.rule, PatternRule::band);
+  EXPECT_EQ(r.wells->contours.tol, 0.25);
+  EXPECT_EQ(r.wells->radius_px, 24.0);
+  EXPECT_EQ(r.wells->strength, 0.5);
+
+  const SceneSpec isophotes = parse_scene_text(
+      std::string(kInterrogationHead) + "[region.wells]\nlight = [0, -1, 1]\ncos_alpha = 0.5\nsnap_px = 3\n", kOrigin);
+  const WellsParams& w = *isophotes.regions[0].wells;
+  EXPECT_EQ(w.pattern, WellPattern::isophotes);
+  EXPECT_EQ(w.isophotes.light.y, -1.0);
+  EXPECT_EQ(w.isophotes.cos_alpha, 0.5);
+  EXPECT_EQ(w.snap_px, 3.0);
+  EXPECT_FALSE(parse_scene_text(std::string(kInterrogationHead), kOrigin).regions[0].materials);
+}
+
+TEST(SceneFileInterrogation, MistakesNameTheKeyAndWhatIsAllowed) {
+  const std::string head(kInterrogationHead);
+  expect_error(head + "[region.materials]\nelliptic = \"glue\"\n", 8, "region[0].materials.elliptic",
+               {"unknown 'glue'", "none, damping, friction, stick_slip"});
+  expect_error(head + "[region.materials]\nsource = \"colour\"\n", 8, "region[0].materials.source",
+               {"auto, normals, depth"});
+  expect_error(head + "[region.materials]\nfriction = { stuck_cd = 50 }\n", 7, "region[0].materials",
+               {"stuck_cd", "20"});
+  expect_error(head + "[region.materials.damping]\nspeed = 1\n", 8, "region[0].materials.damping.speed",
+               {"unknown key", "cd_max"});
+  expect_error(head + "[region.wells]\npattern = \"ridges\"\n", 8, "region[0].wells.pattern", {"isophotes, contours"});
+  expect_error(head + "[region.wells]\nlight = [0, 1]\n", 8, "region[0].wells.light", {"three numbers"});
+  expect_error(head + "[region.wells]\nlevels = 4\n", 8, "region[0].wells.levels", {"contours"});
+  expect_error(head + "[region.wells]\npattern = \"contours\"\ncos_alpha = 0.5\n", 9, "region[0].wells.cos_alpha",
+               {"isophotes"});
+  expect_error(head + "[region.wells]\npattern = \"contours\"\nlevels = \"many\"\n", 9, "region[0].wells.levels",
+               {"count", "list"});
+  expect_error(head + "[region.wells]\nradius_px = 0\n", 7, "region[0].wells", {"radius_px"});
+  expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n[region.wells]\npattern = \"contours\"\n", 5,
+               "region[0].wells.pattern", {"depth_map"});
+}
+
+TEST(SceneFileInterrogation, LoadingBuildsTheEffectsAndKeepsOnlyWhatTheMethodWalks) {
+  ScratchDir dir;
+  const TargetSpec target = all_targets().front();
+  write_target_files(dir.path(), {target});
+  const std::string base = target.name();
+  const fs::path file = dir / "interrogation.toml";
+  std::ofstream(file) << "[[region]]\nwidth = 500\nheight = 500\nmethod = \"none\"\n"
+                      << "normal_map = \"" << base << ".normal.png\"\ndepth_map = \"" << base << ".depth.png\"\n"
+                      << "relief_px = 100\n[region.materials]\n[region.wells]\npattern = \"contours\"\n";
+  const Scene scene = load_scene(parse_scene_file(file));
+  ASSERT_EQ(scene.regions().size(), 1u);
+  const Region& region = scene.regions()[0];
+  ASSERT_EQ(region.effects.size(), 2u);
+  EXPECT_EQ(region.effects[0]->name(), "materials");
+  EXPECT_EQ(region.effects[1]->name(), "wells");
+  EXPECT_TRUE(scene.has_effects());
+  // The flat method walks no field: only the effects' own data stays (1 + 4 bytes per texel).
+  EXPECT_FALSE(region.fields.gradient);
+  EXPECT_FALSE(region.fields.depth);
+  EXPECT_EQ(scene.bytes(), 500u * 500u * 5u);
+
+  // With the curvature method the gradient stays for the walk.
+  std::ofstream(file) << "[[region]]\nwidth = 500\nheight = 500\n"
+                      << "normal_map = \"" << base << ".normal.png\"\n[region.wells]\n";
+  const Scene layered = load_scene(parse_scene_file(file));
+  EXPECT_TRUE(layered.regions()[0].fields.gradient);
+  EXPECT_EQ(layered.regions()[0].effects.size(), 1u);
+}
+
 }  // namespace
 }  // namespace ph

@@ -41,8 +41,15 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
   for (std::size_t i = 0; i < spec.regions.size(); ++i) {
     const RegionSpec& r = spec.regions[i];
     const FieldLoadReport& fr = report.regions.at(i);
-    fmt::format_to(to, "  [{}] '{}': {},{} {}x{} px, {}, {} bytes, {} invalid texels repaired\n", i, r.name, r.rect.x,
-                   r.rect.y, r.rect.w, r.rect.h, method_kind_name(r.method), scene.regions().at(i).fields.bytes(),
+    const Region& region = scene.regions().at(i);
+    std::string effects;
+    std::size_t bytes = region.fields.bytes();
+    for (const EffectPtr& effect : region.effects) {
+      effects += fmt::format(" + {}", effect->name());
+      bytes += effect->bytes();
+    }
+    fmt::format_to(to, "  [{}] '{}': {},{} {}x{} px, {}{}, {} bytes, {} invalid texels repaired\n", i, r.name, r.rect.x,
+                   r.rect.y, r.rect.w, r.rect.h, method_kind_name(r.method), effects, bytes,
                    fr.normals.invalid_texels + fr.depth.invalid_texels);
   }
   return fmt::to_string(out);
