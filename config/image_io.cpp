@@ -1,60 +1,102 @@
 #include "config/image_io.hpp"
 
-#include <OpenImageIO/imageio.h>
+#include <dlfcn.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <stdexcept>
 #include <string>
+#include <system_error>
 #include <vector>
+
+#include "config/image_backend.hpp"
 
 namespace ph {
 namespace {
 
-// OpenImageIO messages sometimes end in a newline; ours are one line.
-std::string one_line(std::string message) {
-  while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) message.pop_back();
-  std::replace(message.begin(), message.end(), '\n', ' ');
-  return message.empty() ? "unknown error" : message;
-}
+namespace fs = std::filesystem;
 
-FieldError file_error(const std::filesystem::path& path, const std::string& reason) {
+FieldError file_error(const fs::path& path, const std::string& reason) {
   return FieldError(path.string() + ": " + reason);
 }
 
-// Keeps colour values as stored: without this hint OpenImageIO premultiplies RGB by alpha on reading PNG,
-// which would corrupt an RGBA normal map whose alpha is not 1.
-OIIO::ImageSpec as_stored_config() {
-  OIIO::ImageSpec config;
-  config.attribute("oiio:UnassociatedAlpha", 1);
-  return config;
+// Raised by load_module, turned into a FieldError that names the image.
+class ModuleError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Where the image module may be, in the order tried: PH_IMAGE_MODULE alone when set (tests); otherwise
+// beside the installed program (PH_IMAGE_MODULE_INSTALLED is relative to the program's folder, e.g.
+// ../lib/pseudohaptic/ph_image_oiio.so), then where the build tree made it.
+const char* module_from_environment() {
+  const char* env = std::getenv("PH_IMAGE_MODULE");
+  return env != nullptr && *env != '\0' ? env : nullptr;
 }
 
-bool is_float_type(OIIO::TypeDesc format) {
-  return format.basetype == OIIO::TypeDesc::HALF || format.basetype == OIIO::TypeDesc::FLOAT ||
-         format.basetype == OIIO::TypeDesc::DOUBLE;
+std::vector<fs::path> module_candidates() {
+  if (const char* env = module_from_environment()) return {fs::path(env)};
+  std::vector<fs::path> candidates;
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) candidates.push_back((self.parent_path() / PH_IMAGE_MODULE_INSTALLED).lexically_normal());
+  candidates.emplace_back(PH_IMAGE_MODULE_BUILT);
+  return candidates;
 }
 
-// Refuses, from the header alone, an image that is empty, not a plain 2D image, or larger than the limits.
-void check_spec(const std::filesystem::path& path, const OIIO::ImageSpec& spec, const ImageLimits& limits) {
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) throw file_error(path, "image has zero size");
-  if (spec.depth > 1)
-    throw file_error(path, "volume images (depth " + std::to_string(spec.depth) + ") are not supported");
-  if (spec.deep) throw file_error(path, "deep images are not supported");
-  const std::string size = std::to_string(spec.width) + " x " + std::to_string(spec.height) + " px";
-  if (spec.width > limits.max_side || spec.height > limits.max_side) {
-    throw file_error(
-        path, "image is " + size + ", more than the limit of " + std::to_string(limits.max_side) + " px per side");
+// "PATH: reason"; dlerror() usually starts with the path already.
+std::string failed(const fs::path& candidate, const char* error, const std::string& otherwise) {
+  const std::string reason = error != nullptr ? error : otherwise;
+  return reason.rfind(candidate.string() + ": ", 0) == 0 ? reason : candidate.string() + ": " + reason;
+}
+
+// The first candidate that loads and holds a table of our version. Never unloaded: OpenImageIO keeps
+// caches and threads that live until exit. RTLD_LAZY, as for the libraries a program starts with (binding
+// every symbol of OpenImageIO's ~260 libraries at once, RTLD_NOW, costs more than the program start did).
+// RTLD_LOCAL: nothing the module brings resolves the program's own symbols.
+const image_backend::Table* load_module() {
+  std::string tried;
+  for (const fs::path& candidate : module_candidates()) {
+    if (!tried.empty()) tried += "; ";
+    void* handle = ::dlopen(candidate.c_str(), RTLD_LAZY | RTLD_LOCAL);
+    if (handle == nullptr) {
+      tried += failed(candidate, ::dlerror(), "dlopen failed");
+      continue;
+    }
+    void* symbol = ::dlsym(handle, image_backend::kEntryPoint);
+    if (symbol == nullptr) {
+      tried += failed(candidate, ::dlerror(), std::string("no symbol ") + image_backend::kEntryPoint);
+      ::dlclose(handle);
+      continue;
+    }
+    const image_backend::Table* table = reinterpret_cast<image_backend::EntryPoint>(symbol)();
+    if (table == nullptr || table->version != image_backend::kVersion) {
+      tried +=
+          failed(candidate, nullptr,
+                 "a module of another version (this program needs " + std::to_string(image_backend::kVersion) + ")");
+      ::dlclose(handle);
+      continue;
+    }
+    return table;
   }
-  const std::int64_t pixels = std::int64_t{spec.width} * spec.height;
-  if (pixels > limits.max_pixels) {
-    throw file_error(path,
-                     "image is " + size + ", more than the limit of " + std::to_string(limits.max_pixels) + " pixels");
-  }
-  if (spec.nchannels > limits.max_channels) {
-    throw file_error(path, "image has " + std::to_string(spec.nchannels) + " channels, more than the limit of " +
-                               std::to_string(limits.max_channels));
+  throw ModuleError("cannot load the image module (OpenImageIO) to read or write images; tried " +
+                    std::string(module_from_environment() != nullptr ? "PH_IMAGE_MODULE: " : "") + tried);
+}
+
+// The image module, loaded on the first call. The cached table is this library's one piece of global
+// state: loading is process-wide anyway (dlopen), the module is never unloaded, and passing a handle to
+// every image function would change config/image_io.hpp for all its callers. A failed load caches
+// nothing (the static's initialisation did not complete), so the next call tries again and says why again.
+const image_backend::Table& backend(const fs::path& image) {
+  try {
+    static const image_backend::Table* const table = load_module();
+    return *table;
+  } catch (const ModuleError& e) {
+    throw file_error(image, e.what());
   }
 }
 
@@ -64,58 +106,18 @@ std::uint16_t unorm16(double v) {
   return static_cast<std::uint16_t>(std::lround(std::clamp(v, 0.0, 1.0) * 65535.0));
 }
 
-// Writes pixels of the given type in the given format, whatever the file name says.
-void write_pixels(const std::filesystem::path& path, const char* format, std::int32_t width, std::int32_t height,
-                  int channels, OIIO::TypeDesc type, const void* pixels) {
-  if (width <= 0 || height <= 0) throw file_error(path, "cannot write an image of zero size");
-  auto out = OIIO::ImageOutput::create(format);
-  if (!out) throw file_error(path, "cannot write: " + one_line(OIIO::geterror()));
-  const OIIO::ImageSpec spec(width, height, channels, type);
-  if (!out->open(path.string(), spec)) throw file_error(path, "cannot write: " + one_line(out->geterror()));
-  const bool written = out->write_image(type, pixels);
-  const bool closed = out->close();
-  if (!written || !closed) throw file_error(path, "cannot write: " + one_line(out->geterror()));
-}
-
-void write_png16(const std::filesystem::path& path, std::int32_t width, std::int32_t height, int channels,
+void write_png16(const fs::path& path, std::int32_t width, std::int32_t height, int channels,
                  const std::vector<std::uint16_t>& codes) {
-  write_pixels(path, "png", width, height, channels, OIIO::TypeDesc::UINT16, codes.data());
+  backend(path).write_image(path, "png", width, height, channels, image_backend::PixelType::uint16, codes.data());
 }
 
 }  // namespace
 
-ImageSize read_image_size(const std::filesystem::path& path, const ImageLimits& limits) {
-  const OIIO::ImageSpec config = as_stored_config();
-  auto in = OIIO::ImageInput::open(path.string(), &config);
-  if (!in) throw file_error(path, "cannot open: " + one_line(OIIO::geterror()));
-  check_spec(path, in->spec(), limits);
-  const OIIO::TypeDesc format = in->spec().format;
-  const std::uint32_t code_max = format == OIIO::TypeDesc::UINT8 ? 255 : format == OIIO::TypeDesc::UINT16 ? 65535 : 0;
-  return {in->spec().width, in->spec().height, code_max};
+ImageSize read_image_size(const fs::path& path, const ImageLimits& limits) {
+  return backend(path).read_image_size(path, limits);
 }
 
-RawImage read_image(const std::filesystem::path& path, const ImageLimits& limits) {
-  const OIIO::ImageSpec config = as_stored_config();
-  auto in = OIIO::ImageInput::open(path.string(), &config);
-  if (!in) throw file_error(path, "cannot open: " + one_line(OIIO::geterror()));
-  const OIIO::ImageSpec& spec = in->spec();
-  check_spec(path, spec, limits);
-
-  RawImage image;
-  image.width = spec.width;
-  image.height = spec.height;
-  image.channels = spec.nchannels;
-  image.is_float = is_float_type(spec.format);
-  if (spec.format == OIIO::TypeDesc::UINT8) image.code_max = 255;
-  if (spec.format == OIIO::TypeDesc::UINT16) image.code_max = 65535;
-  image.pixels.resize(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height) *
-                      static_cast<std::size_t>(spec.nchannels));
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
-    throw file_error(path, "truncated or corrupt: " + one_line(in->geterror()));
-  }
-  in->close();
-  return image;
-}
+RawImage read_image(const fs::path& path, const ImageLimits& limits) { return backend(path).read_image(path, limits); }
 
 void write_normal_png16(const std::filesystem::path& path, const NormalImage& normals) {
   std::vector<std::uint16_t> codes;
@@ -137,14 +139,15 @@ void write_gray_png16(const std::filesystem::path& path, const Grid<float>& valu
 }
 
 void write_float_exr(const std::filesystem::path& path, const Grid<float>& values) {
-  write_pixels(path, "openexr", values.width, values.height, 1, OIIO::TypeDesc::FLOAT, values.values.data());
+  backend(path).write_image(path, "openexr", values.width, values.height, 1, image_backend::PixelType::float32,
+                            values.values.data());
 }
 
 void write_rgb_png8(const std::filesystem::path& path, std::int32_t width, std::int32_t height,
                     const std::vector<std::uint8_t>& rgb) {
   if (rgb.size() != static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0)) * 3)
     throw file_error(path, "cannot write: pixel count does not match the size");
-  write_pixels(path, "png", width, height, 3, OIIO::TypeDesc::UINT8, rgb.data());
+  backend(path).write_image(path, "png", width, height, 3, image_backend::PixelType::uint8, rgb.data());
 }
 
 }  // namespace ph

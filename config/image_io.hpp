@@ -1,4 +1,6 @@
 // Reading and writing images through OpenImageIO. Every error names the file.
+// OpenImageIO lives in a module (ph_image_oiio.so, config/image_backend.hpp) loaded on the first call of
+// any function here, so a program that never touches an image never maps it.
 #pragma once
 
 #include <cstdint>

@@ -1,0 +1,135 @@
+// The image module ph_image_oiio.so: every use of OpenImageIO, behind the table of config/image_backend.hpp.
+// Loaded by config/image_io.cpp on the first image read or written; built with hidden visibility and a
+// version script, so the entry point below is its only exported symbol.
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "config/image_backend.hpp"
+
+namespace ph {
+namespace {
+
+// OpenImageIO messages sometimes end in a newline; ours are one line.
+std::string one_line(std::string message) {
+  while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) message.pop_back();
+  std::replace(message.begin(), message.end(), '\n', ' ');
+  return message.empty() ? "unknown error" : message;
+}
+
+FieldError file_error(const std::filesystem::path& path, const std::string& reason) {
+  return FieldError(path.string() + ": " + reason);
+}
+
+// Keeps colour values as stored: without this hint OpenImageIO premultiplies RGB by alpha on reading PNG,
+// which would corrupt an RGBA normal map whose alpha is not 1.
+OIIO::ImageSpec as_stored_config() {
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  return config;
+}
+
+bool is_float_type(OIIO::TypeDesc format) {
+  return format.basetype == OIIO::TypeDesc::HALF || format.basetype == OIIO::TypeDesc::FLOAT ||
+         format.basetype == OIIO::TypeDesc::DOUBLE;
+}
+
+// Refuses, from the header alone, an image that is empty, not a plain 2D image, or larger than the limits.
+void check_spec(const std::filesystem::path& path, const OIIO::ImageSpec& spec, const ImageLimits& limits) {
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) throw file_error(path, "image has zero size");
+  if (spec.depth > 1)
+    throw file_error(path, "volume images (depth " + std::to_string(spec.depth) + ") are not supported");
+  if (spec.deep) throw file_error(path, "deep images are not supported");
+  const std::string size = std::to_string(spec.width) + " x " + std::to_string(spec.height) + " px";
+  if (spec.width > limits.max_side || spec.height > limits.max_side) {
+    throw file_error(
+        path, "image is " + size + ", more than the limit of " + std::to_string(limits.max_side) + " px per side");
+  }
+  const std::int64_t pixels = std::int64_t{spec.width} * spec.height;
+  if (pixels > limits.max_pixels) {
+    throw file_error(path,
+                     "image is " + size + ", more than the limit of " + std::to_string(limits.max_pixels) + " pixels");
+  }
+  if (spec.nchannels > limits.max_channels) {
+    throw file_error(path, "image has " + std::to_string(spec.nchannels) + " channels, more than the limit of " +
+                               std::to_string(limits.max_channels));
+  }
+}
+
+// Writes pixels of the given type in the given format, whatever the file name says.
+void write_pixels(const std::filesystem::path& path, const char* format, std::int32_t width, std::int32_t height,
+                  int channels, OIIO::TypeDesc type, const void* pixels) {
+  if (width <= 0 || height <= 0) throw file_error(path, "cannot write an image of zero size");
+  auto out = OIIO::ImageOutput::create(format);
+  if (!out) throw file_error(path, "cannot write: " + one_line(OIIO::geterror()));
+  const OIIO::ImageSpec spec(width, height, channels, type);
+  if (!out->open(path.string(), spec)) throw file_error(path, "cannot write: " + one_line(out->geterror()));
+  const bool written = out->write_image(type, pixels);
+  const bool closed = out->close();
+  if (!written || !closed) throw file_error(path, "cannot write: " + one_line(out->geterror()));
+}
+
+OIIO::TypeDesc type_desc(image_backend::PixelType type) {
+  switch (type) {
+    case image_backend::PixelType::uint8:
+      return OIIO::TypeDesc::UINT8;
+    case image_backend::PixelType::uint16:
+      return OIIO::TypeDesc::UINT16;
+    case image_backend::PixelType::float32:
+      return OIIO::TypeDesc::FLOAT;
+  }
+  return OIIO::TypeDesc::UNKNOWN;
+}
+
+void write_image(const std::filesystem::path& path, const char* format, std::int32_t width, std::int32_t height,
+                 std::int32_t channels, image_backend::PixelType type, const void* pixels) {
+  const OIIO::TypeDesc desc = type_desc(type);
+  if (desc == OIIO::TypeDesc::UNKNOWN) throw file_error(path, "cannot write: unknown pixel type");
+  write_pixels(path, format, width, height, channels, desc, pixels);
+}
+
+ImageSize read_size(const std::filesystem::path& path, const ImageLimits& limits) {
+  const OIIO::ImageSpec config = as_stored_config();
+  auto in = OIIO::ImageInput::open(path.string(), &config);
+  if (!in) throw file_error(path, "cannot open: " + one_line(OIIO::geterror()));
+  check_spec(path, in->spec(), limits);
+  const OIIO::TypeDesc format = in->spec().format;
+  const std::uint32_t code_max = format == OIIO::TypeDesc::UINT8 ? 255 : format == OIIO::TypeDesc::UINT16 ? 65535 : 0;
+  return {in->spec().width, in->spec().height, code_max};
+}
+
+RawImage read_pixels(const std::filesystem::path& path, const ImageLimits& limits) {
+  const OIIO::ImageSpec config = as_stored_config();
+  auto in = OIIO::ImageInput::open(path.string(), &config);
+  if (!in) throw file_error(path, "cannot open: " + one_line(OIIO::geterror()));
+  const OIIO::ImageSpec& spec = in->spec();
+  check_spec(path, spec, limits);
+
+  RawImage image;
+  image.width = spec.width;
+  image.height = spec.height;
+  image.channels = spec.nchannels;
+  image.is_float = is_float_type(spec.format);
+  if (spec.format == OIIO::TypeDesc::UINT8) image.code_max = 255;
+  if (spec.format == OIIO::TypeDesc::UINT16) image.code_max = 65535;
+  image.pixels.resize(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height) *
+                      static_cast<std::size_t>(spec.nchannels));
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+    throw file_error(path, "truncated or corrupt: " + one_line(in->geterror()));
+  }
+  in->close();
+  return image;
+}
+
+constexpr image_backend::Table kTable{image_backend::kVersion, &read_size, &read_pixels, &write_image};
+
+}  // namespace
+}  // namespace ph
+
+// The module's one exported symbol (image_backend::kEntryPoint; the version script keeps it so).
+extern "C" __attribute__((visibility("default"))) const ph::image_backend::Table* ph_image_backend_v1() {
+  return &ph::kTable;
+}
