@@ -11,6 +11,7 @@
 //                    prefix ("12.3ns"). It includes the per-frame overhead spread over the frame's steps.
 #include <benchmark/benchmark.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -24,6 +25,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/direction_lut.hpp"
+#include "core/engine_options.hpp"
 #include "core/method_curvature.hpp"
 #include "core/method_depth.hpp"
 #include "core/scene.hpp"
@@ -92,6 +95,24 @@ std::vector<const ph::Scene*> all_target_scenes(MethodKind kind) {
   std::vector<const ph::Scene*> scenes;
   for (const ph::TargetSpec& spec : ph::all_targets()) scenes.push_back(&target_scene(spec, kind));
   return scenes;
+}
+
+// The 24 target scenes with engine options (issue 6's variants); direction tables are built here, once.
+std::vector<const ph::Scene*> all_target_scenes(MethodKind kind, const ph::EngineOptions& options) {
+  static std::map<std::pair<std::string, MethodKind>, std::vector<ph::Scene>> cache;
+  auto key = std::make_pair(ph::label_of(options), kind);
+  auto it = cache.find(key);
+  if (it == cache.end()) {
+    std::vector<ph::Scene> scenes;
+    for (const ph::TargetSpec& spec : ph::all_targets()) {
+      scenes.push_back(scene_of(target_region(spec, kind)));
+      scenes.back().set_options(options);
+    }
+    it = cache.emplace(std::move(key), std::move(scenes)).first;
+  }
+  std::vector<const ph::Scene*> out;
+  for (const ph::Scene& scene : it->second) out.push_back(&scene);
+  return out;
 }
 
 const ph::Scene& flat_scene(MethodKind kind) {
@@ -275,6 +296,90 @@ void register_outside() {
   });
 }
 
+// Every variant of core/engine_options.hpp on all 24 targets, as typical frames and flicks. For
+// unit_steps and frame_midpoint, steps_per_frame counts C/D evaluations inside regions, not texel steps.
+void register_variants() {
+  for (const ph::EngineOptions& options : ph::all_engine_variants()) {
+    for (MethodKind kind : {MethodKind::curvature, MethodKind::depth}) {
+      const std::string suffix = ph::label_of(options) + "/" + method_name(kind) + "/all-24";
+      auto scenes = std::make_shared<std::vector<const ph::Scene*>>();
+      auto scenes_for = [=] {
+        if (scenes->empty()) *scenes = all_target_scenes(kind, options);
+        return std::span<const ph::Scene* const>(*scenes);
+      };
+      benchmark::RegisterBenchmark(("variant/typical/" + suffix).c_str(), [=](benchmark::State& state) {
+        run_typical_frames(state, scenes_for(), kTargetCentre, kTargetRect);
+      });
+      benchmark::RegisterBenchmark(("variant/flick/" + suffix).c_str(),
+                                   [=](benchmark::State& state) { run_flicks(state, scenes_for()); });
+    }
+  }
+}
+
+// A 1920 x 1080 region of smooth relief (gradient of sin x sin y, 60 px of height): what a full-screen
+// texture costs to tabulate.
+ph::Region screen_region(MethodKind kind) {
+  ph::Region region;
+  region.name = "screen";
+  region.rect = {0, 0, 1920, 1080};
+  const double f = 2.0 * std::numbers::pi / 240.0, a = 60.0;
+  if (kind == MethodKind::depth) {
+    region.fields.depth = ph::DepthField(1920, 1080);
+    for (int y = 0; y < 1080; ++y) {
+      for (int x = 0; x < 1920; ++x) {
+        region.fields.depth->at(x, y) = static_cast<float>(a * std::sin(f * x) * std::sin(f * y));
+      }
+    }
+    region.method = std::make_shared<ph::DepthMethod>(ph::DepthParams{});
+  } else {
+    region.fields.gradient = ph::GradientField(1920, 1080);
+    for (int y = 0; y < 1080; ++y) {
+      for (int x = 0; x < 1920; ++x) {
+        region.fields.gradient->at(x, y) = {static_cast<float>(a * f * std::cos(f * x) * std::sin(f * y)),
+                                            static_cast<float>(a * f * std::sin(f * x) * std::cos(f * y))};
+      }
+    }
+    region.method = std::make_shared<ph::CurvatureMethod>(ph::CurvatureParams{});
+  }
+  return region;
+}
+
+// Time of Scene::set_options(direction_lut) (building the tables; the region's fields already exist)
+// and the table's bytes per texel. Manual time: each iteration starts from a scene without tables.
+void register_lut_builds() {
+  for (int directions : {8, 16}) {
+    for (MethodKind kind : {MethodKind::curvature, MethodKind::depth}) {
+      for (bool screen : {false, true}) {
+        const std::string name = "lut_build/" + std::string(method_name(kind)) + "/" +
+                                 (screen ? "1920x1080" : "500x500") + "/" + std::to_string(directions);
+        benchmark::RegisterBenchmark(
+            name.c_str(),
+            [=](benchmark::State& state) {
+              ph::Scene scene =
+                  scene_of(screen ? screen_region(kind) : target_region(target_named("bump-gaussian-h1-r200"), kind));
+              const auto texels = static_cast<double>(scene.regions()[0].rect.area());
+              double seconds = 0.0;
+              for (auto _ : state) {
+                scene.set_options({});
+                const auto t0 = std::chrono::steady_clock::now();
+                scene.set_options({ph::Traversal::direction_lut, ph::Sampling::nearest, directions});
+                const auto t1 = std::chrono::steady_clock::now();
+                const double elapsed = std::chrono::duration<double>(t1 - t0).count();
+                seconds += elapsed;
+                state.SetIterationTime(elapsed);
+              }
+              state.counters["bytes_per_texel"] = static_cast<double>(scene.lut_bytes()) / texels;
+              // Build time per texel (ns), from the manual times alone.
+              state.counters["ns_per_texel"] = seconds * 1e9 / (texels * static_cast<double>(state.iterations()));
+            })
+            ->UseManualTime()
+            ->Unit(benchmark::kMillisecond)
+            ->Iterations(screen ? 2 : 5);
+      }
+    }
+  }
+}
+
 void register_all() {
   for (MethodKind kind : {MethodKind::curvature, MethodKind::depth}) {
     for (const char* name : kRepresentativeTargets) register_pair(name, kind, one_target);
@@ -282,6 +387,8 @@ void register_all() {
     register_pair("flat", kind, flat_only);
   }
   register_outside();
+  register_variants();
+  register_lut_builds();
 }
 
 }  // namespace

@@ -45,6 +45,13 @@ class Method {
   // (or a texel outside every region, `fields == nullptr`) gives the flat surface's sample.
   virtual TexelSample sample(const RegionFields* fields, Texel local, Vec2 direction) const = 0;
 
+  // Sample at a continuous position `at` (region-local px) inside texel `local`, for Sampling::bilinear.
+  // A method that has no interpolated reading keeps the texel's: the default is sample(fields, local, m).
+  virtual TexelSample sample_at(const RegionFields* fields, Texel local, Vec2 at, Vec2 direction) const {
+    static_cast<void>(at);
+    return sample(fields, local, direction);
+  }
+
   // C/D ratio of the segment inside the texel `to`, entered from the neighbour texel `from`, whose
   // centres are `step_px` apart. Always finite and within the method's documented bounds.
   virtual double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const = 0;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/fast_math.hpp"
+#include "core/field_sampling.hpp"
 #include "core/method.hpp"
 
 namespace ph {
@@ -62,6 +63,13 @@ class CurvatureMethod final : public Method {
     const Gradient g = fields->gradient->at(local.x, local.y);
     // With n = (-g, 1)/|.|, n''_x = -t / sqrt(1 + t^2) and theta = atan(t), t = g . m the slope along m.
     const double t = static_cast<double>(g.x) * m.x + static_cast<double>(g.y) * m.y;
+    return {-t / std::sqrt(1.0 + t * t), fast_atan(t)};
+  }
+  // The same from the gradient interpolated at `at` (Sampling::bilinear).
+  TexelSample sample_at(const RegionFields* fields, Texel /*local*/, Vec2 at, Vec2 m) const override {
+    if (fields == nullptr || !fields->gradient) return {0.0, 0.0};
+    const Vec2 g = bilinear(*fields->gradient, at);
+    const double t = g.x * m.x + g.y * m.y;
     return {-t / std::sqrt(1.0 + t * t), fast_atan(t)};
   }
   double cd(const TexelSample& from, const TexelSample& to, double /*step_px*/, StepDetail* detail) const override {

@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 
+#include "core/field_sampling.hpp"
 #include "core/method.hpp"
 
 namespace ph {
@@ -41,6 +42,11 @@ class DepthMethod final : public Method {
   TexelSample sample(const RegionFields* fields, Texel local, Vec2 /*direction*/) const override {
     if (fields == nullptr || !fields->depth) return {0.0, 0.0};
     return {fields->depth->at(local.x, local.y), 0.0};
+  }
+  // The height interpolated at `at` (Sampling::bilinear).
+  TexelSample sample_at(const RegionFields* fields, Texel /*local*/, Vec2 at, Vec2 /*direction*/) const override {
+    if (fields == nullptr || !fields->depth) return {0.0, 0.0};
+    return {bilinear(*fields->depth, at), 0.0};
   }
   double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
     return depth_cd(params_, from.v0, to.v0, step_px, detail);

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/direction_lut.hpp"
+
 namespace ph {
 
 namespace {
@@ -59,6 +61,27 @@ std::size_t Scene::bytes() const {
     total += region.fields.bytes();
     for (const EffectPtr& effect : region.effects) total += effect->bytes();
   }
+  return total + lut_bytes();
+}
+
+void Scene::set_options(const EngineOptions& options) {
+  if (auto error = validate(options); !error.empty()) throw std::invalid_argument("engine options: " + error);
+  const bool keep_luts = options.traversal == Traversal::direction_lut && options_ == options && !luts_.empty();
+  options_ = options;
+  if (keep_luts) return;
+  luts_.clear();
+  luts_.shrink_to_fit();
+  if (options.traversal != Traversal::direction_lut) return;
+  luts_.resize(regions_.size());
+  for (std::size_t i = 0; i < regions_.size(); ++i) {
+    if (regions_[i].method->builtin() == BuiltinMethod::none) continue;
+    luts_[i] = std::make_shared<const DirectionLut>(build_direction_lut(*this, i, options.lut_directions));
+  }
+}
+
+std::size_t Scene::lut_bytes() const {
+  std::size_t total = 0;
+  for (const auto& lut : luts_) total += lut ? lut->bytes() : 0;
   return total;
 }
 

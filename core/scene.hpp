@@ -3,16 +3,20 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/effect.hpp"
+#include "core/engine_options.hpp"
 #include "core/field.hpp"
 #include "core/geometry.hpp"
 #include "core/method.hpp"
 
 namespace ph {
+
+class DirectionLut;
 
 struct Region {
   std::string name;
@@ -44,11 +48,23 @@ class Scene {
     return std::nullopt;
   }
 
-  std::size_t bytes() const;
+  std::size_t bytes() const;  // fields, effects and direction tables
+
+  // How advance() walks this scene (core/engine_options.hpp); default: exact, nearest. Selecting
+  // direction_lut builds the table of every region with a built-in method (memory: Scene::lut_bytes);
+  // any other traversal frees them. Throws std::invalid_argument if the options are invalid.
+  void set_options(const EngineOptions& options);
+  const EngineOptions& options() const { return options_; }
+
+  // Direction table of region i, or null (direction_lut not selected, or not a built-in method).
+  const DirectionLut* direction_lut(std::size_t i) const { return i < luts_.size() ? luts_[i].get() : nullptr; }
+  std::size_t lut_bytes() const;
 
  private:
   std::vector<Region> regions_;
   bool has_effects_ = false;
+  EngineOptions options_;
+  std::vector<std::shared_ptr<const DirectionLut>> luts_;  // empty unless direction_lut is selected
 };
 
 }  // namespace ph

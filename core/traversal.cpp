@@ -4,9 +4,11 @@
 #include <cmath>
 #include <limits>
 
+#include "core/direction_lut.hpp"
 #include "core/fast_math.hpp"
 #include "core/method_curvature.hpp"
 #include "core/method_depth.hpp"
+#include "core/traversal_variants.hpp"
 
 namespace ph {
 
@@ -32,6 +34,16 @@ struct Entry {
   bool via_x = true;
 };
 
+// A region's top-left corner in screen px (bilinear positions are region-local).
+Vec2 corner(const Region& region) { return {static_cast<double>(region.rect.x), static_cast<double>(region.rect.y)}; }
+
+// The variants that walk the exact texel sequence (core/engine_options.hpp): nearest is the default
+// engine; bilinear samples each texel at the midpoint of the ray's chord through it; lut takes each
+// texel's C/D from the region's direction table. Each is its own instantiation, so the default's loop
+// has no per-texel branch on the variant.
+enum class WalkMode { nearest, bilinear, lut };
+
+template <WalkMode Mode>
 class Walker {
  public:
   Walker(const Scene& scene, CursorState& cursor, Vec2 m, StepObserver* observer, FrameResult& result)
@@ -45,6 +57,7 @@ class Walker {
         tdy_(m.y != 0.0 ? 1.0 / std::abs(m.y) : kInf),
         texel_(cursor.texel),
         from_(cursor.came_from) {
+    if constexpr (Mode == WalkMode::lut) lut_k_ = DirectionLut::direction_index(m, scene.options().lut_directions);
     restart_at(cursor.position);
   }
 
@@ -54,7 +67,11 @@ class Walker {
     bool first = true;
     while (budget_ > 0.0) {
       const std::optional<std::size_t> owner = scene_.owner(texel_);
-      if (owner) {
+      const DirectionLut* lut = nullptr;
+      if constexpr (Mode == WalkMode::lut) lut = owner ? scene_.direction_lut(*owner) : nullptr;
+      if (lut != nullptr) {
+        walk_region_lut(*owner, *lut, first);
+      } else if (owner) {
         // One dispatch per leg: the built-in methods' sample() and cd() then inline into the loop.
         const Method& method = *scene_.regions()[*owner].method;
         switch (method.builtin()) {
@@ -100,14 +117,71 @@ class Walker {
     return method.sample(&region.fields, region.local(t), m_);
   }
 
+  // Midpoint of the chord of the current line through a texel's box (the texel's centre when the line
+  // misses the box: a history texel from another direction). For Sampling::bilinear: a function of the
+  // texel and the line only, so splitting a frame does not change what a texel samples.
+  Vec2 chord_mid(Texel box) const {
+    double lo = -kInf, hi = kInf;
+    const double o[2] = {origin_.x, origin_.y}, d[2] = {m_.x, m_.y};
+    const double b[2] = {static_cast<double>(box.x), static_cast<double>(box.y)};
+    for (int axis = 0; axis < 2; ++axis) {
+      if (d[axis] != 0.0) {
+        const double t0 = (b[axis] - o[axis]) / d[axis], t1 = (b[axis] + 1.0 - o[axis]) / d[axis];
+        lo = std::max(lo, std::min(t0, t1));
+        hi = std::min(hi, std::max(t0, t1));
+      } else if (o[axis] < b[axis] || o[axis] > b[axis] + 1.0) {
+        lo = kInf;
+      }
+    }
+    if (lo <= hi) return origin_ + m_ * (0.5 * (lo + hi));
+    return {box.x + 0.5, box.y + 0.5};
+  }
+
+  // Sample of `t` at `at` (bilinear mode): the fields of the region that owns t, read by `method`.
+  template <typename M>
+  TexelSample sample_at_with(const M& method, Texel t, Vec2 at) const {
+    const std::optional<std::size_t> owner = scene_.owner(t);
+    if (!owner) return method.sample(nullptr, {}, m_);
+    const Region& region = scene_.regions()[*owner];
+    return method.sample_at(&region.fields, region.local(t), at - corner(region), m_);
+  }
+
+  // Sample of the texel the walk is in (nearest: its value; bilinear: at its chord's midpoint).
+  template <typename M>
+  TexelSample sample_here(const Region& region, const M& method) {
+    if constexpr (Mode == WalkMode::bilinear) {
+      // The current texel's chord from the walk's own boundary distances: no division.
+      const double t_in = std::max(sx_ != 0 ? tmx_ - tdx_ : -kInf, sy_ != 0 ? tmy_ - tdy_ : -kInf);
+      const Vec2 at = origin_ + m_ * (0.5 * (t_in + std::min(tmx_, tmy_)));
+      const Vec2 gap = at - sample_point_;
+      step_px_ = std::max(fast_length(gap.x, gap.y), 1e-3);  // depth: the distance the height changes over
+      sample_point_ = at;
+      return method.sample_at(&region.fields, region.local(texel_), at - corner(region), m_);
+    } else {
+      return method.sample(&region.fields, region.local(texel_), m_);
+    }
+  }
+
+  // Sample of the texel the walk came from, at the start of a leg.
+  template <typename M>
+  TexelSample sample_from(const M& method) {
+    if constexpr (Mode == WalkMode::bilinear) {
+      sample_point_ = chord_mid(from_);
+      return sample_at_with(method, from_, sample_point_);
+    } else {
+      return sample_with(method, from_);
+    }
+  }
+
   template <typename M>
   double step_cd(const Region& region, const M& method, const TexelSample& from, const TexelSample& to, bool entered) {
     double cd;
+    const double step_px = Mode == WalkMode::bilinear ? step_px_ : 1.0;
     if (observer_ == nullptr) {
-      cd = method.cd(from, to, 1.0, nullptr);
+      cd = method.cd(from, to, step_px, nullptr);
     } else {
       StepRecord record;
-      cd = method.cd(from, to, 1.0, &record.detail);
+      cd = method.cd(from, to, step_px, &record.detail);
       record.entry = position();
       record.texel = texel_;
       record.came_from = from_;
@@ -128,8 +202,8 @@ class Walker {
   template <typename M>
   void walk_region(std::size_t index, const M& method, bool first_leg) {
     const Region& region = scene_.regions()[index];
-    TexelSample s_from = sample_with(method, from_);
-    TexelSample s_cur = method.sample(&region.fields, region.local(texel_), m_);
+    TexelSample s_from = sample_from(method);
+    TexelSample s_cur = sample_here(region, method);
     double cd = step_cd(region, method, s_from, s_cur, !first_leg);
     const bool topmost = index + 1 == scene_.regions().size();
     for (;;) {
@@ -159,8 +233,64 @@ class Walker {
         return;  // another region or the flat outside takes over
       }
       s_from = s_cur;
-      s_cur = method.sample(&region.fields, region.local(texel_), m_);
+      s_cur = sample_here(region, method);
       cd = step_cd(region, method, s_from, s_cur, true);
+    }
+  }
+
+  // C/D of the current texel from a direction table, with the bookkeeping of step_cd.
+  double lut_cd(const Region& region, const DirectionLut& lut, bool entered) {
+    const double cd = lut.cd(lut_k_, region.local(texel_));
+    if (observer_ != nullptr) {
+      StepRecord record;
+      record.detail = empty_step_detail();
+      record.entry = position();
+      record.texel = texel_;
+      record.came_from = from_;
+      record.entered = entered;
+      record.cd = cd;
+      record.region = &region;
+      observer_->on_step(record);
+    }
+    all_unit_ = all_unit_ && cd == 1.0;
+    result_.cd_min = std::min(result_.cd_min, cd);
+    result_.cd_max = std::max(result_.cd_max, cd);
+    if (entered) ++result_.steps;
+    return cd;
+  }
+
+  // walk_region's loop with the C/D from the table (kept separate so the default loop stays as it is).
+  void walk_region_lut(std::size_t index, const DirectionLut& lut, bool first_leg) {
+    const Region& region = scene_.regions()[index];
+    double cd = lut_cd(region, lut, !first_leg);
+    const bool topmost = index + 1 == scene_.regions().size();
+    for (;;) {
+      const double t_next = std::min(tmx_, tmy_);
+      const double cost = cd * (t_next - t_);
+      if (cost >= budget_) {
+        t_ += budget_ / cd;
+        budget_ = 0.0;
+        return;
+      }
+      budget_ -= cost;
+      t_ = t_next;
+      if (++steps_ > kMaxStepsPerFrame) {
+        budget_ = 0.0;
+        return;
+      }
+      from_ = texel_;
+      if (tmx_ <= tmy_) {
+        texel_.x += sx_;
+        tmx_ += tdx_;
+      } else {
+        texel_.y += sy_;
+        tmy_ += tdy_;
+      }
+      if (!region.rect.contains(texel_) || (!topmost && scene_.owner(texel_) != index)) {
+        restart_at(position());
+        return;
+      }
+      cd = lut_cd(region, lut, true);
     }
   }
 
@@ -251,6 +381,9 @@ class Walker {
   double budget_ = 0.0;             // motor travel left in the frame
   bool all_unit_ = true;
   std::uint64_t steps_ = 0;
+  int lut_k_ = 0;         // lut: the frame's quantised direction
+  double step_px_ = 1.0;  // bilinear: distance between the last two sample points
+  Vec2 sample_point_;     // bilinear: where the last sample was taken (screen px)
 };
 
 }  // namespace
@@ -306,6 +439,33 @@ double apply_effects(const Scene& scene, CursorState& cursor, Vec2& motor, TimeU
   return before > 0.0 ? after / before : 1.0;
 }
 
+template <WalkMode Mode>
+CursorState walk_texels(const Scene& scene, CursorState& cursor, Vec2 m, double d, StepObserver* observer,
+                        FrameResult& result, bool& all_unit) {
+  Walker<Mode> walker(scene, cursor, m, observer, result);
+  const CursorState end = walker.run(d);
+  all_unit = walker.all_unit();
+  return end;
+}
+
+[[gnu::noinline]] CursorState walk_variant(const Scene& scene, CursorState& cursor, Vec2 m, double d,
+                                           StepObserver* observer, FrameResult& result, bool& all_unit) {
+  const EngineOptions& options = scene.options();
+  switch (options.traversal) {
+    case Traversal::exact:
+      return options.sampling == Sampling::bilinear
+                 ? walk_texels<WalkMode::bilinear>(scene, cursor, m, d, observer, result, all_unit)
+                 : walk_texels<WalkMode::nearest>(scene, cursor, m, d, observer, result, all_unit);
+    case Traversal::direction_lut:
+      return walk_texels<WalkMode::lut>(scene, cursor, m, d, observer, result, all_unit);
+    case Traversal::unit_steps:
+      return walk_unit_steps(scene, cursor, m, d, options.sampling, observer, result, all_unit);
+    case Traversal::frame_midpoint:
+      return walk_frame_midpoint(scene, cursor, m, d, options.sampling, observer, result, all_unit);
+  }
+  return walk_texels<WalkMode::nearest>(scene, cursor, m, d, observer, result, all_unit);
+}
+
 // The traversal proper: walks `motor` (finite, not zero) through the texels from the cursor.
 FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserver* observer) {
   FrameResult result;
@@ -329,10 +489,17 @@ FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserv
   }
   result.cd_min = kInf;
   result.cd_max = -kInf;
-  Walker walker(scene, cursor, m, observer, result);
   const Vec2 start = cursor.position;
-  CursorState end = walker.run(d);
-  if (walker.all_unit()) {
+  bool all_unit = true;
+  CursorState end;
+  if (scene.options().is_default()) [[likely]] {
+    Walker<WalkMode::nearest> walker(scene, cursor, m, observer, result);
+    end = walker.run(d);
+    all_unit = walker.all_unit();
+  } else {
+    end = walk_variant(scene, cursor, m, d, observer, result, all_unit);  // one branch per frame, out of line
+  }
+  if (all_unit) {
     // C/D was 1 everywhere: the display moves by the motor displacement itself, with no rounding.
     end.position = start + motor;
   }
@@ -341,7 +508,7 @@ FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserv
     end = cursor_at(end.position);
   }
   if (result.cd_min > result.cd_max) result.cd_min = result.cd_max = 1.0;
-  result.display = walker.all_unit() && end.position == start + motor ? motor : end.position - start;
+  result.display = all_unit && end.position == start + motor ? motor : end.position - start;
   end.effect = cursor.effect;
   cursor = end;
   return result;

@@ -16,5 +16,6 @@ Run add_trace_command(CLI::App& app);
 Run add_demo_command(CLI::App& app);
 Run add_replay_command(CLI::App& app);
 Run add_check_config_command(CLI::App& app);
+Run add_accuracy_command(CLI::App& app);
 
 }  // namespace ph::tools

@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
       ph::tools::add_replay_command);
   add("demo", "Print the C/D-ratio range of both methods on each of the 24 targets (the paper's Fig. 5 in numbers)",
       ph::tools::add_demo_command);
+  add("accuracy", "Measure speed and accuracy of every engine variant against the exact ground truth (CSV for charts)",
+      ph::tools::add_accuracy_command);
   add("check-config", "Check a scene file (the daemon's config): its [daemon] table, regions and images",
       ph::tools::add_check_config_command);
 

@@ -1,0 +1,634 @@
+// `pseudohaptic accuracy OUTDIR [--small]`: speed against accuracy of every variant of the engine (issue 6), from
+// one binary, as CSV for tools/charts.py.
+//
+// Variants: method (curvature, depth) x storage x engine options (core/engine_options.hpp: every traversal with
+// every sampling it accepts, direction_lut with 8 and 16 directions). Storage is how a user's map reaches the
+// engine, built from the exact target in memory and decoded through the loader's own path (core/decode.hpp):
+//   f32  the exact field rasterised at texel centres (target_gradient_field / target_depth_field);
+//   n16, n8  a 16- / 8-bit normal map: codes round((n + 1) / 2 * cmax), decode_normals, g = -n_xy / n_z;
+//   d16, d8  a 16- / 8-bit depth map: codes of (h / relief + 1) / 2, decode_depth; the curvature method takes
+//            central differences of it (gradient_from_depth), as the loader does for a depth-only region.
+//   The depth method reads heights, so it has f32, d16 and d8 only.
+// Ground truth: core/ground_truth.hpp (exact continuous C/D, adaptive Gauss-Kronrod, 1e-9 px), per method.
+//
+// Strokes (fixed, seeded): for each target, directions 0, 30, 45, 90, 150, 250 degrees, motor px per frame 0.5, 2,
+// 8, 30, without and with hand jitter (each frame's motor vector turned by N(0, 10 deg) and scaled by
+// 1 + N(0, 0.2) clipped to [0.3, 2]). A stroke starts radius + 30 px before the target's centre, offset sideways
+// by a seeded U(-0.3, 0.3) x radius, and lasts 2 x radius + 60 px of motor travel (without jitter).
+// --small: 3 targets, 2 directions, speeds 2 and 8.
+//
+// Metrics, per variant:
+//   cd_err_rms, cd_err_max  relative C/D error along the strokes. Each step the engine reports (StepObserver)
+//       applies its C/D to a display segment: from its entry point (the frame's start for a frame's first step)
+//       to the next step's entry in the same frame or the frame's end, clipped to the step's region. The error is
+//       (cd_engine - cd_truth) / cd_truth with cd_truth = truth_cd at the segment's midpoint for the frame's
+//       direction; RMS weighted by segment length, max over steps with a segment longer than 1e-6 px. Only steps
+//       inside a region count (the flat outside is exact in every variant). The max is dominated by the rims,
+//       where a texel straddles a step of the C/D field: an error of the order of the jump is unavoidable there.
+//   end_err_rms_px, end_err_max_px  distance between the engine's cursor and the truth's after each stroke
+//       (truth: truth_advance frame by frame with the same motor vectors); RMS and max over strokes.
+//   drift_px  a long random walk (full: 4 targets x 25 000 frames; --small: 1 x 1 500) of a seeded virtual hand:
+//       heading turning by N(0, 0.25 rad) a frame, speed log-normal around 3 px per frame (0.2 to 30), steered
+//       back toward the target when the *true* cursor is beyond radius + 20 px. The walk is cut into windows of
+//       100 frames; the engine starts each window at the truth's position and replays the same motor vectors.
+//       drift_px = RMS over all windows of the distance between the engine's and the truth's cursor at the
+//       window's end. (Over a whole walk the two part ways chaotically - a cursor a little off slides down the
+//       other side of a bump - so the end-to-end distance measures nothing but that; windows measure the drift.)
+//   ns_per_frame_median, ns_per_frame_p99  the walks' windows replayed without an observer (each from the truth's
+//       position, 100 frames a batch) timed with steady_clock, repeated for at least 0.25 s (--small 0.02 s); per-frame
+//       time of each batch, median and 99th percentile over the batches.
+//   ns_per_step  total replay time / total FrameResult::steps (texel or unit steps inside regions).
+//   bytes_per_texel  Scene::bytes() / region area (fields and direction tables).
+//   precompute_ms  mean over the targets of building a region's fields from the in-memory source (decoding for
+//       the 8/16-bit maps; rasterising for f32) plus Scene::set_options (direction tables); no file I/O.
+// fig5_traces.csv: f32 fields, exact traversal, nearest sampling, default parameters; a stroke along the texel
+// row through the centre (y = size / 2 + 0.5), motor 1 px per frame; one row per step, x = segment midpoint.
+// fig2_grid.csv: curvature_cd with a1 = a2 = cos(alpha) and theta1 - theta2 = delta-beta over cos(alpha) in
+// [-1, 1] (the paper's two panels: > 0 downhill, < 0 uphill) and delta-beta in [-2, 2] degrees (the paper's range).
+#include <fmt/core.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/decode.hpp"
+#include "core/engine_options.hpp"
+#include "core/ground_truth.hpp"
+#include "core/scene.hpp"
+#include "core/targets.hpp"
+#include "core/traversal.hpp"
+#include "tools/commands.hpp"
+
+namespace ph::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+struct AccuracyOptions {
+  std::string outdir;
+  bool small = false;
+};
+
+enum class Storage { f32, n16, n8, d16, d8 };
+
+const char* name_of(Storage s) {
+  switch (s) {
+    case Storage::f32:
+      return "f32";
+    case Storage::n16:
+      return "n16";
+    case Storage::n8:
+      return "n8";
+    case Storage::d16:
+      return "d16";
+    case Storage::d8:
+      return "d8";
+  }
+  return "?";
+}
+
+const char* name_of(TruthMethod m) { return m == TruthMethod::curvature ? "curvature" : "depth"; }
+
+// Storage variants per method: adding one is one entry here and one case in build_fields.
+std::vector<Storage> storages_for(TruthMethod m) {
+  if (m == TruthMethod::curvature) return {Storage::f32, Storage::n16, Storage::n8, Storage::d16, Storage::d8};
+  return {Storage::f32, Storage::d16, Storage::d8};
+}
+
+// Engine variants: every traversal x sampling the engine accepts (a new enum value is picked up here).
+std::vector<EngineOptions> engine_variants() {
+  std::vector<EngineOptions> out;
+  for (Traversal t : kAllTraversals) {
+    for (Sampling s : kAllSamplings) {
+      for (int n : t == Traversal::direction_lut ? std::vector<int>{8, 16} : std::vector<int>{16}) {
+        const EngineOptions o{t, s, n};
+        if (validate(o).empty()) out.push_back(o);
+      }
+    }
+  }
+  return out;
+}
+
+std::string traversal_label(const EngineOptions& o) {
+  std::string label(name_of(o.traversal));
+  if (o.traversal == Traversal::direction_lut) label += std::to_string(o.lut_directions);
+  return label;
+}
+
+// A w x h x channels image of integer codes, as an 8- or 16-bit file would give it.
+RawImage quantised(std::int32_t w, std::int32_t h, int channels, const std::vector<double>& values,
+                   std::uint32_t code_max) {
+  RawImage image;
+  image.width = w;
+  image.height = h;
+  image.channels = channels;
+  image.code_max = code_max;
+  image.pixels.resize(values.size());
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const double code = std::round(std::clamp(values[i], 0.0, 1.0) * code_max);
+    image.pixels[i] = static_cast<float>(code / code_max);
+  }
+  return image;
+}
+
+// The unorm values a normal map of the target holds (OpenGL green), and those of its depth map.
+std::vector<double> normal_values(const TargetSpec& spec) {
+  const NormalImage normals = target_normal_image(spec);
+  std::vector<double> v;
+  v.reserve(normals.values.size() * 3);
+  for (const Normal& n : normals.values) {
+    v.push_back((n.x + 1.0) / 2.0);
+    v.push_back((-n.y + 1.0) / 2.0);
+    v.push_back((n.z + 1.0) / 2.0);
+  }
+  return v;
+}
+
+std::vector<double> depth_values(const TargetSpec& spec) {
+  const DepthField depth = target_depth_field(spec);
+  std::vector<double> v(depth.values.size());
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = (depth.values[i] / spec.relief_px + 1.0) / 2.0;
+  return v;
+}
+
+// What the user's file would be, before the timed decoding.
+struct Source {
+  RawImage image;
+};
+
+Source make_source(const TargetSpec& spec, Storage storage) {
+  switch (storage) {
+    case Storage::f32:
+      return {};
+    case Storage::n16:
+    case Storage::n8:
+      return {quantised(spec.size, spec.size, 3, normal_values(spec), storage == Storage::n16 ? 65535 : 255)};
+    case Storage::d16:
+    case Storage::d8:
+      return {quantised(spec.size, spec.size, 1, depth_values(spec), storage == Storage::d16 ? 65535 : 255)};
+  }
+  return {};
+}
+
+// The loader's conversion of decoded normals (config/field_loader.cpp): a wall's slope stays finite.
+GradientField gradient_of_normals(const NormalImage& normals) {
+  constexpr float kMaxSlope = 1.0e6f;
+  GradientField g(normals.width, normals.height);
+  for (std::size_t i = 0; i < g.values.size(); ++i) {
+    const Gradient v = gradient_from_normal(normals.values[i]);
+    g.values[i] = {std::clamp(v.x, -kMaxSlope, kMaxSlope), std::clamp(v.y, -kMaxSlope, kMaxSlope)};
+  }
+  return g;
+}
+
+RegionFields build_fields(const TargetSpec& spec, TruthMethod method, Storage storage, const Source& source) {
+  RegionFields fields;
+  DecodeReport report;
+  const bool curvature = method == TruthMethod::curvature;
+  switch (storage) {
+    case Storage::f32:
+      if (curvature) {
+        fields.gradient = target_gradient_field(spec);
+      } else {
+        fields.depth = target_depth_field(spec);
+      }
+      break;
+    case Storage::n16:
+    case Storage::n8:
+      fields.gradient = gradient_of_normals(decode_normals(source.image, {}, report));
+      break;
+    case Storage::d16:
+    case Storage::d8: {
+      DepthField depth = decode_depth(source.image, {0.5, 2.0 * spec.relief_px}, report);
+      if (curvature) {
+        fields.gradient = gradient_from_depth(depth);
+      } else {
+        fields.depth = std::move(depth);
+      }
+      break;
+    }
+  }
+  return fields;
+}
+
+Scene make_scene(const TargetSpec& spec, TruthMethod method, RegionFields fields) {
+  Region region;
+  region.name = spec.name();
+  region.rect = {0, 0, spec.size, spec.size};
+  region.fields = std::move(fields);
+  if (method == TruthMethod::curvature) {
+    region.method = std::make_shared<CurvatureMethod>(CurvatureParams{});
+  } else {
+    region.method = std::make_shared<DepthMethod>(DepthParams{});
+  }
+  std::vector<Region> regions;
+  regions.push_back(std::move(region));
+  return Scene(std::move(regions));
+}
+
+// A sequence of frames on one target.
+struct Path {
+  std::size_t target = 0;  // index into the run's targets
+  Vec2 start;
+  std::vector<Vec2> motors;
+};
+
+struct Config {
+  std::vector<TargetSpec> targets;
+  std::vector<double> directions_deg, speeds;
+  std::vector<std::size_t> walk_targets;
+  std::size_t walk_frames = 0;
+  double timing_s = 0.0;
+};
+
+Config make_config(bool small) {
+  Config c;
+  const std::vector<TargetSpec> all = all_targets();
+  if (small) {
+    for (std::size_t i : {3u, 6u, 21u})
+      c.targets.push_back(all[i]);  // bump-linear-h1-r200, bump-gaussian-h1-r100, hole-polynomial-h0.25-r200
+    c.directions_deg = {0.0, 30.0};
+    c.speeds = {2.0, 8.0};
+    c.walk_targets = {1};
+    c.walk_frames = 1500;
+    c.timing_s = 0.02;
+  } else {
+    c.targets = all;
+    c.directions_deg = {0.0, 30.0, 45.0, 90.0, 150.0, 250.0};
+    c.speeds = {0.5, 2.0, 8.0, 30.0};
+    c.walk_targets = {3, 6, 11, 16};
+    c.walk_frames = 25'000;
+    c.timing_s = 0.25;
+  }
+  return c;
+}
+
+std::vector<Path> make_strokes(const Config& c) {
+  std::mt19937_64 rng(20120601);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(-0.3, 0.3);
+  std::vector<Path> strokes;
+  for (std::size_t t = 0; t < c.targets.size(); ++t) {
+    const TargetSpec& spec = c.targets[t];
+    const Vec2 centre{spec.size / 2.0, spec.size / 2.0};
+    for (double deg : c.directions_deg) {
+      const double a = deg * std::numbers::pi / 180.0;
+      const Vec2 m{std::cos(a), std::sin(a)};
+      const Vec2 side{-m.y, m.x};
+      for (double speed : c.speeds) {
+        for (bool jitter : {false, true}) {
+          Path p;
+          p.target = t;
+          p.start = centre - m * (spec.radius + 30.0) + side * (uniform(rng) * spec.radius);
+          const auto frames = static_cast<std::size_t>(std::ceil((2.0 * spec.radius + 60.0) / speed));
+          for (std::size_t f = 0; f < frames; ++f) {
+            if (!jitter) {
+              p.motors.push_back(m * speed);
+              continue;
+            }
+            const double turn = gauss(rng) * 10.0 * std::numbers::pi / 180.0;
+            const double scale = std::clamp(1.0 + 0.2 * gauss(rng), 0.3, 2.0);
+            const Vec2 mj{m.x * std::cos(turn) - m.y * std::sin(turn), m.x * std::sin(turn) + m.y * std::cos(turn)};
+            p.motors.push_back(mj * (speed * scale));
+          }
+          strokes.push_back(std::move(p));
+        }
+      }
+    }
+  }
+  return strokes;
+}
+
+constexpr std::size_t kDriftWindow = 100;  // frames between the resets of the drift measure
+
+// The virtual hand's walk, steered by the true cursor; returns the path and the truth's position at every
+// multiple of kDriftWindow frames (the first one the start).
+Path make_walk(const Config& c, std::size_t target, const TruthModel& model, std::uint64_t seed,
+               std::vector<Vec2>& truth_marks) {
+  const TargetSpec& spec = c.targets[target];
+  const Vec2 centre{spec.size / 2.0, spec.size / 2.0};
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  Path p;
+  p.target = target;
+  p.start = centre + Vec2{0.37, -0.21};
+  Vec2 truth = p.start;
+  double heading = 0.0;
+  truth_marks.assign(1, truth);
+  for (std::size_t f = 0; f < c.walk_frames; ++f) {
+    heading += 0.25 * gauss(rng);
+    const Vec2 to_centre = centre - truth;
+    if (length(to_centre) > spec.radius + 20.0) heading = std::atan2(to_centre.y, to_centre.x) + 0.3 * gauss(rng);
+    const double speed = std::clamp(3.0 * std::exp(0.8 * gauss(rng)), 0.2, 30.0);
+    const Vec2 motor{speed * std::cos(heading), speed * std::sin(heading)};
+    p.motors.push_back(motor);
+    truth = truth_advance(model, truth, motor);
+    if ((f + 1) % kDriftWindow == 0) truth_marks.push_back(truth);
+  }
+  return p;
+}
+
+Vec2 truth_end_of(const TruthModel& model, const Path& path) {
+  Vec2 p = path.start;
+  for (const Vec2& motor : path.motors) p = truth_advance(model, p, motor);
+  return p;
+}
+
+// Collects a frame's steps for the C/D error.
+class StepLog final : public StepObserver {
+ public:
+  void on_step(const StepRecord& step) override { steps.push_back(step); }
+  std::vector<StepRecord> steps;
+};
+
+struct CdError {
+  double sum_w = 0.0, sum_we2 = 0.0, max = 0.0;
+  void add(double rel, double w) {
+    sum_w += w;
+    sum_we2 += w * rel * rel;
+    if (w > 1e-6) max = std::max(max, std::abs(rel));
+  }
+  double rms() const { return sum_w > 0.0 ? std::sqrt(sum_we2 / sum_w) : 0.0; }
+};
+
+// Clips the segment a + m s, s in [0, len], to a rect; returns [s0, s1] (s0 >= s1 when it misses).
+std::pair<double, double> clip(Vec2 a, Vec2 m, double len, const Rect& r) {
+  double s0 = 0.0, s1 = len;
+  const double lo[2] = {static_cast<double>(r.x), static_cast<double>(r.y)};
+  const double hi[2] = {static_cast<double>(r.x) + r.w, static_cast<double>(r.y) + r.h};
+  const double o[2] = {a.x, a.y}, d[2] = {m.x, m.y};
+  for (int k = 0; k < 2; ++k) {
+    if (d[k] == 0.0) {
+      if (o[k] < lo[k] || o[k] > hi[k]) return {1.0, 0.0};
+      continue;
+    }
+    const double t0 = (lo[k] - o[k]) / d[k], t1 = (hi[k] - o[k]) / d[k];
+    s0 = std::max(s0, std::min(t0, t1));
+    s1 = std::min(s1, std::max(t0, t1));
+  }
+  return {s0, s1};
+}
+
+// Adds the frame's steps to the C/D error (definition at the top of the file).
+void score_frame(const TruthModel& model, const std::vector<StepRecord>& steps, Vec2 start, Vec2 end, Vec2 m,
+                 CdError& err, const std::function<void(double x, double cd, double truth)>& trace = {}) {
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const StepRecord& s = steps[i];
+    if (s.region == nullptr) continue;
+    const Vec2 a = i == 0 ? start : s.entry;
+    const Vec2 b = i + 1 < steps.size() ? steps[i + 1].entry : end;
+    const Vec2 ab = b - a;
+    const double len = ab.x * m.x + ab.y * m.y;
+    if (!(len > 0.0)) continue;
+    const auto [s0, s1] = clip(a, m, len, s.region->rect);
+    if (!(s1 > s0)) continue;
+    const Vec2 mid = a + m * (0.5 * (s0 + s1));
+    const double truth = truth_cd(model, mid, m);
+    err.add((s.cd - truth) / truth, s1 - s0);
+    if (trace) trace(mid.x, s.cd, truth);
+  }
+}
+
+struct VariantRow {
+  std::string variant, method, traversal, storage, sampling;
+  double ns_median = 0, ns_p99 = 0, ns_step = 0, bytes_texel = 0, precompute_ms = 0;
+  double cd_rms = 0, cd_max = 0, end_rms = 0, end_max = 0, drift = 0;
+};
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const auto i = static_cast<std::size_t>(std::min<double>(v.size() - 1, std::floor(q * (v.size() - 1) + 0.5)));
+  return v[i];
+}
+
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+std::FILE* open_csv(const fs::path& path) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) throw std::runtime_error(fmt::format("{}: cannot open for writing", path.string()));
+  return f;
+}
+
+void close_csv(std::FILE* f, const fs::path& path) {
+  if (std::fclose(f) != 0) throw std::runtime_error(fmt::format("{}: write failed", path.string()));
+}
+
+int run_accuracy(const AccuracyOptions& o) {
+  const Clock::time_point t_start = Clock::now();
+  const Config config = make_config(o.small);
+  const fs::path outdir(o.outdir);
+  fs::create_directories(outdir);
+  const std::vector<Path> strokes = make_strokes(config);
+  std::vector<std::unique_ptr<AnalyticSurface>> surfaces;
+  for (const TargetSpec& t : config.targets) surfaces.push_back(make_target_surface(t));
+  const std::vector<EngineOptions> engines = engine_variants();
+  fmt::print(stderr, "accuracy: {} targets, {} strokes, {} engine variants\n", config.targets.size(), strokes.size(),
+             engines.size());
+
+  std::vector<VariantRow> rows;
+  for (TruthMethod method : {TruthMethod::curvature, TruthMethod::depth}) {
+    auto model_of = [&](std::size_t target) { return TruthModel{surfaces[target].get(), method, {}, {}}; };
+    // The truth, once per method: where each stroke and each walk ends.
+    const Clock::time_point t_truth = Clock::now();
+    std::vector<Vec2> stroke_truth;
+    for (const Path& p : strokes) stroke_truth.push_back(truth_end_of(model_of(p.target), p));
+    std::vector<Path> walks;
+    std::vector<std::vector<Vec2>> walk_truth;
+    for (std::size_t w : config.walk_targets) {
+      walk_truth.emplace_back();
+      walks.push_back(make_walk(config, w, model_of(w), 1000 + w, walk_truth.back()));
+    }
+    fmt::print(stderr, "accuracy: {} ground truth in {:.1f} s\n", name_of(method), ms_since(t_truth) / 1000.0);
+
+    for (Storage storage : storages_for(method)) {
+      // Fields of every target, built once per storage; the build time is the storage's precompute cost.
+      std::vector<Scene> scenes;
+      double build_ms = 0.0;
+      for (const TargetSpec& spec : config.targets) {
+        const Source source = make_source(spec, storage);
+        const Clock::time_point t0 = Clock::now();
+        RegionFields fields = build_fields(spec, method, storage, source);
+        build_ms += ms_since(t0);
+        scenes.push_back(make_scene(spec, method, std::move(fields)));
+      }
+      build_ms /= static_cast<double>(config.targets.size());
+
+      for (const EngineOptions& engine : engines) {
+        VariantRow row;
+        row.method = name_of(method);
+        row.traversal = traversal_label(engine);
+        row.storage = name_of(storage);
+        row.sampling = std::string(name_of(engine.sampling));
+        row.variant = fmt::format("{}/{}/{}/{}", row.method, row.traversal, row.storage, row.sampling);
+        double options_ms = 0.0;
+        std::size_t bytes = 0;
+        std::int64_t area = 0;
+        for (Scene& scene : scenes) {
+          const Clock::time_point t0 = Clock::now();
+          scene.set_options(engine);
+          options_ms += ms_since(t0);
+          bytes += scene.bytes();
+          area += scene.regions().front().rect.area();
+        }
+        row.precompute_ms = build_ms + options_ms / static_cast<double>(scenes.size());
+        row.bytes_texel = static_cast<double>(bytes) / static_cast<double>(area);
+
+        // Accuracy along the strokes.
+        CdError cd_err;
+        double end_sum2 = 0.0, end_max = 0.0;
+        StepLog log;
+        for (std::size_t i = 0; i < strokes.size(); ++i) {
+          const Path& p = strokes[i];
+          const Scene& scene = scenes[p.target];
+          const TruthModel model = model_of(p.target);
+          CursorState cursor = cursor_at(p.start);
+          for (const Vec2& motor : p.motors) {
+            log.steps.clear();
+            const Vec2 start = cursor.position;
+            advance(scene, cursor, motor, &log);
+            score_frame(model, log.steps, start, cursor.position, motor * (1.0 / length(motor)), cd_err);
+          }
+          const double e = length(cursor.position - stroke_truth[i]);
+          end_sum2 += e * e;
+          end_max = std::max(end_max, e);
+        }
+        row.cd_rms = cd_err.rms();
+        row.cd_max = cd_err.max;
+        row.end_rms = std::sqrt(end_sum2 / static_cast<double>(strokes.size()));
+        row.end_max = end_max;
+
+        // Drift over the walks, and speed from replaying them without an observer.
+        double drift2 = 0.0;
+        std::size_t windows = 0;
+        for (std::size_t w = 0; w < walks.size(); ++w) {
+          const std::vector<Vec2>& marks = walk_truth[w];
+          for (std::size_t k = 0; k + 1 < marks.size(); ++k) {
+            CursorState cursor = cursor_at(marks[k]);
+            for (std::size_t f = k * kDriftWindow; f < (k + 1) * kDriftWindow; ++f) {
+              advance(scenes[walks[w].target], cursor, walks[w].motors[f]);
+            }
+            const double e = length(cursor.position - marks[k + 1]);
+            drift2 += e * e;
+            ++windows;
+          }
+        }
+        row.drift = windows > 0 ? std::sqrt(drift2 / static_cast<double>(windows)) : 0.0;
+
+        // One batch per drift window, started at the truth's position: a replay from the walk's start alone would
+        // part from the truth and spend its time on the flat outside.
+        std::vector<double> per_frame;
+        double total_ns = 0.0;
+        std::uint64_t total_steps = 0;
+        const Clock::time_point t_timing = Clock::now();
+        do {
+          for (std::size_t w = 0; w < walks.size(); ++w) {
+            const Scene& scene = scenes[walks[w].target];
+            const std::vector<Vec2>& marks = walk_truth[w];
+            for (std::size_t k = 0; k + 1 < marks.size(); ++k) {
+              CursorState cursor = cursor_at(marks[k]);
+              std::uint64_t steps = 0;
+              const Clock::time_point t0 = Clock::now();
+              for (std::size_t f = k * kDriftWindow; f < (k + 1) * kDriftWindow; ++f) {
+                steps += advance(scene, cursor, walks[w].motors[f]).steps;
+              }
+              const double ns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count();
+              per_frame.push_back(ns / static_cast<double>(kDriftWindow));
+              total_ns += ns;
+              total_steps += steps;
+            }
+          }
+        } while (ms_since(t_timing) < config.timing_s * 1000.0);
+        row.ns_median = percentile(per_frame, 0.5);
+        row.ns_p99 = percentile(per_frame, 0.99);
+        row.ns_step = total_steps > 0 ? total_ns / static_cast<double>(total_steps) : 0.0;
+        fmt::print(stderr, "accuracy: {:<44} end rms {:.3g} px, C/D rms {:.3g}, {:.0f} ns/frame\n", row.variant,
+                   row.end_rms, row.cd_rms, row.ns_median);
+        rows.push_back(row);
+      }
+    }
+  }
+
+  const fs::path variants_path = outdir / "variants.csv";
+  std::FILE* f = open_csv(variants_path);
+  fmt::print(f,
+             "variant,method,traversal,storage,sampling,ns_per_frame_median,ns_per_frame_p99,ns_per_step,"
+             "bytes_per_texel,precompute_ms,cd_err_rms,cd_err_max,end_err_rms_px,end_err_max_px,drift_px\n");
+  for (const VariantRow& r : rows) {
+    fmt::print(f, "{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", r.variant,
+               r.method, r.traversal, r.storage, r.sampling, r.ns_median, r.ns_p99, r.ns_step, r.bytes_texel,
+               r.precompute_ms, r.cd_rms, r.cd_max, r.end_rms, r.end_max, r.drift);
+  }
+  close_csv(f, variants_path);
+
+  // Fig. 5: the default variant's C/D along the centre row of each target, with the truth.
+  const fs::path traces_path = outdir / "fig5_traces.csv";
+  f = open_csv(traces_path);
+  fmt::print(f, "target,method,x,cd,cd_truth\n");
+  for (std::size_t t = 0; t < config.targets.size(); ++t) {
+    const TargetSpec& spec = config.targets[t];
+    for (TruthMethod method : {TruthMethod::curvature, TruthMethod::depth}) {
+      const Scene scene = make_scene(spec, method, build_fields(spec, method, Storage::f32, {}));
+      const TruthModel model{surfaces[t].get(), method, {}, {}};
+      CursorState cursor = cursor_at({0.0, spec.size / 2.0 + 0.5});
+      CdError unused;
+      StepLog log;
+      while (cursor.position.x < spec.size) {
+        log.steps.clear();
+        const Vec2 start = cursor.position;
+        advance(scene, cursor, {1.0, 0.0}, &log);
+        score_frame(model, log.steps, start, cursor.position, {1.0, 0.0}, unused,
+                    [&](double x, double cd, double truth) {
+                      fmt::print(f, "{},{},{:.4f},{:.6g},{:.6g}\n", spec.name(), name_of(method), x, cd, truth);
+                    });
+      }
+    }
+  }
+  close_csv(f, traces_path);
+
+  // Fig. 2: the curvature method's formula over the paper's plane of cos(alpha) and delta-beta.
+  const fs::path grid_path = outdir / "fig2_grid.csv";
+  f = open_csv(grid_path);
+  fmt::print(f, "cos_alpha,delta_beta_deg,cd\n");
+  const CurvatureParams params{};
+  for (int i = 0; i <= 40; ++i) {
+    const double cos_alpha = -1.0 + i / 20.0;
+    for (int j = 0; j <= 40; ++j) {
+      const double delta_beta_deg = -2.0 + j / 10.0;
+      const double theta1 = delta_beta_deg * std::numbers::pi / 180.0;
+      fmt::print(f, "{:.4g},{:.4g},{:.6g}\n", cos_alpha, delta_beta_deg,
+                 curvature_cd(params, cos_alpha, theta1, cos_alpha, 0.0, nullptr));
+    }
+  }
+  close_csv(f, grid_path);
+  fmt::print("wrote {} variants to {} in {:.1f} s\n", rows.size(), outdir.string(), ms_since(t_start) / 1000.0);
+  return 0;
+}
+
+}  // namespace
+
+Run add_accuracy_command(CLI::App& app) {
+  auto o = std::make_shared<AccuracyOptions>();
+  app.description(
+      "Measure accuracy against the exact ground truth and speed of every engine variant (method x storage x\n"
+      "traversal x sampling) over seeded strokes and random walks across the 24 targets; write\n"
+      "OUTDIR/variants.csv, OUTDIR/fig5_traces.csv and OUTDIR/fig2_grid.csv for tools/charts.py.");
+  app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)")->required();
+  app.add_flag("--small", o->small, "A handful of strokes and a short walk (seconds; for CI)");
+  return [o] { return run_accuracy(*o); };
+}
+
+}  // namespace ph::tools
