@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/engine_options.hpp"
 #include "core/geometry.hpp"
 #include "core/pipeline.hpp"
 
@@ -26,6 +27,7 @@ struct DaemonSettings {
   OutputMode output = OutputMode::relative;
   std::optional<Rect> desktop;  // nullopt = auto (the size of the screen)
   double pointer_speed = 1.0;   // screen px per device count at C/D 1
+  EngineOptions engine;         // traversal and sampling (docs/SPEED_VS_ACCURACY.md); applied by load_scene
 };
 
 inline constexpr double kMaxPointerSpeed = 100.0;

@@ -369,8 +369,17 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
 
 DaemonSettings parse_daemon(const Reporter& rep, const toml::table& t) {
   const std::string where = "daemon.";
-  reject_unknown_keys(rep, t, {"devices", "output", "desktop", "pointer_speed"}, where);
+  reject_unknown_keys(
+      rep, t, {"devices", "output", "desktop", "pointer_speed", "traversal", "sampling", "lut_directions"}, where);
   DaemonSettings d;
+  d.engine.traversal = get_choice(rep, t, "traversal", where, d.engine.traversal, parse_traversal,
+                                  "exact, unit_steps, frame_midpoint, direction_lut");
+  d.engine.sampling = get_choice(rep, t, "sampling", where, d.engine.sampling, parse_sampling, "nearest, bilinear");
+  d.engine.lut_directions = get_int(rep, t, "lut_directions", where, d.engine.lut_directions, 8, 16);
+  check_key(
+      rep, t, "lut_directions", where, [&] { return d.engine.lut_directions == 8 || d.engine.lut_directions == 16; },
+      "must be 8 or 16");
+  if (const std::string problem = validate(d.engine); !problem.empty()) rep.fail(&t, "daemon", problem);
 
   if (const toml::node* node = t.get("devices")) {
     const char* allowed =
@@ -532,7 +541,9 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report) {
     if (report != nullptr) report->regions.push_back(field_report);
     regions.push_back(std::move(region));
   }
-  return Scene(std::move(regions));
+  Scene scene(std::move(regions));
+  scene.set_options(spec.daemon.engine);  // builds what the variant precomputes (direction tables), only then
+  return scene;
 }
 
 }  // namespace ph

@@ -563,5 +563,17 @@ TEST(SceneFileInterrogation, LoadingBuildsTheEffectsAndKeepsOnlyWhatTheMethodWal
   EXPECT_EQ(layered.regions()[0].effects.size(), 1u);
 }
 
+TEST(SceneFileEngine, TraversalAndSamplingAreDaemonKeysAppliedByTheLoader) {
+  const SceneSpec spec = parse_scene_text("[daemon]\ntraversal = \"unit_steps\"\nsampling = \"bilinear\"\n", kOrigin);
+  EXPECT_EQ(spec.daemon.engine.traversal, Traversal::unit_steps);
+  EXPECT_EQ(spec.daemon.engine.sampling, Sampling::bilinear);
+  EXPECT_EQ(load_scene(spec).options(), spec.daemon.engine);
+  EXPECT_TRUE(parse_scene_text("[daemon]\n", kOrigin).daemon.engine.is_default());
+  expect_error("[daemon]\ntraversal = \"fast\"\n", 2, "daemon.traversal",
+               {"unknown 'fast'", "exact, unit_steps, frame_midpoint, direction_lut"});
+  expect_error("[daemon]\nlut_directions = 12\n", 2, "daemon.lut_directions", {"8"});
+  expect_error("[daemon]\ntraversal = \"direction_lut\"\nsampling = \"bilinear\"\n", 1, "daemon", {"nearest"});
+}
+
 }  // namespace
 }  // namespace ph

@@ -37,6 +37,7 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
     fmt::format_to(to, "  desktop: auto\n");
   }
   fmt::format_to(to, "  pointer_speed: {}\n", d.pointer_speed);
+  fmt::format_to(to, "  engine: {}\n", label_of(d.engine));
   fmt::format_to(to, "regions: {}\n", spec.regions.size());
   for (std::size_t i = 0; i < spec.regions.size(); ++i) {
     const RegionSpec& r = spec.regions[i];
