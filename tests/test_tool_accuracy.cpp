@@ -77,6 +77,47 @@ TEST(ToolAccuracy, SmallRunWritesTheThreeCsvFiles) {
   EXPECT_LT(value("depth/exact/f32/nearest", kCdRms), value("depth/exact/d8/nearest", kCdRms));
   EXPECT_LT(value("curvature/exact/f32/nearest", kEndRms), value("curvature/exact/d8/nearest", kEndRms));
 
+  // Each variant ends within its documented bound of the ground truth (docs/SPEED_VS_ACCURACY.md, "Error
+  // bounds": the --small run's worst end error, plus a quarter, per method, traversal and sampling; 8-bit depth
+  // maps apart). The run is seeded, so a variant that gets worse fails here.
+  struct Bound {
+    const char* prefix;  // "method/traversal/"
+    const char* suffix;  // "/sampling"
+    double other_px, depth8_px;
+  };
+  const Bound bounds[] = {
+      {"curvature/exact/", "/nearest", 7, 149},
+      {"curvature/exact/", "/bilinear", 5, 140},
+      {"curvature/unit_steps/", "/nearest", 5, 128},
+      {"curvature/unit_steps/", "/bilinear", 4, 124},
+      {"curvature/frame_midpoint/", "/nearest", 26, 244},
+      {"curvature/frame_midpoint/", "/bilinear", 6, 183},
+      {"curvature/direction_lut8/", "/nearest", 29, 137},
+      {"curvature/direction_lut16/", "/nearest", 7, 148},
+      {"depth/exact/", "/nearest", 79, 62},
+      {"depth/exact/", "/bilinear", 4, 16},
+      {"depth/unit_steps/", "/nearest", 22, 17},
+      {"depth/unit_steps/", "/bilinear", 1, 11},
+      {"depth/frame_midpoint/", "/nearest", 103, 277},
+      {"depth/frame_midpoint/", "/bilinear", 5, 72},
+      {"depth/direction_lut8/", "/nearest", 57, 45},
+      {"depth/direction_lut16/", "/nearest", 101, 81},
+  };
+  constexpr std::size_t kEndMax = 13;
+  std::size_t checked = 0;
+  for (const auto& [name, row] : by_variant) {
+    for (const Bound& b : bounds) {
+      if (name.rfind(b.prefix, 0) != 0 || name.size() < std::string(b.suffix).size() ||
+          name.compare(name.size() - std::string(b.suffix).size(), std::string::npos, b.suffix) != 0) {
+        continue;
+      }
+      const double bound = row[3] == "d8" ? b.depth8_px : b.other_px;
+      EXPECT_LE(std::stod(row[kEndMax]), bound) << name << ": end error above its documented bound";
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, by_variant.size()) << "a variant without a documented bound";
+
   const auto [th, traces] = read_csv(out / "fig5_traces.csv");
   ASSERT_EQ(th, "target,method,x,cd,cd_truth");
   std::map<std::string, int> trace_methods;
