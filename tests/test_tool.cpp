@@ -195,6 +195,11 @@ TEST(Tool, HelpNamesTheCommandsAndEveryTraceFlag) {
   }
 
   expect_clean_failure(run_tool("", dir), {});  // no command
+  // A misspelt command is named, with the list of commands.
+  const ToolResult unknown = run_tool("trcae --step 2", dir);
+  EXPECT_EQ(unknown.rc, 2);
+  EXPECT_TRUE(contains(unknown.err, "unknown command 'trcae'")) << unknown.err;
+  EXPECT_TRUE(contains(unknown.err, "trace")) << unknown.err;
 }
 
 TEST(Tool, TraceTargetCurvature) {

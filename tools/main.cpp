@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <map>
+#include <string>
 
 #include "tools/commands.hpp"
 
@@ -36,6 +37,19 @@ int main(int argc, char** argv) {
   add("check-config", "Check a scene file (the daemon's config): its [daemon] table, regions and images",
       ph::tools::add_check_config_command);
 
+  // CLI11 answers a misspelt command with only "A subcommand is required": name it and list the commands.
+  if (argc > 1 && argv[1][0] != '-') {
+    bool known = false;
+    std::string names;
+    for (const CLI::App* sub : app.get_subcommands({})) {
+      known = known || sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      fmt::print(stderr, "pseudohaptic: unknown command '{}' (commands: {}; --help explains each)\n", argv[1], names);
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
