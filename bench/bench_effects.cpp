@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/relief.hpp"
 #include "core/effect.hpp"
 #include "core/effect_materials.hpp"
 #include "core/field.hpp"
@@ -29,29 +30,10 @@
 
 namespace {
 
-constexpr std::int32_t kW = 1920;
-constexpr std::int32_t kH = 1080;
+constexpr std::int32_t kW = ph::bench::kReliefWidth;
+constexpr std::int32_t kH = ph::bench::kReliefHeight;
 
-// Smooth relief with bumps, a hole and a ripple, heights in px (as bench_interrogation): every curvature class.
-const ph::DepthField& relief() {
-  static const ph::DepthField d = [] {
-    ph::DepthField f(kW, kH);
-    for (std::int32_t y = 0; y < kH; ++y) {
-      for (std::int32_t x = 0; x < kW; ++x) {
-        auto bump = [&](double cx, double cy, double s, double a) {
-          const double dx = x - cx;
-          const double dy = y - cy;
-          return a * std::exp(-(dx * dx + dy * dy) / (2.0 * s * s));
-        };
-        const double ripple = 8.0 * std::sin(x / 53.0) * std::cos(y / 41.0);
-        f.at(x, y) =
-            static_cast<float>(bump(480, 400, 150, 60) + bump(1300, 600, 220, 45) + bump(900, 250, 90, -35) + ripple);
-      }
-    }
-    return f;
-  }();
-  return d;
-}
+const ph::DepthField& relief() { return ph::bench::relief_depth(); }
 
 // The fields a loader would hold for the region: a normal map's gradient and a depth map.
 const ph::RegionFields& relief_fields() {

@@ -11,41 +11,19 @@
 #include <cstdint>
 #include <random>
 
+#include "bench/relief.hpp"
 #include "core/distance_transform.hpp"
 #include "core/field.hpp"
 #include "core/patterns.hpp"
 
 namespace {
 
-constexpr std::int32_t kW = 1920;
-constexpr std::int32_t kH = 1080;
+constexpr std::int32_t kW = ph::bench::kReliefWidth;
+constexpr std::int32_t kH = ph::bench::kReliefHeight;
 constexpr float kRadius = 64.0f;  // a generous radius of influence, px
 
-// Smooth relief with bumps, a hole and a ripple, heights in px: many closed and open contours.
-const ph::DepthField& relief() {
-  static const ph::DepthField d = [] {
-    ph::DepthField f(kW, kH);
-    for (std::int32_t y = 0; y < kH; ++y) {
-      for (std::int32_t x = 0; x < kW; ++x) {
-        auto bump = [&](double cx, double cy, double s, double a) {
-          const double dx = x - cx;
-          const double dy = y - cy;
-          return a * std::exp(-(dx * dx + dy * dy) / (2.0 * s * s));
-        };
-        const double ripple = 8.0 * std::sin(x / 53.0) * std::cos(y / 41.0);
-        f.at(x, y) =
-            static_cast<float>(bump(480, 400, 150, 60) + bump(1300, 600, 220, 45) + bump(900, 250, 90, -35) + ripple);
-      }
-    }
-    return f;
-  }();
-  return d;
-}
-
-const ph::GradientField& relief_gradient() {
-  static const ph::GradientField g = ph::gradient_from_depth(relief());
-  return g;
-}
+const ph::DepthField& relief() { return ph::bench::relief_depth(); }
+const ph::GradientField& relief_gradient() { return ph::bench::relief_gradient(); }
 
 ph::Grid<std::uint8_t> random_mask(double density) {
   std::mt19937 rng(42);

@@ -14,6 +14,7 @@
 #include <random>
 #include <vector>
 
+#include "bench/relief.hpp"
 #include "core/effect_wells.hpp"
 #include "core/method_curvature.hpp"
 #include "core/method_flat.hpp"
@@ -22,28 +23,15 @@
 
 namespace {
 
-constexpr std::int32_t kW = 1920;
-constexpr std::int32_t kH = 1080;
+constexpr std::int32_t kW = ph::bench::kReliefWidth;
+constexpr std::int32_t kH = ph::bench::kReliefHeight;
 
-// The relief of bench_interrogation: three Gaussian bumps/holes (35-60 px) and an 8 px ripple.
+// The shared relief's fields, as a loader would hold them.
 const ph::RegionFields& relief() {
   static const ph::RegionFields f = [] {
-    ph::DepthField d(kW, kH);
-    for (std::int32_t y = 0; y < kH; ++y) {
-      for (std::int32_t x = 0; x < kW; ++x) {
-        auto bump = [&](double cx, double cy, double s, double a) {
-          const double dx = x - cx;
-          const double dy = y - cy;
-          return a * std::exp(-(dx * dx + dy * dy) / (2.0 * s * s));
-        };
-        const double ripple = 8.0 * std::sin(x / 53.0) * std::cos(y / 41.0);
-        d.at(x, y) =
-            static_cast<float>(bump(480, 400, 150, 60) + bump(1300, 600, 220, 45) + bump(900, 250, 90, -35) + ripple);
-      }
-    }
     ph::RegionFields fields;
-    fields.gradient = ph::gradient_from_depth(d);
-    fields.depth = std::move(d);
+    fields.gradient = ph::bench::relief_gradient();
+    fields.depth = ph::bench::relief_depth();
     return fields;
   }();
   return f;

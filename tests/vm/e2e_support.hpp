@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "core/event.hpp"
+#include "daemon/unique_fd.hpp"
 #include "tests/vm/vm_check.hpp"
 #include "uinput/uinput_sink.hpp"
 
@@ -60,32 +61,7 @@ inline int ms_until(Clock::time_point deadline, std::chrono::milliseconds cap = 
   return static_cast<int>(std::clamp(left, 0ms, cap).count());
 }
 
-class Fd {
- public:
-  Fd() = default;
-  explicit Fd(int fd) : fd_(fd) {}
-  ~Fd() { reset(); }
-  Fd(Fd&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
-  Fd& operator=(Fd&& other) noexcept {
-    if (this != &other) {
-      reset();
-      fd_ = std::exchange(other.fd_, -1);
-    }
-    return *this;
-  }
-  Fd(const Fd&) = delete;
-  Fd& operator=(const Fd&) = delete;
-
-  int get() const { return fd_; }
-  explicit operator bool() const { return fd_ >= 0; }
-  void reset() {
-    if (fd_ >= 0) ::close(fd_);
-    fd_ = -1;
-  }
-
- private:
-  int fd_ = -1;
-};
+using Fd = UniqueFd;  // daemon/unique_fd.hpp
 
 // The kernel's uevents (NETLINK_KOBJECT_UEVENT): something to wait on while input devices come and go.
 class UeventMonitor {
