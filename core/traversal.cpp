@@ -175,26 +175,33 @@ class Walker {
 
   template <typename M>
   double step_cd(const Region& region, const M& method, const TexelSample& from, const TexelSample& to, bool entered) {
-    double cd;
     const double step_px = Mode == WalkMode::bilinear ? step_px_ : 1.0;
-    if (observer_ == nullptr) {
-      cd = method.cd(from, to, step_px, nullptr);
-    } else {
-      StepRecord record;
-      cd = method.cd(from, to, step_px, &record.detail);
-      record.entry = position();
-      record.texel = texel_;
-      record.came_from = from_;
-      record.entered = entered;
-      record.cd = cd;
-      record.region = &region;
-      observer_->on_step(record);
-    }
+    if (observer_ == nullptr) return count_step(method.cd(from, to, step_px, nullptr), entered);
+    StepDetail detail;
+    const double cd = method.cd(from, to, step_px, &detail);
+    observe_step(cd, detail, entered, region);
+    return count_step(cd, entered);
+  }
+
+  // The bookkeeping of every step: the frame's C/D range, the step count, whether C/D stayed 1.
+  double count_step(double cd, bool entered) {
     all_unit_ = all_unit_ && cd == 1.0;
     result_.cd_min = std::min(result_.cd_min, cd);
     result_.cd_max = std::max(result_.cd_max, cd);
     if (entered) ++result_.steps;
     return cd;
+  }
+
+  void observe_step(double cd, const StepDetail& detail, bool entered, const Region& region) {
+    StepRecord record;
+    record.detail = detail;
+    record.entry = position();
+    record.texel = texel_;
+    record.came_from = from_;
+    record.entered = entered;
+    record.cd = cd;
+    record.region = &region;
+    observer_->on_step(record);
   }
 
   // Walks texel by texel while the texels belong to `index`. M is the method's concrete type for the
@@ -241,22 +248,8 @@ class Walker {
   // C/D of the current texel from a direction table, with the bookkeeping of step_cd.
   double lut_cd(const Region& region, const DirectionLut& lut, bool entered) {
     const double cd = lut.cd(lut_k_, region.local(texel_));
-    if (observer_ != nullptr) {
-      StepRecord record;
-      record.detail = empty_step_detail();
-      record.entry = position();
-      record.texel = texel_;
-      record.came_from = from_;
-      record.entered = entered;
-      record.cd = cd;
-      record.region = &region;
-      observer_->on_step(record);
-    }
-    all_unit_ = all_unit_ && cd == 1.0;
-    result_.cd_min = std::min(result_.cd_min, cd);
-    result_.cd_max = std::max(result_.cd_max, cd);
-    if (entered) ++result_.steps;
-    return cd;
+    if (observer_ != nullptr) observe_step(cd, empty_step_detail(), entered, region);
+    return count_step(cd, entered);
   }
 
   // walk_region's loop with the C/D from the table (kept separate so the default loop stays as it is).
