@@ -39,23 +39,39 @@ class DepthMethod final : public Method {
   std::string_view name() const override { return "depth"; }
   FieldNeeds needs() const override { return {.gradient = false, .depth = true}; }
   // Inline: the traversal calls these directly on the final class (core/traversal.cpp).
-  TexelSample sample(const RegionFields* fields, Texel local, Vec2 /*direction*/) const override {
-    if (fields == nullptr || !fields->depth) return {0.0, 0.0};
-    return {fields->depth->at(local.x, local.y), 0.0};
+  //
+  // The nearest reading of a texel for motion along `direction`: its height (v0) and the height 1 px
+  // behind its centre along the motion, interpolated bilinearly (v1), so that the height change is taken
+  // along the motion. The neighbour a texel walk came from is always a 4-neighbour, so pairing the two
+  // texels would see, on a diagonal, the height change per axis step and not per px along the motion
+  // (a mean slope of (h_x + h_y)/2 instead of (h_x + h_y)/sqrt 2 at 45 degrees). Where the point behind
+  // lies outside the region (its first texel row on entry), v1 is kNoBehind and cd() falls back to the
+  // texel the walk came from, which keeps the step at a region's border.
+  TexelSample sample(const RegionFields* fields, Texel local, Vec2 direction) const override {
+    if (fields == nullptr || !fields->depth) return {0.0, kNoBehind};
+    const DepthField& f = *fields->depth;
+    const double here = f.at(local.x, local.y);
+    const Vec2 behind{local.x + 0.5 - direction.x, local.y + 0.5 - direction.y};
+    if (!(behind.x >= 0.0 && behind.y >= 0.0 && behind.x < f.width && behind.y < f.height)) return {here, kNoBehind};
+    return {here, bilinear(f, behind)};
   }
-  // The height interpolated at `at` (Sampling::bilinear).
+  // The height interpolated at `at` (Sampling::bilinear); the walk pairs it with the previous sample point.
   TexelSample sample_at(const RegionFields* fields, Texel /*local*/, Vec2 at, Vec2 /*direction*/) const override {
-    if (fields == nullptr || !fields->depth) return {0.0, 0.0};
-    return {bilinear(*fields->depth, at), 0.0};
+    if (fields == nullptr || !fields->depth) return {0.0, kNoBehind};
+    return {bilinear(*fields->depth, at), kNoBehind};
   }
   double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
-    return depth_cd(params_, from.v0, to.v0, step_px, detail);
+    if (std::isnan(to.v1)) return depth_cd(params_, from.v0, to.v0, step_px, detail);
+    return depth_cd(params_, to.v1, to.v0, 1.0, detail);
   }
   double cd_lower_bound() const override { return 1.0 / params_.kmin; }
   double cd_upper_bound() const override { return params_.kmax; }
   const DepthParams& params() const { return params_; }
 
  private:
+  // v1 of a sample with no height behind it in the region (a marker, never a height: heights are finite).
+  static constexpr double kNoBehind = std::numeric_limits<double>::quiet_NaN();
+
   DepthParams params_;
 };
 
