@@ -35,10 +35,11 @@ inline std::int32_t floor_to_int(double v) {
   return i - (v < static_cast<double>(i) ? 1 : 0);
 }
 
-// Length of a vector; falls back to hypot only where the squares could overflow.
+// Length of a vector; falls back to hypot only where the squares could overflow or underflow to 0
+// (a motion under 1e-162 px would otherwise have length 0 and be lost).
 inline double fast_length(double x, double y) {
   const double ax = std::abs(x), ay = std::abs(y);
-  if (ax < 1e150 && ay < 1e150) return std::sqrt(x * x + y * y);
+  if (ax < 1e150 && ay < 1e150 && (ax > 1e-150 || ay > 1e-150)) return std::sqrt(x * x + y * y);
   return std::hypot(x, y);
 }
 

@@ -95,6 +95,19 @@ TEST(TraversalVariants, FlatScenesAreExactIdentity) {
   }
 }
 
+TEST(TraversalVariants, TinyMotionsOverRegionsAreNotLost) {
+  // Lengths whose squares underflow to 0, down to the smallest denormal: the identity holds for them too.
+  for (const EngineOptions& options : all_variants()) {
+    const Scene scene = scene_with({depth_region({0, 0, 64, 64}, [](int, int) { return 3.0f; })}, options);
+    for (const Vec2 motor : {Vec2{1e-165, 0.0}, Vec2{0.0, -1e-200}, Vec2{1e-300, 2e-300}, Vec2{-5e-324, 5e-324}}) {
+      CursorState cursor = cursor_at({20.5, 30.5});
+      const FrameResult out = advance(scene, cursor, motor);
+      EXPECT_EQ(out.display, motor) << label_of(options) << " " << motor.x << "," << motor.y;
+      EXPECT_EQ(cursor.position, (Vec2{20.5, 30.5} + motor)) << label_of(options);
+    }
+  }
+}
+
 // Summed display along the motion over a region where C/D is `cd` for every step in direction m.
 void expect_ratio(const Scene& scene, Vec2 start, Vec2 m, double cd, double cd_tolerance, const std::string& what) {
   std::mt19937_64 rng(3);
