@@ -11,11 +11,13 @@
 //   The depth method reads heights, so it has f32, d16 and d8 only.
 // Ground truth: core/ground_truth.hpp (exact continuous C/D, adaptive Gauss-Kronrod, 1e-9 px), per method.
 //
-// Strokes (fixed, seeded): for each target, directions 0, 30, 45, 90, 150, 250 degrees, motor px per frame 0.5, 2,
+// Shapes: the 24 targets of the curvature paper and the 9 interrogation surfaces of core/surfaces.hpp at 256 px
+// (a square relief, flat outside it; its "radius" for the strokes and the walks is half its size).
+// Strokes (fixed, seeded): for each shape, directions 0, 30, 45, 90, 150, 250 degrees, motor px per frame 0.5, 2,
 // 8, 30, without and with hand jitter (each frame's motor vector turned by N(0, 10 deg) and scaled by
 // 1 + N(0, 0.2) clipped to [0.3, 2]). A stroke starts radius + 30 px before the target's centre, offset sideways
 // by a seeded U(-0.3, 0.3) x radius, and lasts 2 x radius + 60 px of motor travel (without jitter).
-// --small: 3 targets, 2 directions, speeds 2 and 8.
+// --small: 3 targets and 1 surface (simple-saddle), 2 directions, speeds 2 and 8.
 //
 // Metrics, per variant:
 //   cd_err_rms, cd_err_max  relative C/D error along the strokes. Each step the engine reports (StepObserver)
@@ -27,7 +29,8 @@
 //       where a texel straddles a step of the C/D field: an error of the order of the jump is unavoidable there.
 //   end_err_rms_px, end_err_max_px  distance between the engine's cursor and the truth's after each stroke
 //       (truth: truth_advance frame by frame with the same motor vectors); RMS and max over strokes.
-//   drift_px  a long random walk (full: 4 targets x 25 000 frames; --small: 1 x 1 500) of a seeded virtual hand:
+//   drift_px  a long random walk (full: 4 targets and 1 surface x 25 000 frames; --small: 1 x 1 500) of a seeded
+//   virtual hand:
 //       heading turning by N(0, 0.25 rad) a frame, speed log-normal around 3 px per frame (0.2 to 30), steered
 //       back toward the target when the *true* cursor is beyond radius + 20 px. The walk is cut into windows of
 //       100 frames; the engine starts each window at the truth's position and replays the same motor vectors.
@@ -39,7 +42,7 @@
 //       time of each batch, median and 99th percentile over the batches.
 //   ns_per_step  total replay time / total FrameResult::steps (texel or unit steps inside regions).
 //   bytes_per_texel  Scene::bytes() / region area (fields and direction tables).
-//   precompute_ms  mean over the targets of building a region's fields from the in-memory source (decoding for
+//   precompute_ms  mean over the shapes of building a region's fields from the in-memory source (decoding for
 //       the 8/16-bit maps; rasterising for f32) plus Scene::set_options (direction tables); no file I/O.
 // fig5_traces.csv: f32 fields, exact traversal, nearest sampling, default parameters; a stroke along the texel
 // row through the centre (y = size / 2 + 0.5), motor 1 px per frame; one row per step, x = segment midpoint.
@@ -60,12 +63,14 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "core/decode.hpp"
 #include "core/engine_options.hpp"
 #include "core/ground_truth.hpp"
 #include "core/scene.hpp"
+#include "core/surfaces.hpp"
 #include "core/targets.hpp"
 #include "core/traversal.hpp"
 #include "tools/commands.hpp"
@@ -128,6 +133,40 @@ std::string traversal_label(const EngineOptions& o) {
   return label;
 }
 
+// One relief the strokes cross: a target of the curvature paper or an interrogation surface, with what the
+// accuracy run needs of either.
+struct Shape {
+  std::variant<TargetSpec, SurfaceSpec> spec;
+
+  bool is_target() const { return std::holds_alternative<TargetSpec>(spec); }
+  std::string name() const {
+    return std::visit([](const auto& s) { return s.name(); }, spec);
+  }
+  std::int32_t size() const {
+    return std::visit([](const auto& s) { return s.size; }, spec);
+  }
+  double radius() const { return is_target() ? std::get<TargetSpec>(spec).radius : size() / 2.0; }
+  double relief_px() const {
+    return is_target() ? std::get<TargetSpec>(spec).relief_px : std::get<SurfaceSpec>(spec).relief_px();
+  }
+  GradientField gradient_field() const {
+    return is_target() ? target_gradient_field(std::get<TargetSpec>(spec))
+                       : surface_gradient_field(std::get<SurfaceSpec>(spec));
+  }
+  DepthField depth_field() const {
+    return is_target() ? target_depth_field(std::get<TargetSpec>(spec))
+                       : surface_depth_field(std::get<SurfaceSpec>(spec));
+  }
+  NormalImage normal_image() const {
+    return is_target() ? target_normal_image(std::get<TargetSpec>(spec))
+                       : surface_normal_image(std::get<SurfaceSpec>(spec));
+  }
+  std::unique_ptr<AnalyticSurface> surface() const {
+    return is_target() ? make_target_surface(std::get<TargetSpec>(spec))
+                       : make_interrogation_surface(std::get<SurfaceSpec>(spec));
+  }
+};
+
 // A w x h x channels image of integer codes, as an 8- or 16-bit file would give it.
 RawImage quantised(std::int32_t w, std::int32_t h, int channels, const std::vector<double>& values,
                    std::uint32_t code_max) {
@@ -144,9 +183,9 @@ RawImage quantised(std::int32_t w, std::int32_t h, int channels, const std::vect
   return image;
 }
 
-// The unorm values a normal map of the target holds (OpenGL green), and those of its depth map.
-std::vector<double> normal_values(const TargetSpec& spec) {
-  const NormalImage normals = target_normal_image(spec);
+// The unorm values a normal map of the shape holds (OpenGL green), and those of its depth map.
+std::vector<double> normal_values(const Shape& shape) {
+  const NormalImage normals = shape.normal_image();
   std::vector<double> v;
   v.reserve(normals.values.size() * 3);
   for (const Normal& n : normals.values) {
@@ -157,10 +196,10 @@ std::vector<double> normal_values(const TargetSpec& spec) {
   return v;
 }
 
-std::vector<double> depth_values(const TargetSpec& spec) {
-  const DepthField depth = target_depth_field(spec);
+std::vector<double> depth_values(const Shape& shape) {
+  const DepthField depth = shape.depth_field();
   std::vector<double> v(depth.values.size());
-  for (std::size_t i = 0; i < v.size(); ++i) v[i] = (depth.values[i] / spec.relief_px + 1.0) / 2.0;
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = (depth.values[i] / shape.relief_px() + 1.0) / 2.0;
   return v;
 }
 
@@ -169,16 +208,17 @@ struct Source {
   RawImage image;
 };
 
-Source make_source(const TargetSpec& spec, Storage storage) {
+Source make_source(const Shape& shape, Storage storage) {
+  const std::int32_t size = shape.size();
   switch (storage) {
     case Storage::f32:
       return {};
     case Storage::n16:
     case Storage::n8:
-      return {quantised(spec.size, spec.size, 3, normal_values(spec), storage == Storage::n16 ? 65535 : 255)};
+      return {quantised(size, size, 3, normal_values(shape), storage == Storage::n16 ? 65535 : 255)};
     case Storage::d16:
     case Storage::d8:
-      return {quantised(spec.size, spec.size, 1, depth_values(spec), storage == Storage::d16 ? 65535 : 255)};
+      return {quantised(size, size, 1, depth_values(shape), storage == Storage::d16 ? 65535 : 255)};
   }
   return {};
 }
@@ -194,16 +234,16 @@ GradientField gradient_of_normals(const NormalImage& normals) {
   return g;
 }
 
-RegionFields build_fields(const TargetSpec& spec, TruthMethod method, Storage storage, const Source& source) {
+RegionFields build_fields(const Shape& shape, TruthMethod method, Storage storage, const Source& source) {
   RegionFields fields;
   DecodeReport report;
   const bool curvature = method == TruthMethod::curvature;
   switch (storage) {
     case Storage::f32:
       if (curvature) {
-        fields.gradient = target_gradient_field(spec);
+        fields.gradient = shape.gradient_field();
       } else {
-        fields.depth = target_depth_field(spec);
+        fields.depth = shape.depth_field();
       }
       break;
     case Storage::n16:
@@ -212,7 +252,7 @@ RegionFields build_fields(const TargetSpec& spec, TruthMethod method, Storage st
       break;
     case Storage::d16:
     case Storage::d8: {
-      DepthField depth = decode_depth(source.image, {0.5, 2.0 * spec.relief_px}, report);
+      DepthField depth = decode_depth(source.image, {0.5, 2.0 * shape.relief_px()}, report);
       if (curvature) {
         fields.gradient = gradient_from_depth(depth);
       } else {
@@ -224,10 +264,10 @@ RegionFields build_fields(const TargetSpec& spec, TruthMethod method, Storage st
   return fields;
 }
 
-Scene make_scene(const TargetSpec& spec, TruthMethod method, RegionFields fields) {
+Scene make_scene(const Shape& shape, TruthMethod method, RegionFields fields) {
   Region region;
-  region.name = spec.name();
-  region.rect = {0, 0, spec.size, spec.size};
+  region.name = shape.name();
+  region.rect = {0, 0, shape.size(), shape.size()};
   region.fields = std::move(fields);
   if (method == TruthMethod::curvature) {
     region.method = std::make_shared<CurvatureMethod>(CurvatureParams{});
@@ -239,15 +279,15 @@ Scene make_scene(const TargetSpec& spec, TruthMethod method, RegionFields fields
   return Scene(std::move(regions));
 }
 
-// A sequence of frames on one target.
+// A sequence of frames on one shape.
 struct Path {
-  std::size_t target = 0;  // index into the run's targets
+  std::size_t target = 0;  // index into the run's shapes
   Vec2 start;
   std::vector<Vec2> motors;
 };
 
 struct Config {
-  std::vector<TargetSpec> targets;
+  std::vector<Shape> targets;  // the targets first, then the interrogation surfaces
   std::vector<double> directions_deg, speeds;
   std::vector<std::size_t> walk_targets;
   std::size_t walk_frames = 0;
@@ -257,19 +297,23 @@ struct Config {
 Config make_config(bool small) {
   Config c;
   const std::vector<TargetSpec> all = all_targets();
+  constexpr std::int32_t kSurfaceSize = 256;
   if (small) {
     for (std::size_t i : {3u, 6u, 21u})
-      c.targets.push_back(all[i]);  // bump-linear-h1-r200, bump-gaussian-h1-r100, hole-polynomial-h0.25-r200
+      c.targets.push_back({all[i]});  // bump-linear-h1-r200, bump-gaussian-h1-r100, hole-polynomial-h0.25-r200
+    c.targets.push_back({SurfaceSpec{SurfaceKind::simple_saddle, kSurfaceSize}});
     c.directions_deg = {0.0, 30.0};
     c.speeds = {2.0, 8.0};
     c.walk_targets = {1};
     c.walk_frames = 1500;
     c.timing_s = 0.02;
   } else {
-    c.targets = all;
+    for (const TargetSpec& t : all) c.targets.push_back({t});
+    for (const SurfaceSpec& s : all_surfaces(kSurfaceSize)) c.targets.push_back({s});
     c.directions_deg = {0.0, 30.0, 45.0, 90.0, 150.0, 250.0};
     c.speeds = {0.5, 2.0, 8.0, 30.0};
-    c.walk_targets = {3, 6, 11, 16};
+    // Four targets and the simple saddle (the 24 targets, then the plane, ..., the saddle at 24 + 7).
+    c.walk_targets = {3, 6, 11, 16, all.size() + 7};
     c.walk_frames = 25'000;
     c.timing_s = 0.25;
   }
@@ -282,8 +326,9 @@ std::vector<Path> make_strokes(const Config& c) {
   std::uniform_real_distribution<double> uniform(-0.3, 0.3);
   std::vector<Path> strokes;
   for (std::size_t t = 0; t < c.targets.size(); ++t) {
-    const TargetSpec& spec = c.targets[t];
-    const Vec2 centre{spec.size / 2.0, spec.size / 2.0};
+    const Shape& shape = c.targets[t];
+    const Vec2 centre{shape.size() / 2.0, shape.size() / 2.0};
+    const double radius = shape.radius();
     for (double deg : c.directions_deg) {
       const double a = deg * std::numbers::pi / 180.0;
       const Vec2 m{std::cos(a), std::sin(a)};
@@ -292,8 +337,8 @@ std::vector<Path> make_strokes(const Config& c) {
         for (bool jitter : {false, true}) {
           Path p;
           p.target = t;
-          p.start = centre - m * (spec.radius + 30.0) + side * (uniform(rng) * spec.radius);
-          const auto frames = static_cast<std::size_t>(std::ceil((2.0 * spec.radius + 60.0) / speed));
+          p.start = centre - m * (radius + 30.0) + side * (uniform(rng) * radius);
+          const auto frames = static_cast<std::size_t>(std::ceil((2.0 * radius + 60.0) / speed));
           for (std::size_t f = 0; f < frames; ++f) {
             if (!jitter) {
               p.motors.push_back(m * speed);
@@ -318,8 +363,8 @@ constexpr std::size_t kDriftWindow = 100;  // frames between the resets of the d
 // multiple of kDriftWindow frames (the first one the start).
 Path make_walk(const Config& c, std::size_t target, const TruthModel& model, std::uint64_t seed,
                std::vector<Vec2>& truth_marks) {
-  const TargetSpec& spec = c.targets[target];
-  const Vec2 centre{spec.size / 2.0, spec.size / 2.0};
+  const Shape& shape = c.targets[target];
+  const Vec2 centre{shape.size() / 2.0, shape.size() / 2.0};
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> gauss(0.0, 1.0);
   Path p;
@@ -331,7 +376,7 @@ Path make_walk(const Config& c, std::size_t target, const TruthModel& model, std
   for (std::size_t f = 0; f < c.walk_frames; ++f) {
     heading += 0.25 * gauss(rng);
     const Vec2 to_centre = centre - truth;
-    if (length(to_centre) > spec.radius + 20.0) heading = std::atan2(to_centre.y, to_centre.x) + 0.3 * gauss(rng);
+    if (length(to_centre) > shape.radius() + 20.0) heading = std::atan2(to_centre.y, to_centre.x) + 0.3 * gauss(rng);
     const double speed = std::clamp(3.0 * std::exp(0.8 * gauss(rng)), 0.2, 30.0);
     const Vec2 motor{speed * std::cos(heading), speed * std::sin(heading)};
     p.motors.push_back(motor);
@@ -434,9 +479,9 @@ int run_accuracy(const AccuracyOptions& o) {
   fs::create_directories(outdir);
   const std::vector<Path> strokes = make_strokes(config);
   std::vector<std::unique_ptr<AnalyticSurface>> surfaces;
-  for (const TargetSpec& t : config.targets) surfaces.push_back(make_target_surface(t));
+  for (const Shape& shape : config.targets) surfaces.push_back(shape.surface());
   const std::vector<EngineOptions> engines = engine_variants();
-  fmt::print(stderr, "accuracy: {} targets, {} strokes, {} engine variants\n", config.targets.size(), strokes.size(),
+  fmt::print(stderr, "accuracy: {} shapes, {} strokes, {} engine variants\n", config.targets.size(), strokes.size(),
              engines.size());
 
   std::vector<VariantRow> rows;
@@ -458,12 +503,12 @@ int run_accuracy(const AccuracyOptions& o) {
       // Fields of every target, built once per storage; the build time is the storage's precompute cost.
       std::vector<Scene> scenes;
       double build_ms = 0.0;
-      for (const TargetSpec& spec : config.targets) {
-        const Source source = make_source(spec, storage);
+      for (const Shape& shape : config.targets) {
+        const Source source = make_source(shape, storage);
         const Clock::time_point t0 = Clock::now();
-        RegionFields fields = build_fields(spec, method, storage, source);
+        RegionFields fields = build_fields(shape, method, storage, source);
         build_ms += ms_since(t0);
-        scenes.push_back(make_scene(spec, method, std::move(fields)));
+        scenes.push_back(make_scene(shape, method, std::move(fields)));
       }
       build_ms /= static_cast<double>(config.targets.size());
 
@@ -579,20 +624,22 @@ int run_accuracy(const AccuracyOptions& o) {
   f = open_csv(traces_path);
   fmt::print(f, "target,method,x,cd,cd_truth\n");
   for (std::size_t t = 0; t < config.targets.size(); ++t) {
-    const TargetSpec& spec = config.targets[t];
+    const Shape& shape = config.targets[t];
+    if (!shape.is_target()) continue;  // the paper's figure is of its targets
+    const std::int32_t size = shape.size();
     for (TruthMethod method : {TruthMethod::curvature, TruthMethod::depth}) {
-      const Scene scene = make_scene(spec, method, build_fields(spec, method, Storage::f32, {}));
+      const Scene scene = make_scene(shape, method, build_fields(shape, method, Storage::f32, {}));
       const TruthModel model{surfaces[t].get(), method, {}, {}};
-      CursorState cursor = cursor_at({0.0, spec.size / 2.0 + 0.5});
+      CursorState cursor = cursor_at({0.0, size / 2.0 + 0.5});
       CdError unused;
       StepLog log;
-      while (cursor.position.x < spec.size) {
+      while (cursor.position.x < size) {
         log.steps.clear();
         const Vec2 start = cursor.position;
         advance(scene, cursor, {1.0, 0.0}, &log);
         score_frame(model, log.steps, start, cursor.position, {1.0, 0.0}, unused,
                     [&](double x, double cd, double truth) {
-                      fmt::print(f, "{},{},{:.4f},{:.6g},{:.6g}\n", spec.name(), name_of(method), x, cd, truth);
+                      fmt::print(f, "{},{},{:.4f},{:.6g},{:.6g}\n", shape.name(), name_of(method), x, cd, truth);
                     });
       }
     }
@@ -624,7 +671,8 @@ Run add_accuracy_command(CLI::App& app) {
   auto o = std::make_shared<AccuracyOptions>();
   app.description(
       "Measure accuracy against the exact ground truth and speed of every engine variant (method x storage x\n"
-      "traversal x sampling) over seeded strokes and random walks across the 24 targets; write\n"
+      "traversal x sampling) over seeded strokes and random walks across the 24 targets and the 9\n"
+      "interrogation surfaces; write\n"
       "OUTDIR/variants.csv, OUTDIR/fig5_traces.csv and OUTDIR/fig2_grid.csv for tools/charts.py.");
   app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)")->required();
   app.add_flag("--small", o->small, "A handful of strokes and a short walk (seconds; for CI)");
