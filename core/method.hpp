@@ -12,8 +12,8 @@
 namespace ph {
 
 // What a method reads from one texel for one motion direction; the meaning of the two numbers is private
-// to the method (curvature: a = n''_x and the slope angle; depth: the height, and the height 1 px behind
-// along the motion).
+// to the method (curvature: a = n''_x and the slope angle; depth: the height, and its change per px along
+// the motion).
 struct TexelSample {
   double v0 = 0.0;
   double v1 = 0.0;

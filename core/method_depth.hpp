@@ -40,20 +40,34 @@ class DepthMethod final : public Method {
   FieldNeeds needs() const override { return {.gradient = false, .depth = true}; }
   // Inline: the traversal calls these directly on the final class (core/traversal.cpp).
   //
-  // The nearest reading of a texel for motion along `direction`: its height (v0) and the height 1 px
-  // behind its centre along the motion, interpolated bilinearly (v1), so that the height change is taken
-  // along the motion. The neighbour a texel walk came from is always a 4-neighbour, so pairing the two
-  // texels would see, on a diagonal, the height change per axis step and not per px along the motion
-  // (a mean slope of (h_x + h_y)/2 instead of (h_x + h_y)/sqrt 2 at 45 degrees). Where the point behind
-  // lies outside the region (its first texel row on entry), v1 is kNoBehind and cd() falls back to the
-  // texel the walk came from, which keeps the step at a region's border.
-  TexelSample sample(const RegionFields* fields, Texel local, Vec2 direction) const override {
+  // The nearest reading of a texel for motion along `direction` m: its height (v0) and the height change
+  // per px along the motion (v1), from upwind differences: m_x times the change from the neighbour the
+  // motion comes from along x, plus m_y times the change from the one along y (|m_x| (h - h[x - sx]) +
+  // |m_y| (h - h[y - sy]), s the sign of m's component). It is exact on a plane, in any direction. The
+  // neighbour a texel walk came from is always a 4-neighbour, so pairing the two texels instead would see,
+  // on a diagonal, the height change per axis step and not per px along the motion (a mean slope of
+  // (h_x + h_y)/2 instead of (h_x + h_y)/sqrt 2 at 45 degrees). Where a neighbour needed lies outside the
+  // region, v1 is kNoBehind and cd() falls back to the texel the walk came from, which keeps the step at a
+  // region's border.
+#if defined(__GNUC__)
+  [[gnu::always_inline]]  // once per texel step in the walk; GCC otherwise leaves it out of line
+#endif
+  TexelSample
+  sample(const RegionFields* fields, Texel local, Vec2 direction) const override {
     if (fields == nullptr || !fields->depth) return {0.0, kNoBehind};
     const DepthField& f = *fields->depth;
-    const double here = f.at(local.x, local.y);
-    const Vec2 behind{local.x + 0.5 - direction.x, local.y + 0.5 - direction.y};
-    if (!(behind.x >= 0.0 && behind.y >= 0.0 && behind.x < f.width && behind.y < f.height)) return {here, kNoBehind};
-    return {here, bilinear(f, behind)};
+    // Offsets to the upwind neighbours; none along an axis the motion does not move along.
+    const std::int32_t ox = direction.x > 0.0 ? -1 : (direction.x < 0.0 ? 1 : 0);
+    const std::int32_t oy = direction.y > 0.0 ? -1 : (direction.y < 0.0 ? 1 : 0);
+    const float* texel = &f.values[static_cast<std::size_t>(local.y) * f.width + local.x];
+    const double here = *texel;
+    const std::int32_t nx = local.x + ox, ny = local.y + oy;
+    if (nx < 0 || ny < 0 || nx >= f.width || ny >= f.height) [[unlikely]]
+      return {here, kNoBehind};
+    // Differences first: a constant field gives exactly 0, so a flat region stays exactly C/D 1.
+    const double change = std::abs(direction.x) * (here - texel[ox]) +
+                          std::abs(direction.y) * (here - texel[static_cast<std::ptrdiff_t>(oy) * f.width]);
+    return {here, change};
   }
   // The height interpolated at `at` (Sampling::bilinear); the walk pairs it with the previous sample point.
   TexelSample sample_at(const RegionFields* fields, Texel /*local*/, Vec2 at, Vec2 /*direction*/) const override {
@@ -62,14 +76,15 @@ class DepthMethod final : public Method {
   }
   double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
     if (std::isnan(to.v1)) return depth_cd(params_, from.v0, to.v0, step_px, detail);
-    return depth_cd(params_, to.v1, to.v0, 1.0, detail);
+    return depth_cd(params_, 0.0, to.v1, 1.0, detail);  // the change along 1 px of the motion
   }
   double cd_lower_bound() const override { return 1.0 / params_.kmin; }
   double cd_upper_bound() const override { return params_.kmax; }
   const DepthParams& params() const { return params_; }
 
  private:
-  // v1 of a sample with no height behind it in the region (a marker, never a height: heights are finite).
+  // v1 of a sample whose upwind neighbours are not all in the region (a marker, never a height change:
+  // heights are finite).
   static constexpr double kNoBehind = std::numeric_limits<double>::quiet_NaN();
 
   DepthParams params_;
