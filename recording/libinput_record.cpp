@@ -1,6 +1,7 @@
 // Reads `libinput record` files (format version 1) with yaml-cpp: the evdev description and the evdev
 // events of one device. Everything else in the file (libinput events, udev, quirks, hid, unknown keys) is
-// ignored. Every problem becomes a RecordingError "ORIGIN:LINE: what is wrong".
+// ignored. Every problem becomes a RecordingError "ORIGIN:LINE: what is wrong", or "ORIGIN: what is wrong"
+// where no line is at fault.
 #include "recording/libinput_record.hpp"
 
 #include <fmt/format.h>
@@ -24,14 +25,15 @@ constexpr std::int64_t kUsecPerSec = 1'000'000;
 // YAML aliases multiply them, which we refuse rather than let a small file fill the memory.
 constexpr std::size_t kMinEventTextBytes = 11;
 
-// Where errors point: the input's name, and yaml-cpp's 0-based line turned 1-based (0: no line).
+// Where errors point: "ORIGIN:LINE: ..." with yaml-cpp's 0-based line turned 1-based, or "ORIGIN: ..." where
+// no line is at fault (as the evemu reader says it).
 class ErrorSite {
  public:
   explicit ErrorSite(const std::string& origin) : origin_(origin) {}
 
   [[noreturn]] void fail_at(const YAML::Mark& mark, std::string_view what) const {
-    const int line = mark.is_null() ? 0 : mark.line + 1;
-    throw RecordingError(fmt::format("{}:{}: {}", origin_, line, what));
+    if (mark.is_null() || mark.line < 0) throw RecordingError(fmt::format("{}: {}", origin_, what));
+    throw RecordingError(fmt::format("{}:{}: {}", origin_, mark.line + 1, what));
   }
   [[noreturn]] void fail(const YAML::Node& node, std::string_view what) const { fail_at(node.Mark(), what); }
   [[noreturn]] void fail_without_line(std::string_view what) const { fail_at(YAML::Mark::null_mark(), what); }
@@ -229,14 +231,20 @@ std::vector<InputEvent> read_events(const YAML::Node& items, std::size_t max_eve
   return events;
 }
 
-YAML::Node select_device(const YAML::Node& root, std::size_t device_index, const ErrorSite& site) {
-  if (!root.IsDefined() || root.IsNull()) site.fail(root, "empty input: no YAML document");
+// The checked top level: a mapping of format version 1 with a list of devices.
+YAML::Node device_list(const YAML::Node& root, const ErrorSite& site) {
+  // An empty document ("---", comments) has no line at fault: yaml-cpp marks its end, or nothing.
+  if (!root.IsDefined() || root.IsNull()) site.fail_without_line("empty input: no YAML document");
   require_map(root, "a libinput record (the top level)", site);
   if (const YAML::Node version = lookup(root, "version"); version.IsDefined()) {
     integer_in(version, 1, 1, "libinput record format version", site);
   }
   const YAML::Node devices = require(root, "devices", "the libinput record", site);
   require_list(devices, "'devices'", site);
+  return devices;
+}
+
+YAML::Node device_at(const YAML::Node& devices, std::size_t device_index, const ErrorSite& site) {
   if (device_index >= devices.size()) {
     site.fail(devices, fmt::format("no device {}: the file has {} device(s)", device_index, devices.size()));
   }
@@ -245,33 +253,60 @@ YAML::Node select_device(const YAML::Node& root, std::size_t device_index, const
   return device;
 }
 
-Recording interpret(const YAML::Node& root, std::size_t device_index, std::size_t max_events, const ErrorSite& site) {
-  const YAML::Node device = select_device(root, device_index, site);
+DeviceDescription description_of(const YAML::Node& device, std::size_t device_index, const ErrorSite& site) {
+  return read_description(require(device, "evdev", fmt::format("device {}", device_index), site), site);
+}
+
+bool is_pointer(const DeviceDescription& device) {
+  return device.has(ev::kRel, ev::kRelX) && device.has(ev::kRel, ev::kRelY);
+}
+
+// kFirstPointerDevice: device 0, unless it has no REL_X/REL_Y and a later device has both. The devices
+// before the one chosen are read in full, so a malformed one is an error here too.
+std::size_t choose_device(const YAML::Node& devices, std::size_t device_index, const ErrorSite& site) {
+  if (device_index != kFirstPointerDevice) return device_index;
+  if (devices.size() == 0 || is_pointer(description_of(device_at(devices, 0, site), 0, site))) return 0;
+  for (std::size_t i = 1; i < devices.size(); ++i) {
+    if (is_pointer(description_of(device_at(devices, i, site), i, site))) return i;
+  }
+  return 0;  // no pointer at all: device 0, whose events all pass through a replay unchanged
+}
+
+Recording interpret(const YAML::Node& root, std::size_t device_index, std::size_t max_events, const ErrorSite& site,
+                    LibinputDevices* devices_read) {
+  const YAML::Node devices = device_list(root, site);
+  const std::size_t index = choose_device(devices, device_index, site);
+  const YAML::Node device = device_at(devices, index, site);
   Recording recording;
-  const YAML::Node evdev = require(device, "evdev", fmt::format("device {}", device_index), site);
-  recording.device = read_description(evdev, site);
+  recording.device = description_of(device, index, site);
   recording.events = read_events(lookup(device, "events"), max_events, site);
+  if (devices_read != nullptr) *devices_read = {index, devices.size()};
   return recording;
 }
 
 }  // namespace
 
 Recording read_libinput_record(std::istream& in, const std::string& origin, std::size_t device_index,
-                               std::size_t max_bytes) {
+                               std::size_t max_bytes, LibinputDevices* devices) {
   const ErrorSite site(origin);
   std::string text = read_limited(in, max_bytes, site);
   if (text.find_first_not_of(" \t\r\n") == std::string::npos) site.fail_without_line("empty input");
   const std::size_t max_events = text.size() / kMinEventTextBytes;
   const YAML::Node root = parse_yaml(std::move(text), site);
   try {
-    return interpret(root, device_index, max_events, site);
+    return interpret(root, device_index, max_events, site, devices);
   } catch (const YAML::Exception& e) {  // a yaml-cpp conversion the checks above missed: still the file's fault
     site.fail_at(e.mark, e.msg);
   }
 }
 
+Recording read_libinput_record(std::istream& in, const std::string& origin, std::size_t device_index,
+                               std::size_t max_bytes) {
+  return read_libinput_record(in, origin, device_index, max_bytes, nullptr);
+}
+
 Recording read_libinput_record(std::istream& in, const std::string& origin, std::size_t device_index) {
-  return read_libinput_record(in, origin, device_index, kMaxLibinputRecordBytes);
+  return read_libinput_record(in, origin, device_index, kMaxLibinputRecordBytes, nullptr);
 }
 
 }  // namespace ph

@@ -58,7 +58,7 @@ class PrefixedBuffer final : public std::streambuf {
 
 }  // namespace
 
-Recording read_recording(std::istream& in, const std::string& origin) {
+Recording read_recording(std::istream& in, const std::string& origin, std::size_t device_index, RecordingInfo* info) {
   std::string head(4096, '\0');
   in.read(head.data(), static_cast<std::streamsize>(head.size()));
   head.resize(static_cast<std::size_t>(in.gcount()));
@@ -66,15 +66,26 @@ Recording read_recording(std::istream& in, const std::string& origin) {
   const RecordingFormat format = detect_recording_format(head);
   PrefixedBuffer buffer(std::move(head), in.rdbuf());
   std::istream whole(&buffer);
-  if (format == RecordingFormat::libinput_record) return read_libinput_record(whole, origin);
-  return read_evemu(whole, origin);
+  if (format == RecordingFormat::libinput_record) {
+    LibinputDevices devices;
+    Recording recording = read_libinput_record(whole, origin, device_index, kMaxLibinputRecordBytes, &devices);
+    if (info != nullptr) *info = {format, devices.index, devices.count};
+    return recording;
+  }
+  if (device_index != 0 && device_index != kFirstPointerDevice) {
+    throw RecordingError(
+        fmt::format("{}: no device {}: an evemu recording holds one device (0)", origin, device_index));
+  }
+  Recording recording = read_evemu(whole, origin);
+  if (info != nullptr) *info = {format, 0, 1};
+  return recording;
 }
 
-Recording read_recording_file(const std::string& path) {
-  if (path == "-") return read_recording(std::cin, "<stdin>");
+Recording read_recording_file(const std::string& path, std::size_t device_index, RecordingInfo* info) {
+  if (path == "-") return read_recording(std::cin, "<stdin>", device_index, info);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw RecordingError(fmt::format("{}: cannot open", path));
-  return read_recording(in, path);
+  return read_recording(in, path, device_index, info);
 }
 
 }  // namespace ph

@@ -7,15 +7,27 @@
 #include <string>
 
 #include "core/device.hpp"
+#include "recording/libinput_record.hpp"
 #include "recording/recording_error.hpp"
 
 namespace ph {
 
 enum class RecordingFormat { evemu, libinput_record };
 
+// What read_recording read: the format, the device (an index into the file's devices) and how many the
+// file holds (an evemu recording holds one).
+struct RecordingInfo {
+  RecordingFormat format = RecordingFormat::evemu;
+  std::size_t device_index = 0;
+  std::size_t device_count = 1;
+};
+
 RecordingFormat detect_recording_format(std::string_view start);
-Recording read_recording(std::istream& in, const std::string& origin);
+// device_index: which device of a libinput record file, or kFirstPointerDevice (libinput_record.hpp); an
+// evemu recording holds only device 0 (kFirstPointerDevice gives it too). `info` may be null.
+Recording read_recording(std::istream& in, const std::string& origin, std::size_t device_index = 0,
+                         RecordingInfo* info = nullptr);
 // "-" reads standard input.
-Recording read_recording_file(const std::string& path);
+Recording read_recording_file(const std::string& path, std::size_t device_index = 0, RecordingInfo* info = nullptr);
 
 }  // namespace ph

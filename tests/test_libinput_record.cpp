@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "recording/evemu.hpp"
 #include "recording/recording_file.hpp"
 
 namespace ph {
@@ -48,9 +49,10 @@ std::string error_of(std::string_view text, std::size_t device_index = 0) {
 
 bool contains(const std::string& text, std::string_view part) { return text.find(part) != std::string::npos; }
 
-// The error names the origin and the line, then says what is wrong.
+// The error names the origin and the line, then says what is wrong; line 0: no line is at fault, and the
+// error names the origin alone ("ORIGIN: ...", as the evemu reader says it, never "ORIGIN:0:").
 void expect_error(const std::string& message, int line, std::string_view fragment) {
-  const std::string prefix = kOrigin + ":" + std::to_string(line) + ": ";
+  const std::string prefix = kOrigin + ":" + (line > 0 ? std::to_string(line) + ":" : std::string()) + " ";
   EXPECT_EQ(message.substr(0, prefix.size()), prefix) << message;
   EXPECT_TRUE(contains(message, fragment)) << message << "\n  lacks: " << fragment;
 }
@@ -132,6 +134,40 @@ TEST(LibinputRecord, ReadsTheChosenDeviceOfSeveral) {
       event(2500, ev::kSyn, ev::kSynReport, 0),
   };
   EXPECT_EQ(mouse.events, events);
+}
+
+TEST(LibinputRecord, FirstPointerDeviceSkipsDevicesWithoutRelativeMotion) {
+  const std::string path = kDataDir + "/libinput_two_devices.yml";
+  std::ifstream in(path, std::ios::binary);
+  LibinputDevices devices;
+  const Recording first = read_libinput_record(in, "two", kFirstPointerDevice, kMaxLibinputRecordBytes, &devices);
+  EXPECT_EQ(devices.index, 1u);
+  EXPECT_EQ(devices.count, 2u);
+  EXPECT_EQ(first.device, parse_file("libinput_two_devices.yml", 1).device);
+  EXPECT_EQ(first.events, parse_file("libinput_two_devices.yml", 1).events);
+  // An explicit index is read as it is, a keyboard included.
+  std::ifstream again(path, std::ios::binary);
+  EXPECT_EQ(read_libinput_record(again, "two", 0, kMaxLibinputRecordBytes, &devices).device.name,
+            "AT Translated Set 2 keyboard");
+  EXPECT_EQ(devices.index, 0u);
+  // Device 0 a pointer: device 0. No pointer at all (the tablet): device 0.
+  for (const char* name : {"libinput_mouse.yml", "libinput_tablet.yml"}) {
+    std::ifstream one(kDataDir + "/" + name, std::ios::binary);
+    const Recording recording = read_libinput_record(one, name, kFirstPointerDevice, kMaxLibinputRecordBytes, &devices);
+    EXPECT_EQ(devices.index, 0u) << name;
+    EXPECT_EQ(devices.count, 1u) << name;
+    EXPECT_EQ(recording.device, parse_file(name).device) << name;
+  }
+  // Through read_recording_file, which tells the format too.
+  RecordingInfo info;
+  EXPECT_EQ(read_recording_file(path, kFirstPointerDevice, &info).device.name, "Razer Razer DeathAdder V2");
+  EXPECT_EQ(info.format, RecordingFormat::libinput_record);
+  EXPECT_EQ(info.device_index, 1u);
+  EXPECT_EQ(info.device_count, 2u);
+  EXPECT_EQ(read_recording_file(path, 0, &info).device.name, "AT Translated Set 2 keyboard");
+  EXPECT_EQ(info.device_index, 0u);
+  // Errors: a device the file does not have; in a file without devices, device 0.
+  expect_error(error_of("version: 1\ndevices: []\n", kFirstPointerDevice), 2, "no device 0: the file has 0 device(s)");
 }
 
 TEST(LibinputRecord, ReadsAbsinfoAndProperties) {
@@ -276,6 +312,59 @@ TEST(LibinputRecord, WrongShapesOfWholeSectionsAreErrors) {
   expect_error(error_of("\n\njust some text\n"), 3, "must be a mapping");
 }
 
+// Looking for the first pointer reads the devices before it: a malformed one is an error with its line.
+TEST(LibinputRecord, FirstPointerDeviceReportsAMalformedDeviceOnTheWay) {
+  const std::string keyboard =
+      "version: 1\n"                 // 1
+      "devices:\n"                   // 2
+      "- node: /dev/input/event3\n"  // 3
+      "  evdev:\n"                   // 4
+      "    name: \"k\"\n"            // 5
+      "    id: [17, 1, 1, 1]\n"      // 6
+      "    codes:\n"                 // 7
+      "      1: [30]\n";             // 8
+  expect_error(error_of(keyboard + "- node: /dev/input/event4\n  evdev:\n    name: [m]\n", kFirstPointerDevice), 11,
+               "'name' must be a string");
+  // A valid second device without REL_X/REL_Y either: device 0.
+  std::istringstream in(keyboard + "- evdev:\n    name: \"b\"\n    id: [25, 0, 1, 0]\n    codes:\n      1: [116]\n");
+  LibinputDevices devices;
+  EXPECT_EQ(read_libinput_record(in, kOrigin, kFirstPointerDevice, kMaxLibinputRecordBytes, &devices).device.name, "k");
+  EXPECT_EQ(devices.index, 0u);
+  EXPECT_EQ(devices.count, 2u);
+  // Only REL_X is not a pointer.
+  std::istringstream rel_x_only(keyboard +
+                                "- evdev:\n    name: \"x\"\n    id: [3, 0, 1, 0]\n    codes:\n      2: [0]\n" +
+                                "- evdev:\n    name: \"xy\"\n    id: [3, 0, 1, 0]\n    codes:\n      2: [0, 1]\n");
+  EXPECT_EQ(
+      read_libinput_record(rel_x_only, kOrigin, kFirstPointerDevice, kMaxLibinputRecordBytes, &devices).device.name,
+      "xy");
+  EXPECT_EQ(devices.index, 2u);
+}
+
+// A libinput record file read, written as evemu and read back gives the same description and events.
+TEST(LibinputRecord, FixturesRoundTripThroughEvemu) {
+  for (const char* name : {"libinput_mouse.yml", "libinput_two_devices.yml", "libinput_tablet.yml"}) {
+    for (std::size_t device = 0; device < (std::string_view(name) == "libinput_two_devices.yml" ? 2u : 1u); ++device) {
+      SCOPED_TRACE(std::string(name) + " device " + std::to_string(device));
+      const Recording yaml = parse_file(name, device);
+      ASSERT_FALSE(yaml.events.empty());
+      std::ostringstream written;
+      write_evemu(written, yaml);
+      std::istringstream text(written.str());
+      const Recording evemu = read_evemu(text, "written.evemu");
+      EXPECT_EQ(evemu.device, yaml.device);
+      EXPECT_EQ(evemu.device.name, yaml.device.name);
+      EXPECT_EQ(evemu.device.absinfo, yaml.device.absinfo);
+      EXPECT_EQ(evemu.device.properties, yaml.device.properties);
+      EXPECT_EQ(evemu.events, yaml.events);
+      // And once more: evemu written from the evemu read is the same text.
+      std::ostringstream again;
+      write_evemu(again, evemu);
+      EXPECT_EQ(again.str(), written.str());
+    }
+  }
+}
+
 TEST(LibinputRecord, InvalidYamlIsAnErrorWithTheParsersLine) {
   expect_error(error_of("version: 1\ndevices: [\n  {node: a,\n"), 4, "not valid YAML");
   expect_error(error_of("version: 1\ndevices:\n  - a\n - b\n"), 4, "not valid YAML");
@@ -289,6 +378,13 @@ TEST(LibinputRecord, EmptyInputIsAnError) {
   expect_error(error_of(""), 0, "empty input");
   expect_error(error_of(" \n\t\r\n"), 0, "empty input");
   expect_error(error_of("# libinput record\n# nothing else\n"), 0, "empty input");
+  expect_error(error_of("# libinput record\n---\n"), 0, "empty input: no YAML document");
+  expect_error(error_of("---\n# nothing\n...\n"), 0, "empty input: no YAML document");
+  for (const char* text : {"", "# libinput record\n---\n"}) {
+    const std::string message = error_of(text);
+    EXPECT_EQ(message.rfind(kOrigin + ": ", 0), 0u) << message;
+    EXPECT_EQ(message.find(":0:"), std::string::npos) << message;
+  }
 }
 
 TEST(LibinputRecord, BinaryGarbageIsAnError) {

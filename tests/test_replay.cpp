@@ -1,7 +1,9 @@
 // The pipeline between source and sink, and `replay`, on generated and real recordings.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <sstream>
+#include <utility>
 
 #include "core/default_scene.hpp"
 #include "core/method_curvature.hpp"
@@ -19,6 +21,8 @@ using testing::rel;
 using testing::scripted_stroke;
 
 bool is_motion(const InputEvent& e) { return e.type == ev::kRel && (e.code == ev::kRelX || e.code == ev::kRelY); }
+// What the absolute output mode emits in place of REL_X/REL_Y.
+bool is_position(const InputEvent& e) { return e.type == ev::kAbs && (e.code == ev::kAbsX || e.code == ev::kAbsY); }
 
 std::vector<Frame> frames_of(const std::vector<InputEvent>& events) {
   std::vector<Frame> frames(1);
@@ -28,6 +32,34 @@ std::vector<Frame> frames_of(const std::vector<InputEvent>& events) {
   }
   if (frames.back().events.empty()) frames.pop_back();
   return frames;
+}
+
+// Frame by frame (frames end at SYN_REPORT): the output has the input's frames, each ending in the same
+// SYN_REPORT, with the same events other than motion (REL_X/REL_Y in; REL_X/REL_Y or ABS_X/ABS_Y out) in the
+// same order, and a frame without motion is unchanged. Returns how many frames differ.
+int expect_non_motion_kept_per_frame(const Recording& input, const Recording& output) {
+  const std::vector<Frame> in_frames = frames_of(input.events), out_frames = frames_of(output.events);
+  EXPECT_EQ(in_frames.size(), out_frames.size());
+  int changed = 0;
+  for (std::size_t f = 0; f < std::min(in_frames.size(), out_frames.size()); ++f) {
+    const std::vector<InputEvent>& in = in_frames[f].events;
+    const std::vector<InputEvent>& out = out_frames[f].events;
+    std::vector<InputEvent> in_other, out_other;
+    for (const InputEvent& e : in) {
+      if (!is_motion(e)) in_other.push_back(e);
+    }
+    for (const InputEvent& e : out) {
+      if (!is_motion(e) && !is_position(e)) out_other.push_back(e);
+    }
+    EXPECT_EQ(out.back(), in.back()) << "frame " << f;  // the same SYN_REPORT
+    EXPECT_EQ(in_other, out_other) << "frame " << f;
+    if (in_other.size() == in.size()) {
+      EXPECT_EQ(out, in) << "frame " << f << " has no motion";
+    }
+    changed += in != out;
+    if (::testing::Test::HasFailure()) break;  // one frame's report is enough
+  }
+  return changed;
 }
 
 Scene flat_region_scene() {
@@ -41,7 +73,9 @@ Scene flat_region_scene() {
 
 // A bump target at (600, 300); a stroke from the flat outside across its centre.
 Scene bump_scene() {
-  const TargetSpec spec = all_targets()[9];  // bump-gaussian-h1-r200
+  const auto& targets = all_targets();
+  const TargetSpec spec = *std::find_if(targets.begin(), targets.end(),
+                                        [](const TargetSpec& t) { return t.name() == "bump-gaussian-h1-r200"; });
   std::vector<Region> regions(1);
   regions[0].name = spec.name();
   regions[0].rect = {600, 300, spec.size, spec.size};
@@ -109,22 +143,25 @@ TEST(Replay, NonMotionEventsPassThroughInTheirFrame) {
   const Scene scene = bump_scene();
   const Recording input = scripted_stroke(300, 3, 1);
   const Recording output = replay(input, scene, start_at({560.5, 520.5}));
-  const std::vector<Frame> in_frames = frames_of(input.events), out_frames = frames_of(output.events);
-  ASSERT_EQ(in_frames.size(), out_frames.size());
-  int changed = 0;
-  for (std::size_t f = 0; f < in_frames.size(); ++f) {
-    std::vector<InputEvent> in_other, out_other;
-    for (const InputEvent& e : in_frames[f].events) {
-      if (!is_motion(e)) in_other.push_back(e);
+  EXPECT_GT(expect_non_motion_kept_per_frame(input, output), 50);  // the texture did change the motion
+}
+
+TEST(Replay, NonMotionEventsPassThroughInTheirFrameInAbsoluteMode) {
+  const Scene scene = bump_scene();
+  for (const auto& [dx, dy] : {std::pair{3, 1}, std::pair{-2, 0}, std::pair{0, 0}}) {
+    SCOPED_TRACE(::testing::PrintToString(std::pair{dx, dy}));
+    const Recording input = scripted_stroke(300, dx, dy);
+    PipelineConfig config = start_at({900.5, 520.5});
+    config.mode = OutputMode::absolute;
+    const Recording output = replay(input, scene, config);
+    const int changed = expect_non_motion_kept_per_frame(input, output);
+    // Every frame with motion now carries positions instead (the dropped frame's REL_X is removed).
+    int moving = 0;
+    for (const Frame& frame : frames_of(input.events)) {
+      moving += std::any_of(frame.events.begin(), frame.events.end(), is_motion);
     }
-    for (const InputEvent& e : out_frames[f].events) {
-      if (!is_motion(e)) out_other.push_back(e);
-    }
-    ASSERT_EQ(out_frames[f].events.back(), in_frames[f].events.back()) << "frame " << f;  // same SYN_REPORT
-    ASSERT_EQ(in_other, out_other) << "frame " << f;
-    changed += in_frames[f].events != out_frames[f].events;
+    EXPECT_EQ(changed, moving);
   }
-  EXPECT_GT(changed, 50);  // the texture did change the motion
 }
 
 TEST(Replay, DroppedFrameIsPassedThroughAndNotApplied) {
@@ -221,16 +258,30 @@ TEST(Replay, RealRecordingsOnFlatSceneAreBitIdentical) {
     ASSERT_GT(input.events.size(), 100u);
     const Recording output = replay(input, Scene{}, PipelineConfig{});
     EXPECT_EQ(output.events, input.events) << file;
-    // And over the default scene they still keep every non-motion event and every timestamp.
-    const Recording textured = replay(input, default_scene(), PipelineConfig{});
-    std::vector<InputEvent> in_other, out_other;
-    for (const InputEvent& e : input.events) {
-      if (!is_motion(e)) in_other.push_back(e);
+  }
+}
+
+// Over the default scene, in both output modes, every non-motion event of the real recordings stays in its
+// frame, in order; the cursor model starts on each target in turn so that the texture changes the motion.
+TEST(Replay, RealRecordingsKeepNonMotionEventsInTheirFrame) {
+  const auto files = testing::shared_recordings();
+  if (files.empty()) GTEST_SKIP() << "no shared recordings beside the project";
+  const Scene scene = default_scene();
+  for (const auto& file : files) {
+    const Recording input = read_recording_file(file.string());
+    ASSERT_GT(input.events.size(), 100u);
+    for (const OutputMode mode : {OutputMode::relative, OutputMode::absolute}) {
+      for (const Vec2 start : {Vec2{385.5, 540.5}, Vec2{960.5, 540.5}, Vec2{1535.5, 540.5}}) {
+        SCOPED_TRACE(file.filename().string() + (mode == OutputMode::relative ? " relative" : " absolute") +
+                     " from x = " + std::to_string(start.x));
+        PipelineConfig config = start_at(start);
+        config.mode = mode;
+        const Recording output = replay(input, scene, config);
+        const int changed = expect_non_motion_kept_per_frame(input, output);
+        EXPECT_GT(changed, 0);
+        if (::testing::Test::HasFailure()) return;
+      }
     }
-    for (const InputEvent& e : textured.events) {
-      if (!is_motion(e)) out_other.push_back(e);
-    }
-    EXPECT_EQ(in_other, out_other) << file;
   }
 }
 

@@ -2,11 +2,20 @@
 #include <fmt/core.h>
 #include <fmt/format.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <iostream>
+#include <optional>
 #include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "config/scene_file.hpp"
 #include "core/default_scene.hpp"
@@ -25,27 +34,136 @@ struct ReplayOptions {
   std::vector<std::int32_t> desktop;
   std::string mode = "relative";
   double gain = 1.0;
+  std::size_t device = 0;
+  bool device_given = false;
 };
 
-// Writes all of `text` to `path` or stdout; a file appears complete or not at all.
-void write_whole(const std::string& path, const std::string& text) {
-  if (path == "-") {
-    if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size() || std::fflush(stdout) != 0) {
-      throw std::runtime_error("<stdout>: write failed");
-    }
-    return;
-  }
-  const std::filesystem::path target(path);
-  std::filesystem::path partial = target;
-  partial += ".partial";
-  {
-    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(fmt::format("{}: cannot open for writing", partial.string()));
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
-    if (!out.flush()) throw std::runtime_error(fmt::format("{}: write failed", partial.string()));
-  }
-  std::filesystem::rename(partial, target);
+[[noreturn]] void fail_errno(const std::string& what, int error) {
+  throw std::runtime_error(fmt::format("{}: {}", what, std::strerror(error)));
 }
+
+// Writes all of `text` to `fd`; false (errno set) on a failure.
+bool write_all(int fd, const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      if (n == 0) errno = EIO;
+      return false;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+bool same_file(const struct stat& a, const struct stat& b) { return a.st_dev == b.st_dev && a.st_ino == b.st_ino; }
+
+// One file the command writes: its text is complete in memory before anything is written, and it goes out
+// in one of three ways, chosen by what the path is now:
+//
+// - "-": standard output.
+// - A regular file, or a path that does not exist: written to a temporary file beside it, then renamed
+//   over it, so that it appears complete or not at all and an old file stays as it was until the rename.
+// - Anything else is opened and written as it is, because a rename would replace the node itself: a FIFO,
+//   a character device (/dev/null, a terminal), a socket, and a symbolic link. A symbolic link is written
+//   through, never renamed over (that would put a file in place of the link) nor resolved to rename over
+//   its target: that would need a writable directory where the target lives, would replace the target's
+//   inode (its owner, mode and other hard links), and /dev/stdout -> /proc/self/fd/1, when the shell
+//   opened a regular file there, would replace the shell's file (losing what `>>` appends to). A link to
+//   the file that is already our standard output or error is written to that descriptor, so `>>` appends.
+//   When a link leads to a regular file and writing fails (disk full, I/O error: the text is already
+//   complete), that file is truncated, so that nothing that looks valid is left.
+class OutputFile {
+ public:
+  explicit OutputFile(std::string path) : path_(std::move(path)) {
+    if (path_ == "-") {
+      fd_ = STDOUT_FILENO;
+      return;
+    }
+    struct stat st {};
+    if (::lstat(path_.c_str(), &st) != 0) {
+      if (errno != ENOENT) fail_errno(path_, errno);
+      renamed_ = true;  // a new file
+    } else if (S_ISREG(st.st_mode)) {
+      renamed_ = true;
+      replaced_mode_ = st.st_mode & 07777;
+    } else if (S_ISLNK(st.st_mode)) {
+      struct stat target {};
+      struct stat standard {};
+      if (::stat(path_.c_str(), &target) == 0) {
+        for (int fd : {STDOUT_FILENO, STDERR_FILENO}) {
+          if (::fstat(fd, &standard) == 0 && same_file(target, standard)) fd_ = fd;
+        }
+      }
+    }
+  }
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+  ~OutputFile() {
+    if (!temp_.empty()) ::unlink(temp_.c_str());
+  }
+
+  // Written through a temporary file and a rename (else written directly by commit()).
+  bool renamed() const { return renamed_; }
+
+  // Holds the text; a renamed file is written to its temporary file now.
+  void stage(std::string text) {
+    text_ = std::move(text);
+    if (!renamed_) return;
+    const std::filesystem::path target(path_);
+    const std::filesystem::path dir = target.has_parent_path() ? target.parent_path() : ".";
+    int fd = -1;
+    for (int attempt = 0; fd < 0; ++attempt) {
+      temp_ = (dir / fmt::format(".{}.{}.{}.partial", target.filename().string(), ::getpid(), attempt)).string();
+      fd = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);  // the umask applies
+      if (fd < 0 && (errno != EEXIST || attempt >= 100)) {
+        const int error = errno;
+        temp_.clear();
+        fail_errno(fmt::format("{}: cannot create a temporary file beside it", path_), error);
+      }
+    }
+    // A replaced file keeps its permissions.
+    const bool ok = (!replaced_mode_ || ::fchmod(fd, *replaced_mode_) == 0) && write_all(fd, text_);
+    const int error = errno;
+    if (::close(fd) != 0 && ok) fail_errno(fmt::format("{}: write failed", path_), errno);
+    if (!ok) fail_errno(fmt::format("{}: write failed", path_), error);
+  }
+
+  // Renames the temporary file over the path, or writes the text where the path leads.
+  void commit() {
+    if (renamed_) {
+      if (::rename(temp_.c_str(), path_.c_str()) != 0) fail_errno(fmt::format("{}: cannot replace it", path_), errno);
+      temp_.clear();
+      return;
+    }
+    if (fd_ >= 0) {  // standard output, or a link to the standard output or error
+      if (fd_ == STDOUT_FILENO) std::fflush(stdout);
+      if (!write_all(fd_, text_)) fail_errno(fmt::format("{}: write failed", name()), errno);
+      return;
+    }
+    const int fd = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOCTTY, 0666);
+    if (fd < 0) fail_errno(fmt::format("{}: cannot open for writing", path_), errno);
+    const bool ok = write_all(fd, text_);
+    const int error = errno;
+    if (!ok) {
+      struct stat st {};
+      if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) (void)!::ftruncate(fd, 0);  // nothing that looks valid
+    }
+    if (::close(fd) != 0 && ok) fail_errno(fmt::format("{}: write failed", path_), errno);
+    if (!ok) fail_errno(fmt::format("{}: write failed", path_), error);
+  }
+
+ private:
+  std::string name() const { return path_ == "-" ? "<stdout>" : path_; }
+
+  std::string path_;
+  std::string text_;
+  std::string temp_;  // the staged temporary file, removed unless renamed
+  bool renamed_ = false;
+  std::optional<mode_t> replaced_mode_;
+  int fd_ = -1;  // a descriptor of ours to write to directly
+};
 
 std::string trace_csv(const std::vector<FrameReport>& reports) {
   fmt::memory_buffer out;
@@ -58,10 +176,31 @@ std::string trace_csv(const std::vector<FrameReport>& reports) {
   return fmt::to_string(out);
 }
 
+// The note printed when the device replayed may not be the one meant.
+void note_device(const std::string& input, const Recording& recording, const RecordingInfo& info, bool given) {
+  const bool pointer = recording.device.has(ev::kRel, ev::kRelX) && recording.device.has(ev::kRel, ev::kRelY);
+  if (!given && info.device_index != 0) {
+    fmt::print(stderr,
+               "pseudohaptic: {}: device 0 has no REL_X/REL_Y; replaying device {} of {}, \"{}\", the first that has "
+               "them (--device N picks another)\n",
+               input, info.device_index, info.device_count, recording.device.name);
+  } else if (!pointer) {
+    fmt::print(stderr,
+               "pseudohaptic: {}: device {} (\"{}\") has no REL_X/REL_Y: nothing to rescale, every event passes "
+               "through{}\n",
+               input, info.device_index, recording.device.name,
+               info.device_count > 1
+                   ? fmt::format(" (the file has {} devices; --device N picks another)", info.device_count)
+                   : "");
+  }
+}
+
 int run_replay(const ReplayOptions& o) {
+  if (o.output == "-" && o.trace == "-") throw std::invalid_argument("OUTPUT and --trace cannot both be - (stdout)");
   // Everything is read and checked before anything is written: no partial output that looks valid.
   const Scene scene = o.scene_file.empty() ? default_scene() : load_scene(parse_scene_file(o.scene_file));
-  const Recording input = read_recording_file(o.input);
+  RecordingInfo info;
+  const Recording input = read_recording_file(o.input, o.device_given ? o.device : kFirstPointerDevice, &info);
   PipelineConfig config;
   config.pointer_gain = o.gain;
   config.mode = o.mode == "absolute" ? OutputMode::absolute : OutputMode::relative;
@@ -70,13 +209,26 @@ int run_replay(const ReplayOptions& o) {
     throw std::invalid_argument("--desktop: width and height must be > 0");
   if (!(o.gain > 0.0) || !std::isfinite(o.gain)) throw std::invalid_argument("--gain must be a finite number > 0");
   if (o.start.size() == 2) config.start = Vec2{o.start[0], o.start[1]};
+  note_device(o.input == "-" ? "<stdin>" : o.input, input, info, o.device_given);
 
   std::vector<FrameReport> reports;
   const Recording output = replay(input, scene, config, o.trace.empty() ? nullptr : &reports);
   std::ostringstream text;
   write_evemu(text, output);
-  write_whole(o.output, text.str());
-  if (!o.trace.empty()) write_whole(o.trace, trace_csv(reports));
+
+  // Both texts go to their temporary files first; then what is written directly (it can fail: a FIFO's
+  // reader gone, a full disk), then the renames (which practically cannot), the output last each time. A
+  // failure anywhere leaves the output uncommitted unless it was the output's own commit, and the
+  // destructors remove the temporary files.
+  OutputFile out(o.output);
+  std::optional<OutputFile> trace;
+  if (!o.trace.empty()) trace.emplace(o.trace);
+  out.stage(text.str());
+  if (trace) trace->stage(trace_csv(reports));
+  for (const bool renamed : {false, true}) {
+    if (trace && trace->renamed() == renamed) trace->commit();
+    if (out.renamed() == renamed) out.commit();
+  }
   if (o.output != "-") fmt::print(stderr, "replayed {} events into {}\n", input.events.size(), o.output);
   return 0;
 }
@@ -92,6 +244,10 @@ Run add_replay_command(CLI::App& app) {
   app.add_option("INPUT", o->input, "Recording to read (evemu or libinput record YAML); - for standard input")
       ->required();
   app.add_option("OUTPUT", o->output, "evemu recording to write; - for standard output")->required();
+  app.add_option("--device", o->device,
+                 "Device of a libinput record file to replay, from 0 (default: device 0, or the first with "
+                 "REL_X/REL_Y when device 0 has none; an evemu file holds one)")
+      ->each([o](const std::string&) { o->device_given = true; });
   app.add_option("--scene", o->scene_file, "Scene file (default: the embedded default scene, described below)");
   app.add_option("--trace", o->trace,
                  "CSV, one row per frame: time_us,in_dx,in_dy,out_dx,out_dy,cursor_x,cursor_y,cd_min,cd_max,dropped");
@@ -111,6 +267,8 @@ Run add_replay_command(CLI::App& app) {
       "The embedded default scene: three targets of the curvature paper in the middle of a 1920x1080 desktop\n"
       "(bump-gaussian-h1-r200 at 135,290; hole-polynomial-h1-r200 at 710,290; bump-linear-h1-r100 at\n"
       "1285,290; 500x500 px each, curvature method).\n"
+      "OUTPUT and --trace: a regular file (or a new one) is written to a temporary file beside it and renamed\n"
+      "over it, so it appears complete or not at all; a FIFO, a device or a symbolic link is written through.\n"
       "Example: pseudohaptic replay --trace frames.csv mouse.evemu out.evemu");
   return [o] { return run_replay(*o); };
 }

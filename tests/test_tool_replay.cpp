@@ -1,0 +1,679 @@
+// End-to-end tests of `pseudohaptic replay` (tools/cmd_replay.cpp): run the built binary as a user would and
+// compare what it writes with the pipeline run in this process. Its flags, standard input and output, what
+// is (not) left behind on an error, FIFOs and symbolic links as outputs, the device of a multi-device
+// libinput record file, and determinism across processes.
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <set>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+#include "config/scene_file.hpp"
+#include "config/target_files.hpp"
+#include "core/default_scene.hpp"
+#include "core/replay.hpp"
+#include "core/targets.hpp"
+#include "recording/evemu.hpp"
+#include "recording/libinput_record.hpp"
+#include "recording/recording_file.hpp"
+#include "tests/recordings.hpp"
+#include "tests/scratch_dir.hpp"
+#include "tests/tool_runner.hpp"
+
+namespace ph {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kDataDir = PH_TEST_DATA_DIR;
+constexpr std::string_view kTraceHeader = "time_us,in_dx,in_dy,out_dx,out_dy,cursor_x,cursor_y,cd_min,cd_max,dropped\n";
+
+bool contains(const std::string& text, std::string_view part) { return text.find(part) != std::string::npos; }
+
+// A failure the tool reports itself: a non-zero status, the given parts on stderr, no crash.
+void expect_clean_failure(const ToolResult& r, std::initializer_list<std::string_view> parts) {
+  EXPECT_EQ(r.rc, 1) << r.err;
+  for (std::string_view part : parts) EXPECT_TRUE(contains(r.err, part)) << "expected '" << part << "' in: " << r.err;
+  for (std::string_view crash : {"terminate called", "what():", "Aborted", "Segmentation", "Sanitizer"}) {
+    EXPECT_FALSE(contains(r.err, crash)) << r.err;
+  }
+}
+
+std::string evemu_text(const Recording& recording) {
+  std::ostringstream out;
+  write_evemu(out, recording);
+  return out.str();
+}
+
+Recording evemu_of(const std::string& text) {
+  std::istringstream in(text);
+  return read_evemu(in, "output");
+}
+
+void write_file(const fs::path& path, std::string_view text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(text.data(), static_cast<std::streamsize>(text.size()));
+  ASSERT_TRUE(out.good()) << path;
+}
+
+// The trace the tool should write for these reports (its format, column by column).
+std::string trace_of(const std::vector<FrameReport>& reports) {
+  std::string text(kTraceHeader);
+  for (const FrameReport& r : reports) {
+    text += fmt::format("{},{},{},{},{},{:.4f},{:.4f},{:.6g},{:.6g},{}\n", r.time, r.in_dx, r.in_dy, r.out_dx, r.out_dy,
+                        r.cursor.x, r.cursor.y, r.cd_min, r.cd_max, r.dropped ? 1 : 0);
+  }
+  return text;
+}
+
+// The names in a directory, except the files run_tool writes.
+std::set<std::string> listing(const ScratchDir& dir) {
+  std::set<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir.path())) {
+    const std::string name = entry.path().filename().string();
+    if (name != "stdout.txt" && name != "stderr.txt") names.insert(name);
+  }
+  return names;
+}
+
+std::size_t frames_in(const Recording& r) {
+  std::size_t n = 0;
+  for (const InputEvent& e : r.events) n += e.type == ev::kSyn && e.code == ev::kSynReport;
+  return n;
+}
+
+PipelineConfig start_at(Vec2 start) {
+  PipelineConfig config;
+  config.start = start;
+  return config;
+}
+
+// A scripted stroke (buttons, wheels, MSC_SCAN, a SYN_DROPPED) written to `name` in the scratch directory.
+fs::path stroke_file(const ScratchDir& dir, const std::string& name = "in.evemu", int frames = 300, std::int32_t dx = 3,
+                     std::int32_t dy = 1) {
+  const fs::path path = dir / name;
+  write_file(path, evemu_text(testing::scripted_stroke(frames, dx, dy)));
+  return path;
+}
+
+// Reads a FIFO in a thread while the tool writes into it.
+class FifoReader {
+ public:
+  explicit FifoReader(fs::path path) : path_(std::move(path)) {
+    thread_ = std::thread([this] {
+      const int fd = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);  // waits for a writer
+      if (fd >= 0) {
+        char buffer[1 << 16];
+        for (;;) {
+          const ssize_t n = ::read(fd, buffer, sizeof buffer);
+          if (n < 0 && errno == EINTR) continue;
+          if (n <= 0) break;
+          text_.append(buffer, static_cast<std::size_t>(n));
+        }
+        ::close(fd);
+      }
+      done_ = true;
+    });
+  }
+  FifoReader(const FifoReader&) = delete;
+  FifoReader& operator=(const FifoReader&) = delete;
+  ~FifoReader() {
+    if (thread_.joinable()) finish();
+  }
+
+  // Once the tool has exited: what it wrote. A writer of our own, opened and closed, ends a reader that is
+  // still waiting because the tool never opened the FIFO.
+  std::string finish() {
+    while (!done_) {
+      const int fd = ::open(path_.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
+      if (fd >= 0) ::close(fd);
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    thread_.join();
+    return text_;
+  }
+
+ private:
+  fs::path path_;
+  std::string text_;
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+};
+
+void make_fifo(const fs::path& path) { ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0) << path << ": " << errno; }
+
+TEST(ReplayTool, HelpNamesEveryFlag) {
+  ScratchDir dir;
+  const ToolResult r = run_tool("replay --help", dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  for (std::string_view flag : {"INPUT", "OUTPUT", "--scene", "--trace", "--start", "--output-mode", "--desktop",
+                                "--gain", "--device", "bump-gaussian-h1-r200", "FIFO", "symbolic link"}) {
+    EXPECT_TRUE(contains(r.out, flag)) << "expected '" << flag << "' in: " << r.out;
+  }
+}
+
+// Without --scene: the embedded default scene, the cursor model at the desktop's centre (on the hole target).
+TEST(ReplayTool, DefaultSceneRescalesMotionAndKeepsTheRest) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir);
+  const ToolResult r = run_tool("replay " + quote(in) + " " + quote(dir / "out.evemu"), dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "replayed")) << r.err;
+  const Recording input = testing::scripted_stroke(300, 3, 1);
+  const std::string expected = evemu_text(replay(input, default_scene(), PipelineConfig{}));
+  const std::string output = read_text(dir / "out.evemu");
+  EXPECT_EQ(output, expected);
+  EXPECT_NE(output, read_text(in));  // the texture changed the motion
+  EXPECT_EQ(evemu_of(output).device, input.device);
+  EXPECT_EQ(listing(dir), (std::set<std::string>{"in.evemu", "out.evemu"}));  // no temporary file left
+}
+
+TEST(ReplayTool, SceneFileIsUsed) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir, "in.evemu", 200, 3, 0);
+  const Recording input = testing::scripted_stroke(200, 3, 0);
+  const std::string start = " --start 20.5,250.5 ";
+  {
+    SCOPED_TRACE("a target's scene file: the bump at (0, 0)");
+    const auto& targets = all_targets();
+    const auto found = std::find_if(targets.begin(), targets.end(),
+                                    [](const TargetSpec& t) { return t.name() == "bump-gaussian-h1-r200"; });
+    ASSERT_NE(found, targets.end());
+    const TargetSpec bump = *found;
+    write_target_files(dir.path(), {bump});
+    const fs::path scene = target_file_paths(dir.path(), bump).scene;
+    const ToolResult r =
+        run_tool("replay --scene " + quote(scene) + start + quote(in) + " " + quote(dir / "bump.evemu"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    const std::string expected =
+        evemu_text(replay(input, load_scene(parse_scene_file(scene)), start_at({20.5, 250.5})));
+    EXPECT_EQ(read_text(dir / "bump.evemu"), expected);
+    EXPECT_NE(expected, read_text(in));
+  }
+  {
+    SCOPED_TRACE("a scene file without regions: the output is the input, byte for byte");
+    write_file(dir / "flat.toml", "[daemon]\noutput = \"relative\"\n");
+    const ToolResult r = run_tool(
+        "replay --scene " + quote(dir / "flat.toml") + start + quote(in) + " " + quote(dir / "flat.evemu"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_EQ(read_text(dir / "flat.evemu"), read_text(in));
+  }
+  {
+    SCOPED_TRACE("a scene file that does not load");
+    write_file(dir / "bad.toml", "[[region]]\nname = \"x\"\nwidth = -1\n");
+    const ToolResult r =
+        run_tool("replay --scene " + quote(dir / "bad.toml") + " " + quote(in) + " " + quote(dir / "bad.evemu"), dir);
+    expect_clean_failure(r, {"bad.toml"});
+    EXPECT_FALSE(fs::exists(dir / "bad.evemu"));
+  }
+}
+
+TEST(ReplayTool, TraceHasItsHeaderAndOneRowPerFrame) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir);
+  const Recording input = testing::scripted_stroke(300, 3, 1);
+  const ToolResult r = run_tool("replay --start 100.5,100.5 --trace " + quote(dir / "frames.csv") + " " + quote(in) +
+                                    " " + quote(dir / "out.evemu"),
+                                dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const std::string trace = read_text(dir / "frames.csv");
+  ASSERT_EQ(trace.substr(0, kTraceHeader.size()), kTraceHeader);
+
+  std::vector<FrameReport> reports;
+  const Recording output = replay(input, default_scene(), start_at({100.5, 100.5}), &reports);
+  EXPECT_EQ(trace, trace_of(reports));
+  EXPECT_EQ(read_text(dir / "out.evemu"), evemu_text(output));
+
+  // One row per frame, the SYN_DROPPED one marked; the first frame moved the model by (3, 1) on the flat.
+  std::istringstream lines(trace);
+  std::string line;
+  std::vector<std::string> rows;
+  std::getline(lines, line);
+  while (std::getline(lines, line)) rows.push_back(line);
+  ASSERT_EQ(rows.size(), frames_in(input));
+  EXPECT_EQ(rows.front(), "1000000,3,1,3,1,103.5000,101.5000,1,1,0");
+  int dropped = 0;
+  for (const std::string& row : rows) dropped += row.back() == '1';
+  EXPECT_EQ(dropped, 1);
+  // The rows' output motion is what the output's events carry.
+  std::int64_t emitted = 0, reported = 0;
+  for (const InputEvent& e : evemu_of(read_text(dir / "out.evemu")).events) {
+    emitted += e.type == ev::kRel && e.code == ev::kRelX ? e.value : 0;
+  }
+  for (const FrameReport& f : reports) reported += f.out_dx;
+  EXPECT_EQ(emitted, reported);
+  bool slowed = false;
+  for (const FrameReport& f : reports) slowed = slowed || f.cd_max > 1.0;
+  EXPECT_TRUE(slowed);  // the stroke reached a target
+}
+
+TEST(ReplayTool, StartPlacesTheCursorModel) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir, "in.evemu", 100, 3, 0);
+  auto run = [&](const std::string& start, const std::string& out) {
+    const ToolResult r = run_tool("replay --start" + (start.starts_with('=') ? start : " " + start) + " --trace " +
+                                      quote(dir / (out + ".csv")) + " " + quote(in) + " " + quote(dir / out),
+                                  dir);
+    EXPECT_EQ(r.rc, 0) << r.err;
+  };
+  run("10.5,10.5", "top.evemu");     // a horizontal stroke above every target: nothing changes
+  run("385.5,540.5", "bump.evemu");  // from the centre of the Gaussian bump
+  EXPECT_EQ(read_text(dir / "top.evemu"), read_text(in));
+  EXPECT_NE(read_text(dir / "bump.evemu"), read_text(in));
+  EXPECT_TRUE(contains(read_text(dir / "top.evemu.csv"), "\n1000000,3,0,3,0,13.5000,10.5000,1,1,0\n"));
+  EXPECT_TRUE(contains(read_text(dir / "bump.evemu.csv"), "\n1000000,3,0,"));
+  EXPECT_TRUE(contains(read_text(dir / "bump.evemu.csv"), ",540.5000,"));
+  {
+    SCOPED_TRACE("a start outside the desktop is kept inside it");
+    run("=-50,-50", "corner.evemu");
+    EXPECT_TRUE(contains(read_text(dir / "corner.evemu.csv"), "\n1000000,3,0,3,0,3.0000,0.0000,1,1,0\n"));
+  }
+  {
+    SCOPED_TRACE("a malformed start");
+    const ToolResult r = run_tool("replay --start 1 " + quote(in) + " " + quote(dir / "x.evemu"), dir);
+    EXPECT_NE(r.rc, 0);
+    EXPECT_FALSE(fs::exists(dir / "x.evemu"));
+  }
+}
+
+TEST(ReplayTool, RelativeAndAbsoluteOutputModes) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir, "in.evemu", 400, -3, 2);
+  const Recording input = testing::scripted_stroke(400, -3, 2);
+  const std::string common = " --start 400.5,300.5 --desktop 0,0,800,600 " + quote(in) + " ";
+  ASSERT_EQ(run_tool("replay" + common + quote(dir / "default.evemu"), dir).rc, 0);
+  ASSERT_EQ(run_tool("replay --output-mode relative" + common + quote(dir / "relative.evemu"), dir).rc, 0);
+  ASSERT_EQ(run_tool("replay --output-mode absolute" + common + quote(dir / "absolute.evemu"), dir).rc, 0);
+
+  PipelineConfig config = start_at({400.5, 300.5});
+  config.desktop = {0, 0, 800, 600};
+  const std::string relative = read_text(dir / "relative.evemu");
+  EXPECT_EQ(read_text(dir / "default.evemu"), relative);
+  EXPECT_EQ(relative, evemu_text(replay(input, default_scene(), config)));
+  config.mode = OutputMode::absolute;
+  const std::string absolute_text = read_text(dir / "absolute.evemu");
+  EXPECT_EQ(absolute_text, evemu_text(replay(input, default_scene(), config)));
+
+  const Recording absolute = evemu_of(absolute_text);
+  EXPECT_FALSE(absolute.device.has(ev::kRel, ev::kRelX));
+  EXPECT_FALSE(absolute.device.has(ev::kRel, ev::kRelY));
+  EXPECT_TRUE(absolute.device.has(ev::kRel, ev::kRelWheel));
+  EXPECT_TRUE(absolute.device.has(ev::kAbs, ev::kAbsX));
+  EXPECT_EQ(absolute.device.absinfo.at(ev::kAbsX).maximum, 799);
+  EXPECT_EQ(absolute.device.absinfo.at(ev::kAbsY).maximum, 599);
+  int positions = 0;
+  for (const InputEvent& e : absolute.events) {
+    EXPECT_FALSE(e.type == ev::kRel && (e.code == ev::kRelX || e.code == ev::kRelY));
+    if (e.type != ev::kAbs) continue;
+    ++positions;
+    EXPECT_GE(e.value, 0);
+    EXPECT_LE(e.value, e.code == ev::kAbsX ? 799 : 599);
+  }
+  EXPECT_GT(positions, 300);
+  EXPECT_EQ(evemu_of(relative).device, input.device);
+
+  const ToolResult bad = run_tool("replay --output-mode sideways" + common + quote(dir / "x.evemu"), dir);
+  EXPECT_NE(bad.rc, 0);
+  EXPECT_TRUE(contains(bad.err, "--output-mode")) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "x.evemu"));
+}
+
+TEST(ReplayTool, StandardInputAndOutput) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir);
+  const ToolResult file =
+      run_tool("replay --trace " + quote(dir / "t.csv") + " " + quote(in) + " " + quote(dir / "out.evemu"), dir);
+  ASSERT_EQ(file.rc, 0) << file.err;
+  {
+    SCOPED_TRACE("- -");
+    const ToolResult r = run_tool("replay - - < " + quote(in), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_EQ(r.out, read_text(dir / "out.evemu"));
+    EXPECT_FALSE(contains(r.err, "replayed")) << r.err;  // nothing but the recording on stdout, no chatter
+  }
+  {
+    SCOPED_TRACE("the trace to stdout");
+    const ToolResult r = run_tool("replay --trace - - " + quote(dir / "out2.evemu") + " < " + quote(in), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_EQ(r.out, read_text(dir / "t.csv"));
+    EXPECT_EQ(read_text(dir / "out2.evemu"), read_text(dir / "out.evemu"));
+  }
+  {
+    SCOPED_TRACE("a libinput record file on stdin");
+    const ToolResult r = run_tool("replay - - < " + quote(kDataDir / "libinput_mouse.yml"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    std::ifstream yml(kDataDir / "libinput_mouse.yml", std::ios::binary);
+    const Recording input = read_libinput_record(yml, "mouse");
+    EXPECT_EQ(r.out, evemu_text(replay(input, default_scene(), PipelineConfig{})));
+  }
+  {
+    SCOPED_TRACE("both to stdout");
+    const ToolResult r = run_tool("replay --trace - " + quote(in) + " -", dir);
+    expect_clean_failure(r, {"stdout"});
+    EXPECT_TRUE(r.out.empty());
+  }
+}
+
+// Replaces line `number` (from 1) of `text`.
+std::string with_line(const std::string& text, int number, const std::string& replacement) {
+  std::istringstream lines(text);
+  std::string line, result;
+  for (int i = 1; std::getline(lines, line); ++i) result += (i == number ? replacement : line) + "\n";
+  return result;
+}
+
+TEST(ReplayTool, MalformedInputNamesFileAndLineAndWritesNothing) {
+  ScratchDir dir;
+  const std::string good = evemu_text(testing::scripted_stroke(50, 3, 1));
+  // The 21st event line.
+  std::istringstream lines(good);
+  std::string line;
+  int event_line = 0;
+  for (int i = 1; event_line == 0 && std::getline(lines, line); ++i) {
+    if (line.starts_with("E:")) event_line = i + 20;
+  }
+  ASSERT_GT(event_line, 20);
+  write_file(dir / "bad.evemu", with_line(good, event_line, "E: 1.008000 0002 0000 zz"));
+  write_file(dir / "old.evemu", "old output\n");
+  write_file(dir / "old.csv", "old trace\n");
+  const auto before = listing(dir);
+  {
+    SCOPED_TRACE("new output files are not created");
+    const ToolResult r = run_tool(
+        "replay --trace " + quote(dir / "new.csv") + " " + quote(dir / "bad.evemu") + " " + quote(dir / "new.evemu"),
+        dir);
+    expect_clean_failure(r, {"bad.evemu:" + std::to_string(event_line) + ":"});
+    EXPECT_EQ(listing(dir), before);
+  }
+  {
+    SCOPED_TRACE("old output files are kept as they were");
+    const ToolResult r = run_tool(
+        "replay --trace " + quote(dir / "old.csv") + " " + quote(dir / "bad.evemu") + " " + quote(dir / "old.evemu"),
+        dir);
+    expect_clean_failure(r, {"bad.evemu:" + std::to_string(event_line) + ":"});
+    EXPECT_EQ(listing(dir), before);
+    EXPECT_EQ(read_text(dir / "old.evemu"), "old output\n");
+    EXPECT_EQ(read_text(dir / "old.csv"), "old trace\n");
+  }
+  {
+    SCOPED_TRACE("on stdin, to stdout: nothing on stdout");
+    const ToolResult r = run_tool("replay - - < " + quote(dir / "bad.evemu"), dir);
+    expect_clean_failure(r, {"<stdin>:" + std::to_string(event_line) + ":"});
+    EXPECT_TRUE(r.out.empty());
+  }
+  {
+    SCOPED_TRACE("libinput record: the YAML line");
+    std::ifstream yml(kDataDir / "libinput_mouse.yml", std::ios::binary);
+    std::ostringstream text;
+    text << yml.rdbuf();
+    std::string bad = text.str();
+    const std::string event = "    - [  0,      0,   2,   0,       1]";
+    const std::size_t at = bad.find(event);
+    ASSERT_NE(at, std::string::npos);
+    bad.replace(at, event.size(), "    - [  0,      0,   2,   0,       x]");
+    const int yaml_line = 1 + static_cast<int>(std::count(bad.begin(), bad.begin() + static_cast<long>(at), '\n'));
+    write_file(dir / "bad.yml", bad);
+    const ToolResult r = run_tool("replay " + quote(dir / "bad.yml") + " " + quote(dir / "new.evemu"), dir);
+    expect_clean_failure(r, {"bad.yml:" + std::to_string(yaml_line) + ": event value must be an integer"});
+    EXPECT_FALSE(fs::exists(dir / "new.evemu"));
+  }
+  {
+    SCOPED_TRACE("libinput record, no line at fault: FILE: as evemu says it, not FILE:0:");
+    write_file(dir / "empty.yml", "# libinput record\n---\n");
+    const ToolResult r = run_tool("replay " + quote(dir / "empty.yml") + " " + quote(dir / "new.evemu"), dir);
+    expect_clean_failure(r, {"empty.yml: empty input"});
+    EXPECT_FALSE(contains(r.err, "empty.yml:0:")) << r.err;
+    write_file(dir / "empty.evemu", "");
+    const ToolResult e = run_tool("replay " + quote(dir / "empty.evemu") + " " + quote(dir / "new.evemu"), dir);
+    expect_clean_failure(e, {"empty.evemu: empty recording"});
+    EXPECT_FALSE(fs::exists(dir / "new.evemu"));
+  }
+  {
+    SCOPED_TRACE("a missing input");
+    const ToolResult r = run_tool("replay " + quote(dir / "none.evemu") + " " + quote(dir / "new.evemu"), dir);
+    expect_clean_failure(r, {"none.evemu: cannot open"});
+    EXPECT_FALSE(fs::exists(dir / "new.evemu"));
+  }
+}
+
+TEST(ReplayTool, WritesIntoAFifo) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir);
+  ASSERT_EQ(
+      run_tool("replay --trace " + quote(dir / "t.csv") + " " + quote(in) + " " + quote(dir / "out.evemu"), dir).rc, 0);
+  make_fifo(dir / "out.fifo");
+  make_fifo(dir / "trace.fifo");
+  {
+    SCOPED_TRACE("the output into a FIFO, the trace into a file");
+    FifoReader reader(dir / "out.fifo");
+    const ToolResult r =
+        run_tool("replay --trace " + quote(dir / "t2.csv") + " " + quote(in) + " " + quote(dir / "out.fifo"), dir);
+    EXPECT_EQ(r.rc, 0) << r.err;
+    EXPECT_EQ(reader.finish(), read_text(dir / "out.evemu"));
+    EXPECT_EQ(read_text(dir / "t2.csv"), read_text(dir / "t.csv"));
+  }
+  {
+    SCOPED_TRACE("the trace into a FIFO, the output into a file");
+    FifoReader reader(dir / "trace.fifo");
+    const ToolResult r = run_tool(
+        "replay --trace " + quote(dir / "trace.fifo") + " " + quote(in) + " " + quote(dir / "out2.evemu"), dir);
+    EXPECT_EQ(r.rc, 0) << r.err;
+    EXPECT_EQ(reader.finish(), read_text(dir / "t.csv"));
+    EXPECT_EQ(read_text(dir / "out2.evemu"), read_text(dir / "out.evemu"));
+  }
+  {
+    SCOPED_TRACE("a trace that cannot be written: nothing goes into the output FIFO");
+    FifoReader reader(dir / "out.fifo");
+    const ToolResult r = run_tool(
+        "replay --trace " + quote(dir / "no" / "t.csv") + " " + quote(in) + " " + quote(dir / "out.fifo"), dir);
+    expect_clean_failure(r, {"t.csv"});
+    EXPECT_EQ(reader.finish(), "");
+  }
+  // Still FIFOs, not replaced by files.
+  EXPECT_TRUE(fs::is_fifo(fs::symlink_status(dir / "out.fifo")));
+  EXPECT_TRUE(fs::is_fifo(fs::symlink_status(dir / "trace.fifo")));
+  EXPECT_EQ(listing(dir), (std::set<std::string>{"in.evemu", "out.evemu", "out2.evemu", "t.csv", "t2.csv", "out.fifo",
+                                                 "trace.fifo"}));
+}
+
+TEST(ReplayTool, WritesThroughASymbolicLink) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir);
+  ASSERT_EQ(run_tool("replay " + quote(in) + " " + quote(dir / "out.evemu"), dir).rc, 0);
+  const std::string expected = read_text(dir / "out.evemu");
+  fs::create_directory(dir / "results");
+  write_file(dir / "results" / "run.evemu", "old\n");
+  fs::create_symlink("results/run.evemu", dir / "link.evemu");
+  {
+    SCOPED_TRACE("a link to a regular file: the link stays, the file it names gets the output");
+    const ToolResult r = run_tool("replay " + quote(in) + " " + quote(dir / "link.evemu"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(fs::is_symlink(dir / "link.evemu"));
+    EXPECT_EQ(fs::read_symlink(dir / "link.evemu"), "results/run.evemu");
+    EXPECT_EQ(read_text(dir / "results" / "run.evemu"), expected);
+  }
+  {
+    SCOPED_TRACE("a link to a file not there yet: created");
+    fs::create_symlink("results/new.evemu", dir / "dangling.evemu");
+    const ToolResult r = run_tool("replay " + quote(in) + " " + quote(dir / "dangling.evemu"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(fs::is_symlink(dir / "dangling.evemu"));
+    EXPECT_EQ(read_text(dir / "results" / "new.evemu"), expected);
+  }
+  {
+    SCOPED_TRACE("a link to a FIFO");
+    make_fifo(dir / "results" / "pipe");
+    fs::create_symlink("results/pipe", dir / "pipe.evemu");
+    FifoReader reader(dir / "results" / "pipe");
+    const ToolResult r = run_tool("replay " + quote(in) + " " + quote(dir / "pipe.evemu"), dir);
+    EXPECT_EQ(r.rc, 0) << r.err;
+    EXPECT_EQ(reader.finish(), expected);
+    EXPECT_TRUE(fs::is_symlink(dir / "pipe.evemu"));
+    EXPECT_TRUE(fs::is_fifo(dir / "results" / "pipe"));
+  }
+  {
+    SCOPED_TRACE("a link to a directory: an error, the link untouched");
+    fs::create_directory_symlink("results", dir / "dir.evemu");
+    const ToolResult r = run_tool("replay " + quote(in) + " " + quote(dir / "dir.evemu"), dir);
+    expect_clean_failure(r, {"dir.evemu"});
+    EXPECT_TRUE(fs::is_symlink(dir / "dir.evemu"));
+  }
+  EXPECT_EQ(listing(dir), (std::set<std::string>{"in.evemu", "out.evemu", "results", "link.evemu", "dangling.evemu",
+                                                 "pipe.evemu", "dir.evemu"}));
+  std::set<std::string> results;
+  for (const auto& entry : fs::directory_iterator(dir / "results")) results.insert(entry.path().filename().string());
+  EXPECT_EQ(results, (std::set<std::string>{"run.evemu", "new.evemu", "pipe"}));
+}
+
+// /dev/stdout is a link to /proc/self/fd/1; a link of our own to it (never /dev/stdout itself: a broken
+// tool could replace that) with the shell appending to a file: the output is appended, the file kept.
+TEST(ReplayTool, LinkToStandardOutputKeepsTheShellsAppend) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir);
+  ASSERT_EQ(run_tool("replay " + quote(in) + " " + quote(dir / "out.evemu"), dir).rc, 0);
+  fs::create_symlink("/proc/self/fd/1", dir / "stdout.evemu");
+  write_file(dir / "log", "earlier lines\n");
+  const std::string command = quote(std::string(PH_TOOL_PATH)) + " replay " + quote(in) + " " +
+                              quote(dir / "stdout.evemu") + " >>" + quote(dir / "log") + " 2>" +
+                              quote(dir / "stderr.txt");
+  ASSERT_EQ(std::system(command.c_str()), 0) << read_text(dir / "stderr.txt");
+  EXPECT_EQ(read_text(dir / "log"), "earlier lines\n" + read_text(dir / "out.evemu"));
+  EXPECT_TRUE(fs::is_symlink(dir / "stdout.evemu"));
+}
+
+TEST(ReplayTool, AFailedTraceLeavesTheOutputUncommitted) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir);
+  write_file(dir / "old.evemu", "old output\n");
+  fs::create_directory(dir / "a-directory");
+  const auto before = listing(dir);
+  {
+    SCOPED_TRACE("the trace's directory does not exist");
+    for (const char* out : {"old.evemu", "new.evemu"}) {
+      const ToolResult r = run_tool(
+          "replay --trace " + quote(dir / "missing" / "t.csv") + " " + quote(in) + " " + quote(dir / out), dir);
+      expect_clean_failure(r, {"missing/t.csv"});
+    }
+  }
+  {
+    SCOPED_TRACE("the trace is a directory: it fails when written, after the output's temporary file");
+    for (const char* out : {"old.evemu", "new.evemu"}) {
+      const ToolResult r =
+          run_tool("replay --trace " + quote(dir / "a-directory") + " " + quote(in) + " " + quote(dir / out), dir);
+      expect_clean_failure(r, {"a-directory"});
+    }
+  }
+  {
+    SCOPED_TRACE("the output is a directory: the trace is not committed either");
+    const ToolResult r =
+        run_tool("replay --trace " + quote(dir / "t.csv") + " " + quote(in) + " " + quote(dir / "a-directory"), dir);
+    expect_clean_failure(r, {"a-directory"});
+  }
+  EXPECT_EQ(read_text(dir / "old.evemu"), "old output\n");
+  EXPECT_EQ(listing(dir), before);
+  EXPECT_TRUE(fs::is_empty(dir / "a-directory"));
+}
+
+TEST(ReplayTool, ReplacesARegularFileKeepingItsMode) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir);
+  write_file(dir / "out.evemu", "old\n");
+  fs::permissions(dir / "out.evemu", fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  const ToolResult r = run_tool("replay " + quote(in) + " " + quote(dir / "out.evemu"), dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(read_text(dir / "out.evemu"), evemu_text(replay(testing::scripted_stroke(300, 3, 1), default_scene(), {})));
+  EXPECT_EQ(fs::status(dir / "out.evemu").permissions(),
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  EXPECT_EQ(listing(dir), (std::set<std::string>{"in.evemu", "out.evemu"}));
+}
+
+TEST(ReplayTool, IsDeterministicAcrossProcesses) {
+  ScratchDir dir;
+  const auto shared = testing::shared_recordings();
+  const fs::path in = shared.empty() ? stroke_file(dir, "in.evemu", 2000, 4, 3) : shared.front();
+  for (const char* run : {"a", "b"}) {
+    const ToolResult r = run_tool("replay --trace " + quote(dir / (std::string(run) + ".csv")) + " " + quote(in) + " " +
+                                      quote(dir / (std::string(run) + ".evemu")),
+                                  dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+  }
+  const std::string a = read_text(dir / "a.evemu");
+  EXPECT_GT(a.size(), 10'000u);
+  EXPECT_EQ(a, read_text(dir / "b.evemu"));
+  EXPECT_EQ(read_text(dir / "a.csv"), read_text(dir / "b.csv"));
+  EXPECT_NE(a, read_text(in));  // over the default scene, not a copy
+}
+
+TEST(ReplayTool, DeviceOfALibinputRecordFile) {
+  ScratchDir dir;
+  const fs::path two = kDataDir / "libinput_two_devices.yml";
+  auto device = [&](std::size_t index) {
+    std::ifstream yml(two, std::ios::binary);
+    return read_libinput_record(yml, "two", index);
+  };
+  const std::string mouse = evemu_text(replay(device(1), default_scene(), PipelineConfig{}));
+  {
+    SCOPED_TRACE("default: device 0 is a keyboard, so the mouse, with a note saying so");
+    const ToolResult r = run_tool("replay " + quote(two) + " -", dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_EQ(r.out, mouse);
+    for (std::string_view part :
+         {"device 0 has no REL_X/REL_Y", "device 1 of 2", "Razer Razer DeathAdder V2", "--device"}) {
+      EXPECT_TRUE(contains(r.err, part)) << "expected '" << part << "' in: " << r.err;
+    }
+  }
+  {
+    SCOPED_TRACE("--device 1: the mouse, no note");
+    const ToolResult r = run_tool("replay --device 1 " + quote(two) + " -", dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_EQ(r.out, mouse);
+    EXPECT_TRUE(r.err.empty()) << r.err;
+  }
+  {
+    SCOPED_TRACE("--device 0: the keyboard, passed through, with a note");
+    const ToolResult r = run_tool("replay --device 0 " + quote(two) + " -", dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    const Recording keyboard = device(0);
+    EXPECT_EQ(evemu_of(r.out).events, keyboard.events);
+    EXPECT_EQ(evemu_of(r.out).device.name, "AT Translated Set 2 keyboard");
+    EXPECT_TRUE(contains(r.err, "has no REL_X/REL_Y")) << r.err;
+  }
+  {
+    SCOPED_TRACE("a device the file does not have");
+    const ToolResult r = run_tool("replay --device 2 " + quote(two) + " " + quote(dir / "x.evemu"), dir);
+    expect_clean_failure(r, {"libinput_two_devices.yml:", "no device 2: the file has 2 device(s)"});
+    EXPECT_FALSE(fs::exists(dir / "x.evemu"));
+  }
+  {
+    SCOPED_TRACE("evemu holds one device");
+    const fs::path in = stroke_file(dir);
+    const ToolResult r = run_tool("replay --device 1 " + quote(in) + " " + quote(dir / "x.evemu"), dir);
+    expect_clean_failure(r, {"in.evemu: no device 1"});
+    EXPECT_FALSE(fs::exists(dir / "x.evemu"));
+    EXPECT_EQ(run_tool("replay --device 0 " + quote(in) + " " + quote(dir / "y.evemu"), dir).rc, 0);
+  }
+  {
+    SCOPED_TRACE("a one-device file whose device is the mouse: no note");
+    const ToolResult r = run_tool("replay " + quote(kDataDir / "libinput_mouse.yml") + " -", dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(r.err.empty()) << r.err;
+  }
+}
+
+}  // namespace
+}  // namespace ph
