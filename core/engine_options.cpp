@@ -53,7 +53,10 @@ std::vector<EngineOptions> all_engine_variants() {
 std::string label_of(const EngineOptions& o) {
   std::string label(name_of(o.traversal));
   if (o.traversal == Traversal::direction_lut) label += std::to_string(o.lut_directions);
-  if (o.sampling != Sampling::nearest) label += "+" + std::string(name_of(o.sampling));
+  if (o.sampling != Sampling::nearest) {
+    label += '+';  // not "+" + std::string(...): GCC 12 -O3 warns -Wrestrict on that (a false positive)
+    label += name_of(o.sampling);
+  }
   return label;
 }
 
