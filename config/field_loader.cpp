@@ -79,4 +79,18 @@ RegionFields load_region_fields(const FieldSources& sources, std::int32_t width,
   return fields;
 }
 
+std::vector<std::string> invalid_texel_notes(const FieldSources& sources, const FieldLoadReport& report) {
+  std::vector<std::string> notes;
+  auto note = [&](const char* what, const std::optional<std::filesystem::path>& path, const DecodeReport& r,
+                  const char* why) {
+    if (r.invalid_texels == 0) return;
+    notes.push_back(std::string(what) + " " + (path ? path->string() : std::string("(none)")) + ": " +
+                    std::to_string(r.invalid_texels) + " of " + std::to_string(r.texels) + " texels invalid (" + why +
+                    "), each given the nearest valid texel's value");
+  };
+  note("normal map", sources.normal_map, report.normals, "length < 0.5, n_z <= 0 or not finite");
+  note("depth map", sources.depth_map, report.depth, "not finite");
+  return notes;
+}
+
 }  // namespace ph

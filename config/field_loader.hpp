@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "config/image_io.hpp"
 #include "core/decode.hpp"
@@ -27,5 +28,10 @@ struct FieldLoadReport {
 // Throws FieldError naming the file, or naming what is missing (e.g. the depth method with only a normal map).
 RegionFields load_region_fields(const FieldSources& sources, std::int32_t width, std::int32_t height, FieldNeeds needs,
                                 FieldLoadReport& report, const ImageLimits& limits = {});
+
+// What `report` says about invalid texels, one line per map that had any (none when every texel was valid):
+// "normal map PATH: N of M texels invalid (...), each given the nearest valid texel's value". For the log
+// of whatever loaded the fields, after its own prefix (the scene file and region).
+std::vector<std::string> invalid_texel_notes(const FieldSources& sources, const FieldLoadReport& report);
 
 }  // namespace ph

@@ -100,15 +100,29 @@ const image_backend::Table& backend(const fs::path& image) {
   }
 }
 
-// 16-bit code of a value in [0, 1]; a non-finite value writes 0.
-std::uint16_t unorm16(double v) {
+// Code of a value in [0, 1] for the largest code `code_max`; a non-finite value writes 0.
+std::uint16_t unorm_code(double v, double code_max) {
   if (!std::isfinite(v)) v = 0.0;
-  return static_cast<std::uint16_t>(std::lround(std::clamp(v, 0.0, 1.0) * 65535.0));
+  return static_cast<std::uint16_t>(std::lround(std::clamp(v, 0.0, 1.0) * code_max));
 }
 
-void write_png16(const fs::path& path, std::int32_t width, std::int32_t height, int channels,
-                 const std::vector<std::uint16_t>& codes) {
-  backend(path).write_image(path, "png", width, height, channels, image_backend::PixelType::uint16, codes.data());
+// Writes values in [0, 1] (`channels` interleaved) as integer codes in the given encoding.
+void write_unorm(const fs::path& path, std::int32_t width, std::int32_t height, int channels,
+                 const std::vector<double>& values, ImageEncoding encoding) {
+  if (encoding.bits != 8 && encoding.bits != 16) {
+    throw file_error(path, "cannot write " + std::to_string(encoding.bits) + "-bit images, only 8 or 16");
+  }
+  const char* format = encoding.format == ImageFormat::tiff ? "tiff" : "png";
+  if (encoding.bits == 8) {
+    std::vector<std::uint8_t> codes(values.size());
+    std::transform(values.begin(), values.end(), codes.begin(),
+                   [](double v) { return static_cast<std::uint8_t>(unorm_code(v, 255.0)); });
+    backend(path).write_image(path, format, width, height, channels, image_backend::PixelType::uint8, codes.data());
+  } else {
+    std::vector<std::uint16_t> codes(values.size());
+    std::transform(values.begin(), values.end(), codes.begin(), [](double v) { return unorm_code(v, 65535.0); });
+    backend(path).write_image(path, format, width, height, channels, image_backend::PixelType::uint16, codes.data());
+  }
 }
 
 }  // namespace
@@ -119,23 +133,29 @@ ImageSize read_image_size(const fs::path& path, const ImageLimits& limits) {
 
 RawImage read_image(const fs::path& path, const ImageLimits& limits) { return backend(path).read_image(path, limits); }
 
-void write_normal_png16(const std::filesystem::path& path, const NormalImage& normals) {
-  std::vector<std::uint16_t> codes;
-  codes.reserve(normals.values.size() * 3);
+void write_normal_image(const std::filesystem::path& path, const NormalImage& normals, ImageEncoding encoding) {
+  std::vector<double> values;
+  values.reserve(normals.values.size() * 3);
   for (const Normal& n : normals.values) {
     // Tangent space, OpenGL convention: +green points to the top of the image, screen -y.
-    codes.push_back(unorm16((n.x + 1.0) / 2.0));
-    codes.push_back(unorm16((-n.y + 1.0) / 2.0));
-    codes.push_back(unorm16((n.z + 1.0) / 2.0));
+    values.push_back((n.x + 1.0) / 2.0);
+    values.push_back((-n.y + 1.0) / 2.0);
+    values.push_back((n.z + 1.0) / 2.0);
   }
-  write_png16(path, normals.width, normals.height, 3, codes);
+  write_unorm(path, normals.width, normals.height, 3, values, encoding);
+}
+
+void write_normal_png16(const std::filesystem::path& path, const NormalImage& normals) {
+  write_normal_image(path, normals, {ImageFormat::png, 16});
+}
+
+void write_gray_image(const std::filesystem::path& path, const Grid<float>& values, ImageEncoding encoding) {
+  write_unorm(path, values.width, values.height, 1, std::vector<double>(values.values.begin(), values.values.end()),
+              encoding);
 }
 
 void write_gray_png16(const std::filesystem::path& path, const Grid<float>& values) {
-  std::vector<std::uint16_t> codes;
-  codes.reserve(values.values.size());
-  for (const float v : values.values) codes.push_back(unorm16(v));
-  write_png16(path, values.width, values.height, 1, codes);
+  write_gray_image(path, values, {ImageFormat::png, 16});
 }
 
 void write_float_exr(const std::filesystem::path& path, const Grid<float>& values) {

@@ -32,10 +32,22 @@ ImageSize read_image_size(const std::filesystem::path& path, const ImageLimits& 
 // Throws FieldError("PATH: reason") for a missing, unreadable, truncated, zero-sized or too large image.
 RawImage read_image(const std::filesystem::path& path, const ImageLimits& limits = {});
 
-// 16-bit RGB PNG of unit normals, tangent-space OpenGL convention (+green = screen -y), c = round((n+1)/2 * 65535).
+// How an integer image is written: its file format (whatever the file name says) and 8 or 16 bits per channel.
+enum class ImageFormat { png, tiff };
+struct ImageEncoding {
+  ImageFormat format = ImageFormat::png;
+  int bits = 16;  // 8 or 16; anything else is refused (FieldError)
+};
+
+// RGB image of unit normals, tangent-space OpenGL convention (+green = screen -y), c = round((n+1)/2 * cmax)
+// with cmax = 2^bits - 1.
+void write_normal_image(const std::filesystem::path& path, const NormalImage& normals, ImageEncoding encoding);
+// The same as a 16-bit PNG.
 void write_normal_png16(const std::filesystem::path& path, const NormalImage& normals);
 
-// 16-bit grey PNG of values in [0, 1] (clamped), c = round(v * 65535).
+// Grey image of values in [0, 1] (clamped), c = round(v * cmax).
+void write_gray_image(const std::filesystem::path& path, const Grid<float>& values, ImageEncoding encoding);
+// The same as a 16-bit PNG.
 void write_gray_png16(const std::filesystem::path& path, const Grid<float>& values);
 
 // One-channel 32-bit float OpenEXR image of the values as they are (e.g. Gaussian curvature in 1/px^2).

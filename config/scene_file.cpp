@@ -546,4 +546,14 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report) {
   return scene;
 }
 
+std::vector<std::string> invalid_texel_warnings(const SceneSpec& spec, const SceneLoadReport& report) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < spec.regions.size() && i < report.regions.size(); ++i) {
+    const RegionSpec& r = spec.regions[i];
+    for (const std::string& note : invalid_texel_notes(r.sources, report.regions[i]))
+      out.push_back(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, note));
+  }
+  return out;
+}
+
 }  // namespace ph

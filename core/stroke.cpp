@@ -3,20 +3,22 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 namespace ph {
 
 namespace {
 
-class ForwardSteps final : public StepObserver {
+// Keeps a frame's steps until the stroke knows whether the frame is its last one, and how long.
+class FrameSteps final : public StepObserver {
  public:
-  explicit ForwardSteps(const StrokeStepFn& fn) : fn_(fn) {}
-  void on_step(const StepRecord& step) override { fn_(frame, step); }
-  std::size_t frame = 0;
-
- private:
-  const StrokeStepFn& fn_;
+  void on_step(const StepRecord& step) override { steps.push_back(step); }
+  std::vector<StepRecord> steps;
 };
+
+// Bisection steps to find the last frame's motor travel: enough to get from a whole step down to the
+// rounding of the position, whatever the step.
+constexpr int kMaxBisections = 200;
 
 }  // namespace
 
@@ -28,25 +30,45 @@ StrokeResult run_stroke(const Scene& scene, const StrokeSpec& spec, const Stroke
     throw std::invalid_argument("the motor step must be a finite number > 0");
   }
   const Vec2 m = span * (1.0 / length_px);
-  const Vec2 step = m * spec.motor_step_px;
+  // The end is reached within a nanometre's worth of rounding, so that a stroke ending on a texel boundary
+  // stops in the texel it walked, not a hair into the next one.
+  const double goal = length_px - 1e-9 * std::max(1.0, length_px);
+  auto reached = [&](const CursorState& c) {
+    const Vec2 done = c.position - spec.from;
+    return done.x * m.x + done.y * m.y >= goal;
+  };
 
-  ForwardSteps forward(on_step);
-  StepObserver* observer = on_step ? &forward : nullptr;
+  FrameSteps steps;
+  StepObserver* observer = on_step ? &steps : nullptr;
   StrokeResult result;
   result.end = cursor_at(spec.from);
   result.cd_min = INFINITY;
   result.cd_max = -INFINITY;
   while (result.frames < spec.max_frames) {
-    forward.frame = result.frames;
-    const FrameResult frame = advance(scene, result.end, step, observer);
+    const CursorState before = result.end;
+    steps.steps.clear();
+    FrameResult frame = advance(scene, result.end, m * spec.motor_step_px, observer);
+    if (reached(result.end)) {
+      // The hand stops at `to`: the last frame's motor travel is the least that gets there (bisection; the
+      // cursor's travel grows with the motor travel), walked again from where the frame started.
+      double lo = 0.0, hi = spec.motor_step_px;
+      for (int i = 0; i < kMaxBisections; ++i) {
+        const double mid = lo + (hi - lo) / 2.0;
+        if (!(mid > lo && mid < hi)) break;
+        CursorState trial = before;
+        advance(scene, trial, m * mid);
+        (reached(trial) ? hi : lo) = mid;
+      }
+      result.end = before;
+      steps.steps.clear();
+      frame = advance(scene, result.end, m * hi, observer);
+      result.reached = true;
+    }
+    for (const StepRecord& s : steps.steps) on_step(result.frames, s);
     ++result.frames;
     result.cd_min = std::min(result.cd_min, frame.cd_min);
     result.cd_max = std::max(result.cd_max, frame.cd_max);
-    const Vec2 done = result.end.position - spec.from;
-    if (done.x * m.x + done.y * m.y >= length_px) {
-      result.reached = true;
-      break;
-    }
+    if (result.reached) break;
   }
   if (result.frames == 0) result.cd_min = result.cd_max = 1.0;
   return result;

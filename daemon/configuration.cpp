@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <string>
+
 #include "config/desktop_geometry.hpp"
 #include "config/scene_file.hpp"
 #include "core/default_scene.hpp"
@@ -36,7 +38,10 @@ Configuration load_configuration(const ConfigChoice& choice) {
   }
   if (file && !choice.default_scene) {
     const SceneSpec spec = parse_scene_file(*file);
-    c.scene = std::make_shared<const Scene>(load_scene(spec));
+    SceneLoadReport report;
+    c.scene = std::make_shared<const Scene>(load_scene(spec, &report));
+    // ALGORITHMS.md section 1: invalid texels are counted and reported at load (and repaired).
+    for (std::string& warning : invalid_texel_warnings(spec, report)) c.warnings.push_back(std::move(warning));
     c.settings = spec.daemon;
     c.source = file->string();
   } else {

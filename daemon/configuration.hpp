@@ -27,7 +27,7 @@ struct Configuration {
   DaemonSettings settings;
   PipelineConfig pipeline;
   std::vector<std::string> notes;     // for the log: the embedded default scene in use
-  std::vector<std::string> warnings;  // for the log: the desktop size guessed
+  std::vector<std::string> warnings;  // for the log: invalid texels repaired, per region and map; the desktop guessed
 };
 
 // Throws ConfigError (scene file) with a message that names the file, line and key.

@@ -7,8 +7,10 @@
 
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <string>
 
+#include "config/image_io.hpp"
 #include "config/scene_file.hpp"
 #include "daemon/configuration.hpp"
 #include "daemon/log.hpp"
@@ -140,6 +142,47 @@ TEST(DaemonConfiguration, ReloadKeepsThePipelineWhenOnlyTheSceneChanged) {
   std::string error;
   pickier.settings.devices.push_back(*parse_device_match("name:Logitech*", error));
   EXPECT_FALSE(only_scene_differs(base, pickier));
+}
+
+// ALGORITHMS.md section 1: invalid texels are counted and reported at load. The daemon logs every
+// Configuration warning (Daemon::log_notes), one per region and map that had any, naming both.
+TEST(DaemonConfiguration, InvalidTexelsAreWarnedPerRegionAndMap) {
+  const ScratchDir dir("daemon-config");
+  NormalImage holes(4, 4);  // flat, but 3 texels face away from the viewer (n_z <= 0) and 1 has no length
+  holes.at(0, 0) = {0.0f, 0.0f, -1.0f};
+  holes.at(1, 2) = {0.6f, 0.0f, -0.8f};
+  holes.at(3, 3) = {0.0f, 0.0f, -1.0f};
+  holes.at(2, 1) = {0.0f, 0.0f, 0.0f};
+  write_normal_png16(dir / "holes.png", holes);
+  write_normal_png16(dir / "clean.png", NormalImage(4, 4));
+  Grid<float> depth(4, 2, 0.5f);  // 2 of 8 depth texels not finite
+  depth.at(1, 0) = std::numeric_limits<float>::quiet_NaN();
+  depth.at(2, 1) = std::numeric_limits<float>::infinity();
+  write_float_exr(dir / "deep.exr", depth);
+  std::ofstream(dir / "scene.toml") << "[daemon]\ndesktop = [0, 0, 800, 600]\n\n"
+                                       "[[region]]\nname = \"clean\"\nx = 0\ny = 0\nwidth = 8\nheight = 8\n"
+                                       "normal_map = \"clean.png\"\n\n"
+                                       "[[region]]\nname = \"holes\"\nx = 10\ny = 0\nwidth = 8\nheight = 8\n"
+                                       "normal_map = \"holes.png\"\n\n"
+                                       "[[region]]\nname = \"deep\"\nx = 20\ny = 0\nwidth = 4\nheight = 2\n"
+                                       "method = \"depth\"\ndepth_map = \"deep.exr\"\n";
+  const Configuration c = load_configuration(choice_in(dir));
+  ASSERT_EQ(c.warnings.size(), 2u);  // nothing for the clean region, nothing about the desktop
+  const std::string scene = (dir / "scene.toml").string();
+  const std::string& normals = c.warnings[0];
+  EXPECT_EQ(normals.rfind(scene + ":12: region 'holes': normal map " + (dir / "holes.png").string() + ": ", 0), 0u)
+      << normals;
+  EXPECT_NE(normals.find("4 of 16 texels invalid"), std::string::npos) << normals;
+  const std::string& heights = c.warnings[1];
+  EXPECT_EQ(heights.rfind(scene + ":20: region 'deep': depth map " + (dir / "deep.exr").string() + ": ", 0), 0u)
+      << heights;
+  EXPECT_NE(heights.find("2 of 8 texels invalid"), std::string::npos) << heights;
+  // The repaired texels took their neighbours' (flat) values.
+  EXPECT_EQ(c.scene->regions().size(), 3u);
+  for (const Gradient g : c.scene->regions()[1].fields.gradient->values) {
+    EXPECT_EQ(g.x, 0.0f);
+    EXPECT_EQ(g.y, 0.0f);
+  }
 }
 
 // A datagram socket standing in for systemd's notification socket.

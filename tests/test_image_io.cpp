@@ -192,6 +192,128 @@ TEST(ImageIo, ExrNormalMapWithNaNTexelsIsRepaired) {
   EXPECT_NEAR(n.at(0, 0).x, 0.6f, 1e-6);  // signed values, not unorm
 }
 
+// What decoding an unorm normal map must give for a normal written as write_normal_image writes it: the codes,
+// c = round((n + 1) / 2 * cmax), read back as 2c / cmax - 1 (green flipped: OpenGL convention), tangent
+// components within one code of 0 taken as 0, renormalised.
+Normal expected_from_codes(Normal n, double cmax) {
+  auto back = [&](double v) { return 2.0 * static_cast<double>(std::lround((v + 1.0) / 2.0 * cmax)) / cmax - 1.0; };
+  double x = back(n.x), y = -back(-n.y);
+  const double z = back(n.z);
+  if (std::abs(x) <= 1.0 / cmax + 1e-7) x = 0.0;
+  if (std::abs(y) <= 1.0 / cmax + 1e-7) y = 0.0;
+  const double length = std::sqrt(x * x + y * y + z * z);
+  return {static_cast<float>(x / length), static_cast<float>(y / length), static_cast<float>(z / length)};
+}
+
+// Heights in [0, 1] on a grid with a step of 1/7 (not a multiple of any code).
+Grid<float> ramp_heights(std::int32_t width, std::int32_t height) {
+  Grid<float> values(width, height);
+  for (std::int32_t y = 0; y < height; ++y) {
+    for (std::int32_t x = 0; x < width; ++x) values.at(x, y) = static_cast<float>((x + 2 * y) % 8) / 7.0f;
+  }
+  return values;
+}
+
+// A normal map and a depth map written in `encoding`, read back from the files: the stored codes, decoded, and
+// the region's fields built from them (at the image's own size, so no resampling).
+void expect_maps_load(const ScratchDir& dir, ImageEncoding encoding, const std::string& extension,
+                      const std::string& signature) {
+  const double cmax = encoding.bits == 8 ? 255.0 : 65535.0;
+  const fs::path normal_path = dir / ("normals." + extension);
+  const fs::path depth_path = dir / ("depth." + extension);
+  const NormalImage normals = dome(19, 13);
+  const Grid<float> heights = ramp_heights(11, 6);
+  write_normal_image(normal_path, normals, encoding);
+  write_gray_image(depth_path, heights, encoding);
+  for (const fs::path& path : {normal_path, depth_path}) {
+    const std::vector<char> bytes = read_bytes(path);
+    ASSERT_GE(bytes.size(), signature.size());
+    EXPECT_EQ(std::string(bytes.data(), signature.size()), signature) << path << ": not the format asked for";
+  }
+
+  // The image as read: integer codes of the asked depth.
+  const RawImage raw = read_image(normal_path);
+  EXPECT_EQ(raw.width, 19);
+  EXPECT_EQ(raw.height, 13);
+  EXPECT_EQ(raw.channels, 3);
+  EXPECT_FALSE(raw.is_float);
+  EXPECT_EQ(raw.code_max, static_cast<std::uint32_t>(cmax));
+  EXPECT_EQ(read_image_size(depth_path).code_max, static_cast<std::uint32_t>(cmax));
+
+  // Normals: decoded exactly as the codes say, within a code or two of what was written.
+  FieldLoadReport report;
+  const RegionFields fields = load_region_fields(maps(normal_path), 19, 13, gradient_only, report);
+  EXPECT_EQ(report.normals.texels, 19u * 13u);
+  EXPECT_EQ(report.normals.invalid_texels, 0u);
+  ASSERT_TRUE(fields.gradient);
+  DecodeReport decode_report;
+  const NormalImage decoded = decode_normals(raw, {}, decode_report);
+  std::size_t tilted = 0;
+  for (std::int32_t y = 0; y < 13; ++y) {
+    for (std::int32_t x = 0; x < 19; ++x) {
+      SCOPED_TRACE("texel " + std::to_string(x) + "," + std::to_string(y));
+      const Normal want = expected_from_codes(normals.at(x, y), cmax);
+      const Normal got = decoded.at(x, y);
+      EXPECT_NEAR(got.x, want.x, 1e-6);
+      EXPECT_NEAR(got.y, want.y, 1e-6);
+      EXPECT_NEAR(got.z, want.z, 1e-6);
+      EXPECT_NEAR(got.x, normals.at(x, y).x, 3.0 / cmax);
+      EXPECT_NEAR(got.y, normals.at(x, y).y, 3.0 / cmax);
+      // The stored field: the height gradient of that normal, g = -(n_x, n_y) / n_z.
+      const Gradient g = fields.gradient->at(x, y);
+      EXPECT_NEAR(g.x, -want.x / want.z, 1e-4 * (1.0 + std::abs(g.x)));
+      EXPECT_NEAR(g.y, -want.y / want.z, 1e-4 * (1.0 + std::abs(g.y)));
+      tilted += want.x != 0.0f;
+    }
+  }
+  EXPECT_GT(tilted, 100u);
+
+  // Depth: h = (c / cmax - depth_zero) * relief_px.
+  FieldSources sources = maps(std::nullopt, depth_path);
+  sources.depth_options.depth_zero = 0.25;
+  sources.depth_options.relief_px = 40.0;
+  const RegionFields depth = load_region_fields(sources, 11, 6, depth_only, report);
+  EXPECT_EQ(report.depth.texels, 66u);
+  EXPECT_EQ(report.depth.invalid_texels, 0u);
+  ASSERT_TRUE(depth.depth);
+  for (std::int32_t y = 0; y < 6; ++y) {
+    for (std::int32_t x = 0; x < 11; ++x) {
+      const double code = static_cast<double>(std::lround(heights.at(x, y) * cmax));
+      EXPECT_NEAR(depth.depth->at(x, y), (code / cmax - 0.25) * 40.0, 1e-4) << x << "," << y;
+      EXPECT_NEAR(depth.depth->at(x, y), (heights.at(x, y) - 0.25) * 40.0, 40.0 / cmax) << x << "," << y;
+    }
+  }
+  EXPECT_FLOAT_EQ(depth.depth->at(0, 0), -10.0f);  // v = 0
+  EXPECT_FLOAT_EQ(depth.depth->at(7, 0), 30.0f);   // v = 1
+}
+
+TEST(ImageIo, Tiff16NormalAndDepthMapsLoad) {
+  const ScratchDir dir;
+  expect_maps_load(dir, {ImageFormat::tiff, 16}, "tif", "II*");  // little-endian TIFF
+}
+
+TEST(ImageIo, Png8NormalAndDepthMapsLoad) {
+  const ScratchDir dir;
+  expect_maps_load(dir, {ImageFormat::png, 8}, "png", "\x89PNG");
+}
+
+TEST(ImageIo, Png16NormalAndDepthMapsLoad) {
+  const ScratchDir dir;
+  expect_maps_load(dir, {ImageFormat::png, 16}, "png", "\x89PNG");
+}
+
+TEST(ImageIo, OnlyEightAndSixteenBitImagesAreWritten) {
+  const ScratchDir dir;
+  const fs::path path = dir / "odd.png";
+  expect_error_names(
+      path,
+      [&] {
+        write_gray_image(path, Grid<float>(2, 2), {ImageFormat::png, 12});
+      },
+      "only 8 or 16");
+  EXPECT_FALSE(fs::exists(path));
+}
+
 // --- Bad files ------------------------------------------------------------------------------------
 
 TEST(ImageIoErrors, MissingFile) {
@@ -392,6 +514,38 @@ TEST(FieldLoader, BadFilesNameThePath) {
   write_gray_png16(grey, Grid<float>(4, 4));
   expect_error_names(
       grey, [&] { load_region_fields(maps(std::nullopt, grey), 0, 8, depth_only, report); }, "cannot resample");
+}
+
+TEST(FieldLoader, InvalidTexelsAreCountedAndDescribedPerMap) {
+  const ScratchDir dir;
+  NormalImage normals(4, 4);
+  normals.at(1, 1) = {0.0f, 0.0f, -1.0f};  // faces away
+  normals.at(2, 3) = {0.0f, 0.0f, 0.0f};   // no length
+  const fs::path normal_path = dir / "holes.png";
+  write_normal_png16(normal_path, normals);
+  Grid<float> heights(3, 3, 0.5f);
+  heights.at(0, 2) = std::numeric_limits<float>::quiet_NaN();
+  const fs::path depth_path = dir / "holes.exr";
+  write_float_exr(depth_path, heights);
+  FieldLoadReport report;
+  const FieldSources both = maps(normal_path, depth_path);
+  const RegionFields fields = load_region_fields(both, 4, 4, gradient_and_depth, report);
+  EXPECT_EQ(report.normals.invalid_texels, 2u);
+  EXPECT_EQ(report.depth.invalid_texels, 1u);
+  const std::vector<std::string> notes = invalid_texel_notes(both, report);
+  ASSERT_EQ(notes.size(), 2u);
+  EXPECT_EQ(notes[0].rfind("normal map " + normal_path.string() + ": 2 of 16 texels invalid (", 0), 0u) << notes[0];
+  EXPECT_EQ(notes[1].rfind("depth map " + depth_path.string() + ": 1 of 9 texels invalid (", 0), 0u) << notes[1];
+  for (const float h : fields.depth->values) EXPECT_TRUE(std::isfinite(h));
+  // Nothing to say about clean maps, or maps not read.
+  load_region_fields(both, 4, 4, gradient_only, report);
+  const std::vector<std::string> normals_only = invalid_texel_notes(both, report);
+  ASSERT_EQ(normals_only.size(), 1u);
+  EXPECT_EQ(normals_only[0].rfind("normal map ", 0), 0u);
+  const fs::path clean = dir / "clean.png";
+  write_normal_png16(clean, NormalImage(4, 4));
+  load_region_fields(maps(clean), 4, 4, gradient_only, report);
+  EXPECT_TRUE(invalid_texel_notes(maps(clean), report).empty());
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "config/image_io.hpp"
 #include "config/target_files.hpp"
 #include "core/targets.hpp"
 #include "tests/scratch_dir.hpp"
@@ -82,7 +83,11 @@ Csv trace(const std::string& args, const ScratchDir& dir) {
   const fs::path csv = dir / "trace.csv";
   const ToolResult r = run_tool("trace " + args + " -o " + quote(csv), dir);
   EXPECT_EQ(r.rc, 0) << args << "\n" << r.err;
-  return parse_csv(read_text(csv));
+  Csv parsed = parse_csv(read_text(csv));
+  for (const auto& row : parsed.rows) {
+    for (const std::string& cell : row) EXPECT_NE(cell, "-0") << args;  // zero is written 0, whatever its sign
+  }
+  return parsed;
 }
 
 enum class Method { curvature, depth };
@@ -311,6 +316,242 @@ TEST(Tool, TraceErrors) {
     expect_clean_failure(run_tool("trace --scene " + quote(scene) + out, dir),
                          {scene.string() + ":5:", "region[0].normal_green"});
   }
+}
+
+// How many times `part` occurs in `text`.
+std::size_t occurrences(const std::string& text, std::string_view part) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + part.size())) ++n;
+  return n;
+}
+
+// A map the tool cannot use reads "pseudohaptic: FILE: what went wrong", the file named once, no scene file line.
+TEST(Tool, TraceMapErrorsNameTheFileOnce) {
+  ScratchDir dir;
+  const std::string out = " -o " + quote(dir / "x.csv");
+  const fs::path grey = dir / "grey.png";
+  write_gray_png16(grey, Grid<float>(8, 8, 0.5f));
+  const fs::path rgb = dir / "rgb.png";
+  write_normal_png16(rgb, NormalImage(8, 8));
+  const fs::path missing = dir / "missing.png";
+  struct Case {
+    std::string args;
+    fs::path file;
+    std::string says;
+  };
+  for (const Case& c :
+       {Case{"--normal-map " + quote(grey), grey, "a normal map needs 3 (RGB) or 4 (RGBA) channels"},
+        Case{"--depth-map " + quote(rgb), rgb, "a depth map needs 1 channel"},
+        Case{"--normal-map " + quote(rgb) + " --depth-map " + quote(rgb) + " --method depth", rgb, "1 channel"},
+        Case{"--normal-map " + quote(missing), missing, "cannot open"}}) {
+    SCOPED_TRACE(c.args);
+    const ToolResult r = run_tool("trace " + c.args + out, dir);
+    expect_clean_failure(r, {c.says});
+    EXPECT_EQ(r.err.rfind("pseudohaptic: " + c.file.string() + ": ", 0), 0u) << r.err;
+    EXPECT_EQ(occurrences(r.err, c.file.string() + ":"), 1u) << r.err;  // OpenImageIO's own words may quote it
+    EXPECT_FALSE(contains(r.err, ":0:")) << r.err;
+    EXPECT_FALSE(contains(r.err, "region")) << r.err;
+  }
+}
+
+// ALGORITHMS.md section 1: invalid texels are counted and reported at load; trace warns on stderr, per map.
+TEST(Tool, TraceWarnsOfInvalidTexels) {
+  ScratchDir dir;
+  NormalImage holes(4, 4);  // flat, with 3 texels facing away from the viewer
+  holes.at(0, 0) = {0.0f, 0.0f, -1.0f};
+  holes.at(2, 1) = {0.6f, 0.0f, -0.8f};
+  holes.at(3, 3) = {0.0f, 0.0f, -1.0f};
+  const fs::path map = dir / "holes.png";
+  write_normal_png16(map, holes);
+  const std::string warning = "pseudohaptic: warning: ";
+  const std::string what = "normal map " + map.string() + ": 3 of 16 texels invalid";
+  {
+    SCOPED_TRACE("--normal-map");
+    const ToolResult r = run_tool("trace --normal-map " + quote(map) + " -o " + quote(dir / "a.csv"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(contains(r.err, warning + what)) << r.err;
+    EXPECT_EQ(occurrences(r.err, "warning"), 1u) << r.err;
+    // Repaired from their flat neighbours: the stroke is flat all along.
+    const Csv csv = parse_csv(read_text(dir / "a.csv"));
+    ASSERT_EQ(csv.rows.size(), 4u);
+    for (std::size_t i = 0; i < csv.rows.size(); ++i) EXPECT_EQ(csv.rows[i][kCd], "1");
+  }
+  {
+    SCOPED_TRACE("--scene");
+    const fs::path scene = dir / "scene.toml";
+    write_normal_png16(dir / "clean.png", NormalImage(4, 4));
+    std::ofstream(scene) << "[[region]]\nname = \"clean\"\nwidth = 4\nheight = 4\nnormal_map = \"clean.png\"\n\n"
+                            "[[region]]\nname = \"holes\"\nx = 10\nwidth = 8\nheight = 8\nnormal_map = \"holes.png\"\n";
+    const ToolResult r = run_tool("trace --scene " + quote(scene) + " -o " + quote(dir / "b.csv"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(contains(r.err, warning + scene.string() + ":7: region 'holes': " + what)) << r.err;
+    EXPECT_EQ(occurrences(r.err, "warning"), 1u) << r.err;  // nothing for the clean region
+  }
+  {
+    SCOPED_TRACE("clean map");
+    const ToolResult r =
+        run_tool("trace --normal-map " + quote(dir / "clean.png") + " -o " + quote(dir / "c.csv"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_FALSE(contains(r.err, "warning")) << r.err;
+  }
+}
+
+// A flat texel's cos alpha is a signed zero in the arithmetic (-0 on a stroke to the right); the CSV says 0.
+// (Every trace() above and below also checks that no cell reads -0.)
+TEST(Tool, TraceWritesNoNegativeZero) {
+  ScratchDir dir;
+  const Csv csv = trace("--target " + kBump, dir);
+  ASSERT_EQ(csv.rows.size(), 500u);
+  std::size_t zeros = 0;
+  for (const auto& row : csv.rows) zeros += row[kCosAlpha] == "0";
+  EXPECT_GT(zeros, 80u);  // the flat ends of the target
+}
+
+// --speed (with --rate) is a motor step of speed / rate px per frame; the last frame is shortened so that even a
+// huge step ends the stroke at --to.
+TEST(Tool, TraceSpeedAndRate) {
+  ScratchDir dir;
+  const Csv step8 = trace("--target " + kBump + " --step 8", dir);
+  const Csv step4 = trace("--target " + kBump + " --step 4", dir);
+  EXPECT_EQ(trace("--target " + kBump + " --speed 1000", dir).rows, step8.rows);  // default rate 125 Hz
+  EXPECT_EQ(trace("--target " + kBump + " --speed 1000 --rate 250", dir).rows, step4.rows);
+  // On the flat start (C/D 1) a frame crosses `step` texels: texel k is entered in frame k / step.
+  for (std::size_t k = 0; k < 40; ++k) {
+    EXPECT_EQ(step8.number(k, kFrame), static_cast<double>(k / 8)) << k;
+    EXPECT_EQ(step4.number(k, kFrame), static_cast<double>(k / 4)) << k;
+  }
+  EXPECT_GT(step4.number(step4.rows.size() - 1, kFrame), step8.number(step8.rows.size() - 1, kFrame));
+
+  {
+    SCOPED_TRACE("--speed 1e9: one frame of 8e6 px, stopped at --to");
+    const ToolResult r = run_tool("trace --target " + kBump + " --speed 1e9 -o " + quote(dir / "f.csv"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(contains(r.err, "1 frames, cursor ended at (500.000, 250.000)")) << r.err;
+    EXPECT_FALSE(contains(r.err, "stopped before")) << r.err;
+    const Csv csv = parse_csv(read_text(dir / "f.csv"));
+    ASSERT_EQ(csv.rows.size(), 500u);  // texels 0 to 499, nothing past --to
+    EXPECT_EQ(csv.number(499, kTexelX), 499.0);
+    for (std::size_t i = 0; i < csv.rows.size(); ++i) EXPECT_EQ(csv.number(i, kFrame), 0.0);
+  }
+  {
+    SCOPED_TRACE("--step past a --to inside a texel");
+    const ToolResult r = run_tool(
+        "trace --target " + kBump + " --from 10.5,20.5 --to 30.25,20.5 --step 7 -o " + quote(dir / "g.csv"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(contains(r.err, "3 frames, cursor ended at (30.250, 20.500)")) << r.err;
+    const Csv csv = parse_csv(read_text(dir / "g.csv"));
+    ASSERT_FALSE(csv.rows.empty());
+    EXPECT_EQ(csv.rows.back()[kTexelX], "30");
+  }
+}
+
+// --from and --to set the stroke: its texels, in order, and where the cursor stops.
+TEST(Tool, TraceFromTo) {
+  ScratchDir dir;
+  {
+    SCOPED_TRACE("part of the middle row");
+    const ToolResult r =
+        run_tool("trace --target " + kBump + " --from 100,250 --to 400,250 -o " + quote(dir / "a.csv"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(contains(r.err, "cursor ended at (400.000, 250.000)")) << r.err;
+    const Csv csv = parse_csv(read_text(dir / "a.csv"));
+    ASSERT_EQ(csv.rows.size(), 300u);
+    for (std::size_t i = 0; i < csv.rows.size(); ++i) {
+      EXPECT_EQ(csv.number(i, kTexelX), 100.0 + static_cast<double>(i));
+      EXPECT_EQ(csv.number(i, kTexelY), 250.0);
+    }
+    EXPECT_EQ(csv.number(0, kX), 100.0);
+  }
+  {
+    SCOPED_TRACE("upward along a column, across the whole bump");
+    const ToolResult r =
+        run_tool("trace --target " + kBump + " --from 250.5,490.5 --to 250.5,10.5 -o " + quote(dir / "b.csv"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(contains(r.err, "cursor ended at (250.500, 10.500)")) << r.err;
+    const Csv csv = parse_csv(read_text(dir / "b.csv"));
+    ASSERT_EQ(csv.rows.size(), 481u);
+    double cd_max = 0.0, cd_min = 10.0;
+    for (std::size_t i = 0; i < csv.rows.size(); ++i) {
+      EXPECT_EQ(csv.number(i, kTexelX), 250.0);
+      EXPECT_EQ(csv.number(i, kTexelY), 490.0 - static_cast<double>(i));
+      EXPECT_EQ(csv.number(i, kX), 250.5);
+      cd_max = std::max(cd_max, csv.number(i, kCd));
+      cd_min = std::min(cd_min, csv.number(i, kCd));
+    }
+    EXPECT_GT(cd_max, 1.5);  // up the bump from below, then down: as along the row
+    EXPECT_LT(cd_min, 0.8);
+  }
+  {
+    SCOPED_TRACE("diagonal");
+    const ToolResult r =
+        run_tool("trace --target " + kBump + " --from 0,0 --to 300,300 -o " + quote(dir / "c.csv"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(contains(r.err, "cursor ended at (300.000, 300.000)")) << r.err;
+    const Csv csv = parse_csv(read_text(dir / "c.csv"));
+    ASSERT_GE(csv.rows.size(), 599u);  // a diagonal crosses two texel boundaries per px, corners once
+    for (std::size_t i = 0; i < csv.rows.size(); ++i) {
+      EXPECT_NEAR(csv.number(i, kX), csv.number(i, kY), 1e-5);
+      EXPECT_LE(csv.number(i, kTexelX), 299.0);
+      EXPECT_LE(csv.number(i, kTexelY), 299.0);
+    }
+  }
+  expect_clean_failure(run_tool("trace --target " + kBump + " --from 3,4 --to 3,4", dir), {"no length"});
+}
+
+// Eq. 1-3 from a row's own cells (the values are printed to 6 significant digits).
+void expect_eq2(const Csv& csv, std::size_t i, double kmax_lo, double kmax_hi, double kmin_lo, double kmin_hi) {
+  SCOPED_TRACE("row " + std::to_string(i));
+  const double cos_alpha = csv.number(i, kCosAlpha), delta_beta = csv.number(i, kDeltaBeta);
+  const double kmax = csv.number(i, kKmax), kmin = csv.number(i, kKmin), cd = csv.number(i, kCd);
+  EXPECT_GE(kmax, kmax_lo);
+  EXPECT_LE(kmax, kmax_hi);
+  EXPECT_GE(kmin, kmin_lo);
+  EXPECT_LE(kmin, kmin_hi);
+  EXPECT_NEAR(kmax, std::clamp(4.0 * (1.0 + delta_beta), kmax_lo, kmax_hi), 1e-4 * kmax + 1e-4);
+  EXPECT_NEAR(kmin, std::clamp(1.5 * (1.0 - delta_beta), kmin_lo, kmin_hi), 1e-4 * kmin + 1e-4);
+  const double want = cos_alpha > 0 ? 1.0 - cos_alpha * (1.0 - 1.0 / kmin) : 1.0 - cos_alpha * (kmax - 1.0);
+  EXPECT_NEAR(cd, want, 1e-4 * cd);
+}
+
+// --delta-beta-sign -1 reverses delta-beta, and with it kmax and kmin; the --*-limits clamp them.
+TEST(Tool, TraceCurvatureOptions) {
+  ScratchDir dir;
+  const Csv plain = trace("--target " + kBump, dir);
+  const Csv reversed = trace("--target " + kBump + " --delta-beta-sign -1", dir);
+  const Csv narrow = trace("--target " + kBump + " --kmax-limits 1,2 --kmin-limits 1,1.25", dir);
+  const Csv raised = trace("--target " + kBump + " --kmax-limits 3,30 --kmin-limits 1.4,5", dir);
+  for (const Csv* csv : {&reversed, &narrow, &raised}) ASSERT_EQ(csv->rows.size(), plain.rows.size());
+  std::size_t flipped = 0, cd_changed = 0;
+  double plain_max = 0.0, plain_min = 10.0, narrow_max = 0.0, narrow_min = 10.0;
+  bool kmax_at_2 = false, kmin_at_125 = false;
+  for (std::size_t i = 0; i < plain.rows.size(); ++i) {
+    EXPECT_EQ(reversed.rows[i][kCosAlpha], plain.rows[i][kCosAlpha]);
+    const double db = plain.number(i, kDeltaBeta);
+    EXPECT_EQ(reversed.number(i, kDeltaBeta), -db) << i;
+    flipped += db != 0.0;
+    cd_changed += reversed.rows[i][kCd] != plain.rows[i][kCd];
+    expect_eq2(plain, i, 1, 30, 1, 5);
+    expect_eq2(reversed, i, 1, 30, 1, 5);
+    expect_eq2(narrow, i, 1, 2, 1, 1.25);
+    expect_eq2(raised, i, 3, 30, 1.4, 5);
+    plain_max = std::max(plain_max, plain.number(i, kCd));
+    plain_min = std::min(plain_min, plain.number(i, kCd));
+    narrow_max = std::max(narrow_max, narrow.number(i, kCd));
+    narrow_min = std::min(narrow_min, narrow.number(i, kCd));
+    kmax_at_2 = kmax_at_2 || narrow.rows[i][kKmax] == "2";
+    kmin_at_125 = kmin_at_125 || narrow.rows[i][kKmin] == "1.25";
+    EXPECT_GE(raised.number(i, kKmax), 3.0);
+    EXPECT_GE(raised.number(i, kKmin), 1.4);
+  }
+  EXPECT_GT(flipped, 300u);
+  EXPECT_GT(cd_changed, 100u);
+  EXPECT_GT(plain_max, 3.0);  // unclamped: up to 4 on this bump
+  EXPECT_LT(plain_min, 0.75);
+  EXPECT_LE(narrow_max, 2.0);
+  EXPECT_GE(narrow_min, 1.0 / 1.25 - 1e-6);
+  EXPECT_TRUE(kmax_at_2);
+  EXPECT_TRUE(kmin_at_125);
+  expect_clean_failure(run_tool("trace --target " + kBump + " --kmax-limits 5,2", dir), {"kmax"});
 }
 
 // `targets` writes the 24 targets' files; `demo` reads them (as the daemon would) and prints one row per target.

@@ -23,6 +23,7 @@
 #include <thread>
 #include <vector>
 
+#include "config/image_io.hpp"
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
 #include "core/default_scene.hpp"
@@ -221,6 +222,23 @@ TEST(ReplayTool, SceneFileIsUsed) {
     expect_clean_failure(r, {"bad.toml"});
     EXPECT_FALSE(fs::exists(dir / "bad.evemu"));
   }
+}
+
+TEST(ReplayTool, WarnsOfInvalidTexelsInTheScene) {
+  ScratchDir dir;
+  NormalImage holes(4, 4);  // flat, with 2 texels facing away from the viewer (repaired from their neighbours)
+  holes.at(1, 1) = {0.0f, 0.0f, -1.0f};
+  holes.at(3, 0) = {0.6f, 0.0f, -0.8f};
+  write_normal_png16(dir / "holes.png", holes);
+  write_file(dir / "scene.toml", "[[region]]\nname = \"holes\"\nwidth = 4\nheight = 4\nnormal_map = \"holes.png\"\n");
+  const fs::path in = stroke_file(dir, "in.evemu", 20, 1, 0);
+  const ToolResult r =
+      run_tool("replay --scene " + quote(dir / "scene.toml") + " " + quote(in) + " " + quote(dir / "out.evemu"), dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "pseudohaptic: warning: " + (dir / "scene.toml").string() +
+                                  ":1: region 'holes': normal map " + (dir / "holes.png").string() +
+                                  ": 2 of 16 texels invalid"))
+      << r.err;
 }
 
 TEST(ReplayTool, TraceHasItsHeaderAndOneRowPerFrame) {

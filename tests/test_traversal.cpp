@@ -335,3 +335,115 @@ TEST(Cursor, WorldLimitKeepsTexelIndicesValid) {
 
 }  // namespace
 }  // namespace ph
+
+namespace ph {
+namespace {
+
+// A method that is not built in (BuiltinMethod::none), so the traversal reaches it through the virtual
+// interface only. Its C/D is `base` + `to_weight` x the entered texel's height + `from_weight` x the height of
+// the texel it was entered from, with the heights of the region's depth field (0 outside every region).
+class PluginMethod final : public Method {
+ public:
+  PluginMethod(double base, double to_weight, double from_weight, double lo, double hi)
+      : base_(base), to_weight_(to_weight), from_weight_(from_weight), lo_(lo), hi_(hi) {}
+  std::string_view name() const override { return "plug-in"; }
+  FieldNeeds needs() const override { return {.gradient = false, .depth = true}; }
+  TexelSample sample(const RegionFields* fields, Texel local, Vec2) const override {
+    if (fields == nullptr || !fields->depth) return {0.0, 0.0};
+    return {fields->depth->at(local.x, local.y), 0.0};
+  }
+  double cd(const TexelSample& from, const TexelSample& to, double, StepDetail* detail) const override {
+    ++calls;
+    if (detail != nullptr) *detail = empty_step_detail();
+    return base_ + to_weight_ * to.v0 + from_weight_ * from.v0;
+  }
+  double cd_lower_bound() const override { return lo_; }
+  double cd_upper_bound() const override { return hi_; }
+  mutable std::size_t calls = 0;
+
+ private:
+  double base_, to_weight_, from_weight_, lo_, hi_;
+};
+
+Region plugin_region(Rect rect, std::shared_ptr<const PluginMethod> method, float (*height)(int x, int y)) {
+  Region r = depth_region(rect, height);
+  r.name = "plug-in";
+  r.method = std::move(method);
+  return r;
+}
+
+TEST(Traversal, PluginMethodThroughTheVirtualInterface) {
+  {
+    SCOPED_TRACE("constant C/D 2 halves the display travel, exactly");
+    auto two = std::make_shared<const PluginMethod>(2.0, 0.0, 0.0, 2.0, 2.0);
+    ASSERT_EQ(two->builtin(), BuiltinMethod::none);
+    const Scene scene = scene_of({plugin_region({0, 0, 1000, 1000}, two, [](int, int) { return 0.0f; })});
+    // Dyadic starts and motions along the axes and the diagonal: every half is exact.
+    const Vec2 motions[] = {{10.0, 0.0}, {0.0, -7.25}, {-3.5, 0.0}, {6.0, 6.0}, {-0.125, 0.0625}, {300.0, -200.0}};
+    CursorState cursor = cursor_at({400.5, 600.25});
+    Vec2 expected = cursor.position;
+    for (const Vec2 motor : motions) {
+      const FrameResult out = advance(scene, cursor, motor);
+      EXPECT_EQ(out.display.x, motor.x / 2.0) << motor.x << "," << motor.y;
+      EXPECT_EQ(out.display.y, motor.y / 2.0) << motor.x << "," << motor.y;
+      EXPECT_EQ(out.cd_min, 2.0);
+      EXPECT_EQ(out.cd_max, 2.0);
+      expected = expected + motor * 0.5;
+    }
+    EXPECT_EQ(cursor.position.x, expected.x);
+    EXPECT_EQ(cursor.position.y, expected.y);
+    // Along an axis, a whole stroke of random frames: the display travel is the motor travel / 2.
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(0.0, 3.0);
+    const Scene strip = scene_of({plugin_region({0, 499, 8000, 3}, two, [](int, int) { return 0.0f; })});
+    CursorState walker = cursor_at({10.5, 500.5});
+    double motor_sum = 0.0, display_sum = 0.0;
+    for (int i = 0; i < 5000; ++i) {
+      const double step = u(rng);
+      motor_sum += step;
+      display_sum += advance(strip, walker, {step, 0.0}).display.x;
+    }
+    EXPECT_NEAR(display_sum, motor_sum / 2.0, 1e-9);
+    EXPECT_NEAR(walker.position.x - 10.5, motor_sum / 2.0, 1e-9);
+    EXPECT_EQ(walker.position.y, 500.5);
+    EXPECT_GT(two->calls, 3000u);  // per texel, through the virtual cd()
+  }
+  {
+    SCOPED_TRACE("C/D from the texel and its predecessor: the independent integral");
+    // Heights 0..4 in a pattern; C/D = 0.5 + 0.3 h(to) + 0.1 h(from), in [0.5, 2.1]. Outside: flat, C/D 1.
+    auto varying = std::make_shared<const PluginMethod>(0.5, 0.3, 0.1, 0.5, 2.1);
+    auto pattern = [](int x, int y) { return static_cast<float>((x * 7 + y * 3) % 5); };
+    const Vec2 offset{40.0, 30.0};
+    const Scene scene = scene_of({plugin_region({40, 30, 200, 150}, varying, pattern)});
+    std::mt19937_64 rng(12);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    double worst = 0.0;
+    for (int k = 0; k < 48; ++k) {
+      const double phi = 2.0 * std::numbers::pi * (k + u(rng)) / 48.0;
+      const Vec2 m{std::cos(phi), std::sin(phi)};
+      // Starts inside and around the region: strokes enter, cross and leave it.
+      const Vec2 start = offset + Vec2{-20.0 + 240.0 * u(rng), -20.0 + 190.0 * u(rng)};
+      const double budget = 150.0;
+      const Vec2 want = reference_end(scene, start, m, budget);
+      CursorState cursor = cursor_at(start);
+      double left = budget;
+      while (left > 0.0) {
+        const double step = std::min(left, 0.2 + 9.0 * u(rng));
+        advance(scene, cursor, m * step);
+        left -= step;
+      }
+      const double error = length(cursor.position - want);
+      worst = std::max(worst, error);
+      ASSERT_LT(error, 1e-6) << "direction " << phi << " from " << start.x << "," << start.y;
+    }
+    // The reference really did see C/D other than 1 and 2: a stroke over the region ends short of or beyond
+    // where a flat one would.
+    const Vec2 start = offset + Vec2{10.5, 70.5};
+    const Vec2 end = reference_end(scene, start, {1.0, 0.0}, 100.0);
+    EXPECT_GT(std::abs(end.x - start.x - 100.0), 1.0);
+    RecordProperty("worst_error_px", std::to_string(worst));
+  }
+}
+
+}  // namespace
+}  // namespace ph

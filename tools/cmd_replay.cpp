@@ -195,10 +195,21 @@ void note_device(const std::string& input, const Recording& recording, const Rec
   }
 }
 
+// The scene file's scene (or the embedded default), with a warning per map with invalid texels (repaired).
+Scene load_replay_scene(const std::string& scene_file) {
+  if (scene_file.empty()) return default_scene();
+  const SceneSpec spec = parse_scene_file(scene_file);
+  SceneLoadReport report;
+  Scene scene = load_scene(spec, &report);
+  for (const std::string& w : invalid_texel_warnings(spec, report))
+    fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
+  return scene;
+}
+
 int run_replay(const ReplayOptions& o) {
   if (o.output == "-" && o.trace == "-") throw std::invalid_argument("OUTPUT and --trace cannot both be - (stdout)");
   // Everything is read and checked before anything is written: no partial output that looks valid.
-  const Scene scene = o.scene_file.empty() ? default_scene() : load_scene(parse_scene_file(o.scene_file));
+  const Scene scene = load_replay_scene(o.scene_file);
   RecordingInfo info;
   const Recording input = read_recording_file(o.input, o.device_given ? o.device : kFirstPointerDevice, &info);
   PipelineConfig config;

@@ -6,7 +6,10 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <string>
+#include <vector>
 
+#include "config/field_loader.hpp"
 #include "config/image_io.hpp"
 #include "config/scene_file.hpp"
 #include "core/stroke.hpp"
@@ -46,8 +49,9 @@ void apply_overrides(const TraceOptions& o, RegionSpec& r) {
   if (auto e = validate(r.depth); !e.empty()) throw std::invalid_argument("depth method: " + e);
 }
 
-// A one-region scene at (0, 0) covering the given image(s) at their own size.
-SceneSpec scene_from_maps(const TraceOptions& o) {
+// A one-region scene at (0, 0) covering the given image(s) at their own size. Loaded here rather than through a
+// scene file's loader, so that a bad map reads "FILE: what went wrong", with no scene file line to name.
+Scene scene_from_maps(const TraceOptions& o, std::vector<std::string>& warnings) {
   RegionSpec r;
   r.name = "trace";
   if (!o.normal_map.empty()) r.sources.normal_map = o.normal_map;
@@ -61,10 +65,17 @@ SceneSpec scene_from_maps(const TraceOptions& o) {
   r.sources.depth_options.depth_zero = o.depth_zero.value_or(0.0);
   r.sources.depth_options.relief_px = o.relief_px.value_or(100.0);
   r.method = o.depth_map.empty() || !o.normal_map.empty() ? MethodKind::curvature : MethodKind::depth;
-  SceneSpec spec;
-  spec.file = !o.normal_map.empty() ? o.normal_map : o.depth_map;
-  spec.regions.push_back(r);
-  return spec;
+  apply_overrides(o, r);
+  Region region;
+  region.name = r.name;
+  region.rect = r.rect;
+  region.method = make_method(r);
+  FieldLoadReport report;
+  region.fields = load_region_fields(r.sources, r.rect.w, r.rect.h, region.method->needs(), report);
+  for (const std::string& note : invalid_texel_notes(r.sources, report)) warnings.push_back(note);
+  std::vector<Region> regions;
+  regions.push_back(std::move(region));
+  return Scene(std::move(regions));
 }
 
 // A target built in memory from its exact analytic fields (no files).
@@ -86,24 +97,33 @@ Scene scene_from_target(const TraceOptions& o) {
   throw std::invalid_argument(fmt::format("no target named '{}' (see `pseudohaptic targets`)", o.target));
 }
 
-Scene build_scene(const TraceOptions& o) {
+// The scene to trace; `warnings` gets a line per map with invalid texels (repaired).
+Scene build_scene(const TraceOptions& o, std::vector<std::string>& warnings) {
   const int sources = !o.scene_file.empty() + !o.target.empty() + (!o.normal_map.empty() || !o.depth_map.empty());
   if (sources != 1) throw std::invalid_argument("give exactly one of --scene, --target, or --normal-map/--depth-map");
   if (!o.target.empty()) return scene_from_target(o);
-  SceneSpec spec = !o.scene_file.empty() ? parse_scene_file(o.scene_file) : scene_from_maps(o);
+  if (o.scene_file.empty()) return scene_from_maps(o, warnings);
+  SceneSpec spec = parse_scene_file(o.scene_file);
   if (spec.regions.empty()) throw std::invalid_argument(fmt::format("{}: the scene has no region", spec.file.string()));
   for (RegionSpec& r : spec.regions) apply_overrides(o, r);
-  return load_scene(spec);
+  SceneLoadReport report;
+  Scene scene = load_scene(spec, &report);
+  for (std::string& warning : invalid_texel_warnings(spec, report)) warnings.push_back(std::move(warning));
+  return scene;
 }
 
 Vec2 point(const std::vector<double>& v, Vec2 fallback) { return v.size() == 2 ? Vec2{v[0], v[1]} : fallback; }
 
+// A finite number, or nothing (an empty cell). Zero is written 0, whatever its sign: a flat texel's cos alpha
+// comes out of the arithmetic as -0 (a = -t / sqrt(1 + t^2) with t = +0).
 void append_number(fmt::memory_buffer& out, double v) {
-  if (std::isfinite(v)) fmt::format_to(std::back_inserter(out), "{:.6g}", v);
+  if (std::isfinite(v)) fmt::format_to(std::back_inserter(out), "{:.6g}", v == 0.0 ? 0.0 : v);
 }
 
 int run_trace(const TraceOptions& o) {
-  const Scene scene = build_scene(o);
+  std::vector<std::string> warnings;
+  const Scene scene = build_scene(o, warnings);
+  for (const std::string& w : warnings) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
   const Rect first = scene.regions().front().rect;
   StrokeSpec stroke;
   const double mid_y = first.y + first.h / 2.0;
@@ -147,9 +167,12 @@ int run_trace(const TraceOptions& o) {
 Run add_trace_command(CLI::App& app) {
   auto o = std::make_shared<TraceOptions>();
   app.description(
-      "Move the cursor along a straight stroke across a texture and write CSV, one row per texel step:\n"
+      "Move the cursor along a straight stroke across a texture and write CSV, one row per texel step,\n"
+      "with these columns in this order:\n"
       "frame,x,y,texel_x,texel_y,cos_alpha,delta_beta_deg,kmax,kmin,dh,cd,region\n"
-      "(x, y: where the cursor entered the texel, screen px; empty cells: quantities the method has not).");
+      "(x, y: where the cursor entered the texel, screen px; cos_alpha, delta_beta_deg, kmax, kmin: curvature\n"
+      "method, dh: depth method, empty for the other). The last frame is shortened so that the stroke ends at\n"
+      "--to. A summary, and a warning per map with invalid texels (repaired), go to standard error.");
   auto* src = app.add_option_group("texture", "What to trace across (exactly one)");
   src->add_option("--scene", o->scene_file, "Scene file (TOML); the stroke defaults to the first region");
   src->add_option("--target", o->target, "One of the 24 targets by name (e.g. bump-gaussian-h1-r200), exact fields");
