@@ -149,6 +149,25 @@ def fronts_for(variants, ykey):
     return result
 
 
+COST_KEYS = ("ns_per_frame_median", "bytes_per_texel", "precompute_ms")
+
+
+def cost_front(group, ykey):
+    """Names of the variants no other variant of the group dominates on every cost the issue counts as speed
+    (time per frame, memory per texel, precompute time) and on ykey at once."""
+    keys = [k for k in COST_KEYS if all(finite(v.get(k)) for v in group)] + [ykey]
+    ok = [v for v in group if all(finite(v.get(k)) for k in keys)]
+
+    def dominates(a, b):
+        return all(a[k] <= b[k] for k in keys) and any(a[k] < b[k] for k in keys)
+    return {v["variant"] for v in ok if not any(dominates(u, v) for u in ok)}
+
+
+def cost_fronts_for(variants, ykey):
+    """{<method>: set of names} of the fronts over all costs against ykey, among each method's variants."""
+    return {m: cost_front([v for v in variants if v["method"] == m], ykey) for m in methods_of(variants)}
+
+
 def methods_of(rows):
     out = []
     for r in rows:
@@ -598,8 +617,16 @@ def markdown_table(variants, header, defaults, fake):
     out = []
     if fake:
         out.append("**FAKE DATA** (charts.py --fake-data): not measurements.\n")
-    out.append("| variant | on the Pareto front | " + " | ".join(t for _, t in columns) + " |")
-    out.append("|---|---|" + "---:|" * len(columns))
+    end_costs = cost_fronts_for(variants, "end_err_rms_px")
+    cd_costs = cost_fronts_for(variants, "cd_err_rms")
+
+    def on_cost_fronts(v):
+        tags = [what for what, fronts in (("end", end_costs), ("C/D", cd_costs))
+                if v["variant"] in fronts.get(v["method"], set())]
+        return "+".join(tags) or "no"
+    out.append("| variant | on the Pareto front (time) | on the front of all costs | " +
+               " | ".join(t for _, t in columns) + " |")
+    out.append("|---|---|---|" + "---:|" * len(columns))
     rows = []
     for v in variants:
         tags = [t for t in (where(v["variant"], end, "end"), where(v["variant"], cd, "C/D")) if t]
@@ -609,16 +636,22 @@ def markdown_table(variants, header, defaults, fake):
     rows.sort(key=lambda r: (methods.index(r[0]["method"]), r[0]["ns_per_frame_median"]))
     for v, tags in rows:
         name = f"`{v['variant']}`" + (" (default)" if is_default(v, defaults) else "")
-        out.append(f"| {name} | {tags} | " + " | ".join(fmt_num(v[k]) for k, _ in columns) + " |")
+        out.append(f"| {name} | {tags} | {on_cost_fronts(v)} | " +
+                   " | ".join(fmt_num(v[k]) for k, _ in columns) + " |")
     out.append("")
     out.append("\"end\": front of ns/frame against end-position error; \"C/D\": against C/D-ratio error; "
-               "\"all\": over every variant; \"own method\": among the variants of its method.")
+               "\"all\": over every variant; \"own method\": among the variants of its method. \"All costs\": "
+               "among the variants of its method, no other is at least as good in time per frame, memory per "
+               "texel, precompute time and the error together (and better in one).")
     for v in variants:
         if is_default(v, defaults):
             on_end = v["variant"] in end.get(v["method"], [])
             on_cd = v["variant"] in cd.get(v["method"], [])
+            all_end = v["variant"] in end_costs.get(v["method"], set())
+            all_cd = v["variant"] in cd_costs.get(v["method"], set())
             out.append(f"Default `{v['variant']}`: on its method's end-error front: {'yes' if on_end else 'NO'}; "
-                       f"on its method's C/D-error front: {'yes' if on_cd else 'NO'}.")
+                       f"on its method's C/D-error front: {'yes' if on_cd else 'NO'}; over all costs: "
+                       f"end error {'yes' if all_end else 'NO'}, C/D error {'yes' if all_cd else 'NO'}.")
     return "\n".join(out)
 
 
