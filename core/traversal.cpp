@@ -494,8 +494,6 @@ CursorState walk_texels(const Scene& scene, CursorState& cursor, Vec2 m, double 
 
 // The traversal proper: walks `motor` (finite, not zero) through the texels from the cursor.
 FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserver* observer) {
-  // C/D is 1 all the way (the effects may have moved the frame off every region).
-  if (crosses_only_flat(scene, cursor, motor)) return flat_frame(cursor, motor);
   FrameResult result;
   double d = fast_length(motor.x, motor.y);
   // Divide rather than multiply by 1/d: for a denormal d, 1/d overflows and the walk would never advance.
@@ -541,7 +539,10 @@ FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserv
                                                       StepObserver* observer) {
   const double gain = scene.has_effects() ? apply_effects(scene, cursor, motor, time) : 1.0;
   if (motor.x == 0.0 && motor.y == 0.0) return {};
-  FrameResult result = walk(scene, cursor, motor, observer);
+  // advance() has found that this frame meets a region; the effects may have moved it off every region.
+  FrameResult result = scene.has_effects() && crosses_only_flat(scene, cursor, motor)
+                           ? flat_frame(cursor, motor)
+                           : walk(scene, cursor, motor, observer);
   if (gain != 1.0) {
     // The hand's motor travel was the frame's; the effects let only `gain` of it reach the walk.
     result.cd_min /= gain;
