@@ -7,7 +7,6 @@
 #include <fstream>
 #include <set>
 #include <sstream>
-#include "core/method_flat.hpp"
 
 namespace ph {
 
@@ -70,19 +69,6 @@ std::optional<std::string> get_string(const Reporter& rep, const toml::table& t,
   rep.fail(node, fmt::format("{}{}", where, key), "must be a string");
 }
 
-// A [lower, upper] pair of numbers.
-void get_limits(const Reporter& rep, const toml::table& t, std::string_view key, std::string_view where, double& lo,
-                double& hi) {
-  const toml::node* node = t.get(key);
-  if (node == nullptr) return;
-  const toml::array* arr = node->as_array();
-  if (arr == nullptr || arr->size() != 2 || !(*arr)[0].value<double>() || !(*arr)[1].value<double>()) {
-    rep.fail(node, fmt::format("{}{}", where, key), "must be a pair of numbers [lower, upper]");
-  }
-  lo = *(*arr)[0].value<double>();
-  hi = *(*arr)[1].value<double>();
-}
-
 const toml::table* get_table(const Reporter& rep, const toml::table& t, std::string_view key, std::string_view where) {
   const toml::node* node = t.get(key);
   if (node == nullptr) return nullptr;
@@ -98,47 +84,39 @@ void check_key(const Reporter& rep, const toml::table& t, std::string_view key, 
 }
 
 bool positive_finite(double v) { return std::isfinite(v) && v > 0.0; }
-bool limits_ok(double lo, double hi) { return std::isfinite(lo) && std::isfinite(hi) && lo >= 1.0 && lo <= hi; }
 
-CurvatureParams parse_curvature(const Reporter& rep, const toml::table& t, std::string_view where) {
-  reject_unknown_keys(rep, t, {"kmax_prime", "kmin_prime", "kmax_limits", "kmin_limits", "delta_beta_sign"}, where);
-  CurvatureParams p;
-  p.kmax_prime = get_number(rep, t, "kmax_prime", where, p.kmax_prime);
-  p.kmin_prime = get_number(rep, t, "kmin_prime", where, p.kmin_prime);
-  get_limits(rep, t, "kmax_limits", where, p.kmax_lo, p.kmax_hi);
-  get_limits(rep, t, "kmin_limits", where, p.kmin_lo, p.kmin_hi);
-  p.delta_beta_sign = get_number(rep, t, "delta_beta_sign", where, p.delta_beta_sign);
-  check_key(
-      rep, t, "kmax_prime", where, [&] { return positive_finite(p.kmax_prime); }, "must be a finite number > 0");
-  check_key(
-      rep, t, "kmin_prime", where, [&] { return positive_finite(p.kmin_prime); }, "must be a finite number > 0");
-  const char* limits = "must be [lower, upper] with 1 <= lower <= upper (Eq. 2 needs k >= 1)";
-  check_key(
-      rep, t, "kmax_limits", where, [&] { return limits_ok(p.kmax_lo, p.kmax_hi); }, limits);
-  check_key(
-      rep, t, "kmin_limits", where, [&] { return limits_ok(p.kmin_lo, p.kmin_hi); }, limits);
-  check_key(
-      rep, t, "delta_beta_sign", where, [&] { return p.delta_beta_sign == 1.0 || p.delta_beta_sign == -1.0; },
-      "must be 1 or -1 (1: Eq. 1 as printed; -1: reversed)");
-  if (auto error = validate(p); !error.empty()) rep.fail(&t, where.substr(0, where.size() - 1), error);
-  return p;
-}
+// A method's [region.NAME] table as its parser reads it (core/method_registry.hpp).
+class TomlParamReader final : public ParamReader {
+ public:
+  TomlParamReader(const Reporter& rep, const toml::table& table, std::string_view where)
+      : rep_(rep), table_(table), where_(where) {}
 
-DepthParams parse_depth(const Reporter& rep, const toml::table& t, std::string_view where) {
-  reject_unknown_keys(rep, t, {"gain", "kmax", "kmin"}, where);
-  DepthParams p;
-  p.gain = get_number(rep, t, "gain", where, p.gain);
-  p.kmax = get_number(rep, t, "kmax", where, p.kmax);
-  p.kmin = get_number(rep, t, "kmin", where, p.kmin);
-  check_key(
-      rep, t, "gain", where, [&] { return std::isfinite(p.gain); }, "must be a finite number");
-  check_key(
-      rep, t, "kmax", where, [&] { return std::isfinite(p.kmax) && p.kmax >= 1.0; }, "must be a finite number >= 1");
-  check_key(
-      rep, t, "kmin", where, [&] { return std::isfinite(p.kmin) && p.kmin >= 1.0; }, "must be a finite number >= 1");
-  if (auto error = validate(p); !error.empty()) rep.fail(&t, where.substr(0, where.size() - 1), error);
-  return p;
-}
+  std::optional<double> number(std::string_view key) const override {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return std::nullopt;
+    if (auto v = node->value<double>()) return *v;  // integers convert too
+    reject(key, "must be a number");
+  }
+  std::optional<std::pair<double, double>> pair(std::string_view key) const override {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return std::nullopt;
+    const toml::array* arr = node->as_array();
+    if (arr == nullptr || arr->size() != 2 || !(*arr)[0].value<double>() || !(*arr)[1].value<double>()) {
+      reject(key, "must be a pair of numbers [lower, upper]");
+    }
+    return std::pair(*(*arr)[0].value<double>(), *(*arr)[1].value<double>());
+  }
+  [[noreturn]] void reject(std::string_view key, std::string_view message) const override {
+    if (key.empty()) rep_.fail(&table_, where_.substr(0, where_.size() - 1), message);
+    const toml::node* node = table_.get(key);
+    rep_.fail(node != nullptr ? node : &table_, fmt::format("{}{}", where_, key), message);
+  }
+
+ private:
+  const Reporter& rep_;
+  const toml::table& table_;
+  std::string_view where_;
+};
 
 // A named choice among `names` ("a", "b" or "c" in the message).
 template <typename T, typename Parse>
@@ -293,13 +271,42 @@ std::filesystem::path resolve(const std::filesystem::path& base_dir, const std::
 constexpr std::int64_t kMaxCoordinate = 1 << 20;
 constexpr std::int64_t kMaxRegionSide = 1 << 14;
 
+// Every method's parameters: its [region.NAME] table, else its defaults.
+void parse_method_tables(const Reporter& rep, const toml::table& t, const std::string& where,
+                         const MethodRegistry& methods, RegionSpec& r) {
+  for (const auto& entry : methods.entries()) {
+    const toml::table* table = entry->keys.empty() ? nullptr : get_table(rep, t, entry->name, where);
+    if (table == nullptr) {
+      r.method_params[entry->name] = entry->defaults();
+      continue;
+    }
+    const std::string w = where + entry->name + ".";
+    reject_unknown_keys(rep, *table, std::set<std::string_view>(entry->keys.begin(), entry->keys.end()), w);
+    r.method_params[entry->name] = entry->parse(TomlParamReader(rep, *table, w));
+  }
+}
+
 RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t index,
-                        const std::filesystem::path& base_dir) {
+                        const std::filesystem::path& base_dir, const MethodRegistry& methods) {
   const std::string where = fmt::format("region[{}].", index);
-  reject_unknown_keys(rep, t,
-                      {"name", "x", "y", "width", "height", "method", "normal_map", "normal_green", "normal_encoding",
-                       "depth_map", "depth_zero", "relief_px", "curvature", "depth", "materials", "wells"},
-                      where);
+  std::set<std::string_view> keys = {"name",
+                                     "x",
+                                     "y",
+                                     "width",
+                                     "height",
+                                     "method",
+                                     "normal_map",
+                                     "normal_green",
+                                     "normal_encoding",
+                                     "depth_map",
+                                     "depth_zero",
+                                     "relief_px",
+                                     "materials",
+                                     "wells"};
+  for (const auto& entry : methods.entries()) {
+    if (!entry->keys.empty()) keys.insert(entry->name);  // its parameter table
+  }
+  reject_unknown_keys(rep, t, keys, where);
   RegionSpec r;
   r.line = static_cast<int>(t.source().begin.line);
   r.name = get_string(rep, t, "name", where).value_or(fmt::format("region {}", index));
@@ -308,12 +315,11 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   r.rect.w = get_int(rep, t, "width", where, std::nullopt, 1, kMaxRegionSide);
   r.rect.h = get_int(rep, t, "height", where, std::nullopt, 1, kMaxRegionSide);
 
-  const std::string method = get_string(rep, t, "method", where).value_or("curvature");
-  const auto kind = parse_method_kind(method);
-  if (!kind)
+  r.method = get_string(rep, t, "method", where).value_or("curvature");
+  const MethodEntry* entry = methods.find(r.method);
+  if (entry == nullptr)
     rep.fail(t.get("method"), where + "method",
-             fmt::format("unknown method '{}' (allowed: curvature, depth, none)", method));
-  r.method = *kind;
+             fmt::format("unknown method '{}' (allowed: {})", r.method, methods.names()));
 
   if (auto p = get_string(rep, t, "normal_map", where)) r.sources.normal_map = resolve(base_dir, *p);
   if (auto p = get_string(rep, t, "depth_map", where)) r.sources.depth_map = resolve(base_dir, *p);
@@ -344,12 +350,11 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
 
   if (!r.sources.normal_map && !r.sources.depth_map)
     rep.fail(&t, where + "normal_map", "a region needs a normal_map or a depth_map");
-  if (r.method == MethodKind::depth && !r.sources.depth_map) {
-    rep.fail(&t, where + "depth_map", "the depth method needs a depth_map (a normal map alone is not enough)");
+  if (entry->make(entry->defaults())->needs().depth && !r.sources.depth_map) {
+    rep.fail(&t, where + "depth_map",
+             fmt::format("the {} method needs a depth_map (a normal map alone is not enough)", r.method));
   }
-  if (const toml::table* c = get_table(rep, t, "curvature", where))
-    r.curvature = parse_curvature(rep, *c, where + "curvature.");
-  if (const toml::table* d = get_table(rep, t, "depth", where)) r.depth = parse_depth(rep, *d, where + "depth.");
+  parse_method_tables(rep, t, where, methods, r);
   if (const toml::table* m = get_table(rep, t, "materials", where)) {
     r.materials = parse_materials(rep, *m, where + "materials.");
     const bool needs_depth = r.materials->source == ClassSource::depth;
@@ -449,26 +454,7 @@ DaemonSettings parse_daemon(const Reporter& rep, const toml::table& t) {
 
 }  // namespace
 
-std::optional<MethodKind> parse_method_kind(std::string_view name) {
-  if (name == "curvature") return MethodKind::curvature;
-  if (name == "depth") return MethodKind::depth;
-  if (name == "none") return MethodKind::none;
-  return std::nullopt;
-}
-
-std::string_view method_kind_name(MethodKind kind) {
-  switch (kind) {
-    case MethodKind::depth:
-      return "depth";
-    case MethodKind::none:
-      return "none";
-    case MethodKind::curvature:
-      break;
-  }
-  return "curvature";
-}
-
-SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& origin) {
+SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& origin, MethodRegistry methods) {
   const Reporter rep(origin.string());
   toml::table root;
   try {
@@ -479,6 +465,7 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
   reject_unknown_keys(rep, root, {"daemon", "region"}, "");
   SceneSpec spec;
   spec.file = origin;
+  spec.methods = std::move(methods);
   if (const toml::table* daemon = get_table(rep, root, "daemon", "")) spec.daemon = parse_daemon(rep, *daemon);
   const toml::node* regions = root.get("region");
   if (regions == nullptr) return spec;
@@ -486,22 +473,26 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
   if (arr == nullptr || !arr->is_array_of_tables()) rep.fail(regions, "region", "must be written as [[region]] tables");
   const std::filesystem::path base_dir = origin.parent_path();
   for (std::size_t i = 0; i < arr->size(); ++i)
-    spec.regions.push_back(parse_region(rep, *(*arr)[i].as_table(), i, base_dir));
+    spec.regions.push_back(parse_region(rep, *(*arr)[i].as_table(), i, base_dir, spec.methods));
   return spec;
 }
 
-SceneSpec parse_scene_file(const std::filesystem::path& file) {
+SceneSpec parse_scene_file(const std::filesystem::path& file, MethodRegistry methods) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw ConfigError(fmt::format("{}: cannot open the scene file", file.string()));
   std::ostringstream text;
   text << in.rdbuf();
-  return parse_scene_text(text.str(), file);
+  return parse_scene_text(text.str(), file, std::move(methods));
 }
 
-MethodPtr make_method(const RegionSpec& region) {
-  if (region.method == MethodKind::depth) return std::make_shared<DepthMethod>(region.depth);
-  if (region.method == MethodKind::none) return std::make_shared<FlatMethod>();
-  return std::make_shared<CurvatureMethod>(region.curvature);
+MethodPtr make_method(const RegionSpec& region, const MethodRegistry& methods) {
+  const MethodEntry* entry = methods.find(region.method);
+  if (entry == nullptr) {
+    throw ConfigError(
+        fmt::format("region '{}': unknown method '{}' (allowed: {})", region.name, region.method, methods.names()));
+  }
+  const auto params = region.method_params.find(region.method);
+  return entry->make(params != region.method_params.end() ? params->second : entry->defaults());
 }
 
 Scene load_scene(const SceneSpec& spec, SceneLoadReport* report) {
@@ -510,7 +501,7 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report) {
     Region region;
     region.name = r.name;
     region.rect = r.rect;
-    region.method = make_method(r);
+    region.method = make_method(r, spec.methods);
     const FieldNeeds method_needs = region.method->needs();
     FieldNeeds needs = method_needs;
     if (r.materials) {

@@ -3,7 +3,10 @@
 // line and the key, and says what is allowed. Unknown keys are errors: a typo must not pass silently.
 #pragma once
 
+#include <any>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -14,8 +17,7 @@
 #include "config/field_loader.hpp"
 #include "core/effect_materials.hpp"
 #include "core/effect_wells.hpp"
-#include "core/method_curvature.hpp"
-#include "core/method_depth.hpp"
+#include "core/methods.hpp"
 #include "core/scene.hpp"
 
 namespace ph {
@@ -28,36 +30,49 @@ class ConfigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// none: C/D 1 (a region rendered by its effects only: materials, gravity wells).
-enum class MethodKind { curvature, depth, none };
-
-std::optional<MethodKind> parse_method_kind(std::string_view name);
-std::string_view method_kind_name(MethodKind kind);
-
 // A region as the scene file describes it, before its images are read.
 struct RegionSpec {
   std::string name;
   Rect rect;
-  MethodKind method = MethodKind::curvature;
+  // A method of the scene's registry (core/methods.hpp); "none" is C/D 1, a region rendered by its
+  // effects only (materials, gravity wells).
+  std::string method = "curvature";
   FieldSources sources;  // paths already resolved against the scene file's folder
-  CurvatureParams curvature;
-  DepthParams depth;
+  // Per method name, the parameters of its [region.NAME] table; a method without one gets its defaults.
+  std::map<std::string, MethodParams, std::less<>> method_params;
   std::optional<MaterialsParams> materials;  // [region.materials]: curvature classes as materials
   std::optional<WellsParams> wells;          // [region.wells]: isophote or contour gravity wells
   int line = 0;                              // where the region starts in the file
 };
 
+// The parameters of method class M in a region: its table's, else M's defaults (added to the region).
+template <typename M>
+typename M::Params& method_params(RegionSpec& region) {
+  auto [at, added] = region.method_params.try_emplace(std::string(M::kName), typename M::Params{});
+  return std::any_cast<typename M::Params&>(at->second);
+}
+template <typename M>
+typename M::Params method_params(const RegionSpec& region) {
+  const auto at = region.method_params.find(M::kName);
+  return at == region.method_params.end() ? typename M::Params{} : std::any_cast<typename M::Params>(at->second);
+}
+
 struct SceneSpec {
   std::filesystem::path file;  // empty for a scene given as text
   std::vector<RegionSpec> regions;
-  DaemonSettings daemon;  // the [daemon] table; its defaults when there is none
+  DaemonSettings daemon;                       // the [daemon] table; its defaults when there is none
+  MethodRegistry methods = builtin_methods();  // what the regions' methods may be
 };
 
-// `origin` names the text in errors and is the base for relative image paths.
-SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& origin);
-SceneSpec parse_scene_file(const std::filesystem::path& file);
+// `origin` names the text in errors and is the base for relative image paths. `methods`: the methods a
+// region may name (a test or a tool may add its own to the built-in ones).
+SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& origin,
+                           MethodRegistry methods = builtin_methods());
+SceneSpec parse_scene_file(const std::filesystem::path& file, MethodRegistry methods = builtin_methods());
 
-MethodPtr make_method(const RegionSpec& region);
+// The region's method from `methods`, with its parameters; throws ConfigError for a name not in `methods`
+// and std::invalid_argument for parameters that are not valid.
+MethodPtr make_method(const RegionSpec& region, const MethodRegistry& methods = builtin_methods());
 
 struct SceneLoadReport {
   std::vector<FieldLoadReport> regions;

@@ -4,8 +4,7 @@
 #include <limits>
 #include <numbers>
 
-#include "core/method_curvature.hpp"
-#include "core/method_depth.hpp"
+#include "core/methods.hpp"
 #include "core/scene.hpp"
 
 namespace ph {
@@ -89,16 +88,8 @@ DirectionLut build_with(const Scene& scene, const Region& region, const M& metho
 
 DirectionLut build_direction_lut(const Scene& scene, std::size_t index, int directions) {
   const Region& region = scene.regions()[index];
-  const Method& method = *region.method;
-  switch (method.builtin()) {
-    case BuiltinMethod::curvature:
-      return build_with(scene, region, static_cast<const CurvatureMethod&>(method), directions);
-    case BuiltinMethod::depth:
-      return build_with(scene, region, static_cast<const DepthMethod&>(method), directions);
-    case BuiltinMethod::none:
-      break;
-  }
-  return build_with(scene, region, method, directions);
+  return visit_method(*region.method,
+                      [&](const auto& method) { return build_with(scene, region, method, directions); });
 }
 
 }  // namespace ph

@@ -56,7 +56,7 @@ class DirectionLut {
   std::vector<std::int16_t> codes_;
 };
 
-// The table of region `index` of a scene, whose method must be a built-in one (curvature or depth).
+// The table of region `index` of a scene (any method; the listed ones are called inline).
 // The neighbour of texel p behind it along m_k is the texel containing centre(p) - m_k: a 4- or
 // 8-neighbour; its sample comes from the region's own field inside the region and from whatever lies
 // there (another region, or the flat outside) beyond its edge, as the exact walk reads it. The depth

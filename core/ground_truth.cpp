@@ -185,9 +185,15 @@ std::vector<double> integrand_breakpoints(const TruthModel& model, Vec2 p0, Vec2
   return cuts;
 }
 
-double slope_along(const AnalyticSurface& surface, Vec2 p, Vec2 m) {
-  const ExactGradient g = surface.gradient(p);
-  return g.x * m.x + g.y * m.y;
+// What a method with `needs` reads of the surface at p.
+SurfacePoint point_of(const AnalyticSurface& surface, Vec2 p, FieldNeeds needs) {
+  SurfacePoint point;
+  if (needs.depth) point.height = surface.height(p);
+  if (needs.gradient) {
+    const ExactGradient g = surface.gradient(p);
+    point.gradient = {g.x, g.y};
+  }
+  return point;
 }
 
 }  // namespace
@@ -200,24 +206,16 @@ std::unique_ptr<AnalyticSurface> make_interrogation_surface(const SurfaceSpec& s
   return std::make_unique<InterrogationSurface>(spec);
 }
 
-double truth_cd_lower_bound(const TruthModel& model) {
-  return model.method == TruthMethod::curvature ? 1.0 / model.curvature.kmin_hi : 1.0 / model.depth.kmin;
-}
+double truth_cd_lower_bound(const TruthModel& model) { return model.method->cd_lower_bound(); }
 
-double truth_cd_upper_bound(const TruthModel& model) {
-  return model.method == TruthMethod::curvature ? model.curvature.kmax_hi : model.depth.kmax;
-}
+double truth_cd_upper_bound(const TruthModel& model) { return model.method->cd_upper_bound(); }
 
 double truth_cd(const TruthModel& model, Vec2 p, Vec2 m, StepDetail* detail) {
-  const Vec2 behind = p - m;
-  if (model.method == TruthMethod::depth) {
-    return depth_cd(model.depth, model.surface->height(behind), model.surface->height(p), 1.0, detail);
-  }
-  // Exact atan here, not the engine's fast_atan: the truth must not share the engine's approximations.
-  const double t1 = slope_along(*model.surface, behind, m);
-  const double t2 = slope_along(*model.surface, p, m);
-  return curvature_cd(model.curvature, -t1 / std::sqrt(1.0 + t1 * t1), std::atan(t1), -t2 / std::sqrt(1.0 + t2 * t2),
-                      std::atan(t2), detail);
+  const Method& method = *model.method;
+  const FieldNeeds needs = method.needs();
+  const TexelSample behind = method.sample_exact(point_of(*model.surface, p - m, needs), m);
+  const TexelSample here = method.sample_exact(point_of(*model.surface, p, needs), m);
+  return method.cd(behind, here, 1.0, detail);
 }
 
 double truth_motor_travel(const TruthModel& model, Vec2 p0, Vec2 m, double d, const TruthTolerance& tol) {

@@ -7,9 +7,9 @@
 // inside texel p2 the C/D of the pair (p1, p2), p1 the texel it came from, their centres 1 px apart. The continuous
 // analogue at a point p moving along the unit direction m takes the pair (p - m, p): the point itself and the point
 // one px behind it along the motion, both at exact positions, with exact values:
-//   curvature: a = -t / sqrt(1 + t^2), theta = atan(t), t = g . m (ALGORITHMS.md section 2), then curvature_cd of
-//              core/method_curvature.hpp with (a, theta) at p - m as the first sample and at p as the second;
-//   depth:     depth_cd of core/method_depth.hpp with h(p - m), h(p) and a step of 1 px.
+//   the method's cd() with its sample_exact() at p - m as the first sample and at p as the second, and a step of
+//   1 px. Curvature: a = -t / sqrt(1 + t^2), theta = atan(t), t = g . m (ALGORITHMS.md section 2), then
+//   curvature_cd of core/method_curvature.hpp; depth: depth_cd of core/method_depth.hpp with h(p - m), h(p).
 // The "to" sample is the point itself because the engine's "to" texel is the one the cursor is in; the pair lies
 // along m rather than along a grid axis because that is the step the paper's wording ("each time the cursor
 // advances one pixel") describes, independent of how a grid is oriented.
@@ -27,8 +27,6 @@
 
 #include "core/geometry.hpp"
 #include "core/method.hpp"
-#include "core/method_curvature.hpp"
-#include "core/method_depth.hpp"
 #include "core/surfaces.hpp"
 #include "core/targets.hpp"
 
@@ -61,13 +59,10 @@ std::unique_ptr<AnalyticSurface> make_target_surface(const TargetSpec& spec);
 // Breakpoints: the square's border.
 std::unique_ptr<AnalyticSurface> make_interrogation_surface(const SurfaceSpec& spec);
 
-enum class TruthMethod { curvature, depth };
-
+// A surface and a method (any, through Method::sample_exact). Both must outlive the model.
 struct TruthModel {
   const AnalyticSurface* surface = nullptr;
-  TruthMethod method = TruthMethod::curvature;
-  CurvatureParams curvature{};
-  DepthParams depth{};
+  const Method* method = nullptr;
 };
 
 // Smallest and largest C/D the model can give (the method's bounds).

@@ -2,7 +2,6 @@
 // nothing else about a method, so new methods plug in without touching it (STYLE.md, libinput filters).
 #pragma once
 
-#include <cstdint>
 #include <memory>
 #include <string_view>
 
@@ -11,12 +10,22 @@
 
 namespace ph {
 
-// What a method reads from one texel for one motion direction; the meaning of the two numbers is private
-// to the method (curvature: a = n''_x and the slope angle; depth: the height, and its change per px along
-// the motion).
+// What a method reads from one texel for one motion direction; the meaning of the numbers is private to
+// the method (curvature: a = n''_x and the slope angle; depth: the height, and its change per px along the
+// motion). Four, so that a method reading normals and heights together keeps both methods' pairs; the
+// walkers call the listed methods inline (core/methods.hpp), so numbers a method leaves unused cost nothing.
 struct TexelSample {
   double v0 = 0.0;
   double v1 = 0.0;
+  double v2 = 0.0;
+  double v3 = 0.0;
+};
+
+// A surface's exact values at one point, in double precision: what the ground truth's analytic surfaces
+// give a method in place of a texel (core/ground_truth.hpp). Only what the method's needs() names is set.
+struct SurfacePoint {
+  double height = 0.0;  // px toward the viewer
+  Vec2 gradient;        // (dh/dx, dh/dy), y down
 };
 
 // The intermediate quantities of one step, for traces and tests. Fields a method does not use stay NaN
@@ -30,14 +39,20 @@ struct StepDetail {
 };
 StepDetail empty_step_detail();
 
-// The built-in methods, which the traversal calls without a virtual call per texel. Any other method
-// (BuiltinMethod::none) goes through the virtual interface, unchanged.
-enum class BuiltinMethod : std::uint8_t { none, curvature, depth };
+// Names a method's concrete class, so that a walker can call the methods of core/methods.hpp without a
+// virtual call per texel (one compare per region a frame meets). A method outside that list has none.
+using MethodTag = const void*;
+template <typename M>
+inline constexpr char kMethodTagOf = 0;
+template <typename M>
+constexpr MethodTag method_tag() {
+  return &kMethodTagOf<M>;
+}
 
 class Method {
  public:
   virtual ~Method() = default;
-  BuiltinMethod builtin() const { return builtin_; }
+  MethodTag tag() const { return tag_; }
 
   virtual std::string_view name() const = 0;
   virtual FieldNeeds needs() const = 0;
@@ -53,6 +68,14 @@ class Method {
     return sample(fields, local, direction);
   }
 
+  // Sample at a point of an exact continuous surface (the ground truth): the value sample() would read
+  // there with no rounding and no approximation (exact atan where the walk uses fast_atan). The default
+  // reads nothing: the flat surface's sample.
+  virtual TexelSample sample_exact(const SurfacePoint& point, Vec2 direction) const {
+    static_cast<void>(point);
+    return sample(nullptr, {}, direction);
+  }
+
   // C/D ratio of the segment inside the texel `to`, entered from the neighbour texel `from`, whose
   // centres are `step_px` apart. Always finite and within the method's documented bounds.
   virtual double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const = 0;
@@ -62,10 +85,10 @@ class Method {
   virtual double cd_upper_bound() const = 0;
 
  protected:
-  explicit Method(BuiltinMethod builtin = BuiltinMethod::none) : builtin_(builtin) {}
+  explicit Method(MethodTag tag = nullptr) : tag_(tag) {}
 
  private:
-  BuiltinMethod builtin_;
+  MethodTag tag_;
 };
 
 using MethodPtr = std::shared_ptr<const Method>;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -10,6 +11,7 @@
 #include "core/fast_math.hpp"
 #include "core/field_sampling.hpp"
 #include "core/method.hpp"
+#include "core/method_registry.hpp"
 
 namespace ph {
 
@@ -53,9 +55,16 @@ inline double curvature_cd(const CurvatureParams& p, double a1, double theta1, d
 
 class CurvatureMethod final : public Method {
  public:
+  using Params = CurvatureParams;
+  static constexpr std::string_view kName = "curvature";
+  static constexpr std::array<std::string_view, 5> kParamKeys = {"kmax_prime", "kmin_prime", "kmax_limits",
+                                                                 "kmin_limits", "delta_beta_sign"};
+  // The [region.curvature] table; each value is checked where it is written.
+  static CurvatureParams parse_params(const ParamReader& reader);
+
   explicit CurvatureMethod(const CurvatureParams& params);  // throws std::invalid_argument if invalid
 
-  std::string_view name() const override { return "curvature"; }
+  std::string_view name() const override { return kName; }
   FieldNeeds needs() const override { return {.gradient = true, .depth = false}; }
   // Inline: the traversal calls these directly on the final class (core/traversal.cpp).
   TexelSample sample(const RegionFields* fields, Texel local, Vec2 m) const override {
@@ -71,6 +80,11 @@ class CurvatureMethod final : public Method {
     const Vec2 g = bilinear(*fields->gradient, at);
     const double t = g.x * m.x + g.y * m.y;
     return {-t / std::sqrt(1.0 + t * t), fast_atan(t)};
+  }
+  // The same from the exact gradient, with the exact atan (the ground truth must not share fast_atan).
+  TexelSample sample_exact(const SurfacePoint& point, Vec2 m) const override {
+    const double t = point.gradient.x * m.x + point.gradient.y * m.y;
+    return {-t / std::sqrt(1.0 + t * t), std::atan(t)};
   }
   double cd(const TexelSample& from, const TexelSample& to, double /*step_px*/, StepDetail* detail) const override {
     return curvature_cd(params_, from.v0, from.v1, to.v0, to.v1, detail);

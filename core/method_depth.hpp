@@ -2,12 +2,14 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include "core/field_sampling.hpp"
 #include "core/method.hpp"
+#include "core/method_registry.hpp"
 
 namespace ph {
 
@@ -34,9 +36,15 @@ inline double depth_cd(const DepthParams& p, double h1, double h2, double step_p
 
 class DepthMethod final : public Method {
  public:
+  using Params = DepthParams;
+  static constexpr std::string_view kName = "depth";
+  static constexpr std::array<std::string_view, 3> kParamKeys = {"gain", "kmax", "kmin"};
+  // The [region.depth] table; each value is checked where it is written.
+  static DepthParams parse_params(const ParamReader& reader);
+
   explicit DepthMethod(const DepthParams& params);  // throws std::invalid_argument if invalid
 
-  std::string_view name() const override { return "depth"; }
+  std::string_view name() const override { return kName; }
   FieldNeeds needs() const override { return {.gradient = false, .depth = true}; }
   // Inline: the traversal calls these directly on the final class (core/traversal.cpp).
   //
@@ -73,6 +81,10 @@ class DepthMethod final : public Method {
   TexelSample sample_at(const RegionFields* fields, Texel /*local*/, Vec2 at, Vec2 /*direction*/) const override {
     if (fields == nullptr || !fields->depth) return {0.0, kNoBehind};
     return {bilinear(*fields->depth, at), kNoBehind};
+  }
+  // The exact height at a point; cd() pairs it with the point the ground truth puts 1 px behind.
+  TexelSample sample_exact(const SurfacePoint& point, Vec2 /*direction*/) const override {
+    return {point.height, kNoBehind};
   }
   double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
     if (std::isnan(to.v1)) return depth_cd(params_, from.v0, to.v0, step_px, detail);

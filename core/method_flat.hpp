@@ -2,13 +2,25 @@
 // gravity wells), so that the region exists for them without changing the walk.
 #pragma once
 
+#include <array>
+#include <string_view>
+
 #include "core/method.hpp"
+#include "core/method_registry.hpp"
 
 namespace ph {
 
 class FlatMethod final : public Method {
  public:
-  std::string_view name() const override { return "none"; }
+  struct Params {};
+  static constexpr std::string_view kName = "none";
+  static constexpr std::array<std::string_view, 0> kParamKeys = {};
+  static Params parse_params(const ParamReader&) { return {}; }
+
+  FlatMethod() : Method(method_tag<FlatMethod>()) {}
+  explicit FlatMethod(const Params&) : FlatMethod() {}
+
+  std::string_view name() const override { return kName; }
   FieldNeeds needs() const override { return {}; }
   TexelSample sample(const RegionFields*, Texel, Vec2) const override { return {}; }
   double cd(const TexelSample&, const TexelSample&, double, StepDetail* detail) const override {

@@ -74,7 +74,8 @@ void Scene::set_options(const EngineOptions& options) {
   if (options.traversal != Traversal::direction_lut) return;
   luts_.resize(regions_.size());
   for (std::size_t i = 0; i < regions_.size(); ++i) {
-    if (regions_[i].method->builtin() == BuiltinMethod::none) continue;
+    const Method& method = *regions_[i].method;
+    if (method.cd_lower_bound() == 1.0 && method.cd_upper_bound() == 1.0) continue;  // C/D 1: nothing to look up
     luts_[i] = std::make_shared<const DirectionLut>(build_direction_lut(*this, i, options.lut_directions));
   }
 }

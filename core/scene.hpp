@@ -51,12 +51,12 @@ class Scene {
   std::size_t bytes() const;  // fields, effects and direction tables
 
   // How advance() walks this scene (core/engine_options.hpp); default: exact, nearest. Selecting
-  // direction_lut builds the table of every region with a built-in method (memory: Scene::lut_bytes);
+  // direction_lut builds the table of every region whose method is not C/D 1 throughout (memory: Scene::lut_bytes);
   // any other traversal frees them. Throws std::invalid_argument if the options are invalid.
   void set_options(const EngineOptions& options);
   const EngineOptions& options() const { return options_; }
 
-  // Direction table of region i, or null (direction_lut not selected, or not a built-in method).
+  // Direction table of region i, or null (direction_lut not selected, or a method that is C/D 1 throughout).
   const DirectionLut* direction_lut(std::size_t i) const { return i < luts_.size() ? luts_[i].get() : nullptr; }
   std::size_t lut_bytes() const;
 

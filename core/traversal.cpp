@@ -6,8 +6,7 @@
 
 #include "core/direction_lut.hpp"
 #include "core/fast_math.hpp"
-#include "core/method_curvature.hpp"
-#include "core/method_depth.hpp"
+#include "core/methods.hpp"
 #include "core/traversal_variants.hpp"
 
 namespace ph {
@@ -81,19 +80,8 @@ class Walker {
       if (lut != nullptr) {
         walk_region_lut(*owner, *lut, first);
       } else if (owner) {
-        // One dispatch per leg: the built-in methods' sample() and cd() then inline into the loop.
-        const Method& method = *scene_.regions()[*owner].method;
-        switch (method.builtin()) {
-          case BuiltinMethod::curvature:
-            walk_region(*owner, static_cast<const CurvatureMethod&>(method), first);
-            break;
-          case BuiltinMethod::depth:
-            walk_region(*owner, static_cast<const DepthMethod&>(method), first);
-            break;
-          case BuiltinMethod::none:
-            walk_region(*owner, method, first);
-            break;
-        }
+        // One dispatch per leg: the listed methods' sample() and cd() then inline into the loop.
+        visit_method(*scene_.regions()[*owner].method, [&](const auto& method) { walk_region(*owner, method, first); });
       } else {
         cross_flat();
       }
@@ -214,7 +202,7 @@ class Walker {
   }
 
   // Walks texel by texel while the texels belong to `index`. M is the method's concrete type for the
-  // built-in methods (calls inline), or Method itself (virtual calls) for any other.
+  // listed methods (calls inline), or Method itself (virtual calls) for any other.
   template <typename M>
   void walk_region(std::size_t index, const M& method, bool first_leg) {
     const Region& region = scene_.regions()[index];

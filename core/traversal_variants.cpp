@@ -6,8 +6,7 @@
 #include <limits>
 
 #include "core/fast_math.hpp"
-#include "core/method_curvature.hpp"
-#include "core/method_depth.hpp"
+#include "core/methods.hpp"
 
 namespace ph {
 
@@ -22,20 +21,6 @@ int sign_of(double v) { return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0); }
 // As in core/traversal.cpp: the cell a coordinate on a boundary belongs to, behind or ahead of the motion.
 std::int32_t cell_behind(double v, int step) { return step > 0 ? -floor_to_int(-v) - 1 : floor_to_int(v); }
 std::int32_t cell_ahead(double v, int step) { return step < 0 ? -floor_to_int(-v) - 1 : floor_to_int(v); }
-
-// Calls f with the method as its concrete type for the built-in methods, so that sample() and cd() inline.
-template <typename F>
-auto visit_method(const Method& method, F&& f) {
-  switch (method.builtin()) {
-    case BuiltinMethod::curvature:
-      return f(static_cast<const CurvatureMethod&>(method));
-    case BuiltinMethod::depth:
-      return f(static_cast<const DepthMethod&>(method));
-    case BuiltinMethod::none:
-      break;
-  }
-  return f(method);
-}
 
 // What `method` reads at texel t (nearest) or at point p inside t (bilinear), from the fields of the
 // region that owns t; the flat surface's sample outside every region.

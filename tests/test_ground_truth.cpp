@@ -8,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include "core/methods.hpp"
 #include "core/scene.hpp"
 #include "core/targets.hpp"
 #include "core/traversal.hpp"
@@ -36,6 +37,11 @@ TargetSpec target(TargetShape shape, TargetProfile profile, double height, doubl
   return spec;
 }
 
+// The two methods the truth is checked with, with their default parameters.
+const CurvatureMethod kCurvature{CurvatureParams{}};
+const DepthMethod kDepth{DepthParams{}};
+const Method* const kMethods[] = {&kCurvature, &kDepth};
+
 // The curvature method's C/D for a step from slope t1 to slope t2 along the motion.
 double cd_of_slopes(const CurvatureParams& p, double t1, double t2) {
   return curvature_cd(p, -t1 / std::sqrt(1 + t1 * t1), std::atan(t1), -t2 / std::sqrt(1 + t2 * t2), std::atan(t2),
@@ -60,14 +66,14 @@ TEST(GroundTruth, TargetSurfaceIsTheTargetInDoublePrecision) {
 
 TEST(GroundTruth, PlaneGivesConstantCdAndDisplayIsMotorOverCd) {
   const Plane plane({0.3, -0.2});
-  for (TruthMethod method : {TruthMethod::curvature, TruthMethod::depth}) {
-    const TruthModel model{&plane, method, {}, {}};
+  for (const Method* method : kMethods) {
+    const TruthModel model{&plane, method};
     for (double angle_deg : {0.0, 30.0, 90.0, 200.0, 333.0}) {
       const double a = angle_deg * std::acos(-1.0) / 180.0;
       const Vec2 m{std::cos(a), std::sin(a)};
       const double t = 0.3 * m.x - 0.2 * m.y;
-      const double cd = method == TruthMethod::curvature ? cd_of_slopes(model.curvature, t, t)
-                                                         : depth_cd(model.depth, 0.0, t, 1.0, nullptr);
+      const double cd = method == &kCurvature ? cd_of_slopes(kCurvature.params(), t, t)
+                                              : depth_cd(kDepth.params(), 0.0, t, 1.0, nullptr);
       EXPECT_NEAR(truth_cd(model, {10, 20}, m), cd, 1e-12);
       for (double motor : {0.37, 5.0, 123.4}) {
         EXPECT_NEAR(truth_display_distance(model, {10, 20}, m, motor), motor / cd, 1e-9) << angle_deg;
@@ -84,8 +90,8 @@ TEST(GroundTruth, ConeAlongADiameterMatchesTheClosedForm) {
     for (double radius : {100.0, 200.0}) {
       const TargetSpec spec = target(TargetShape::bump, TargetProfile::linear, height, radius);
       const auto surface = make_target_surface(spec);
-      const TruthModel model{surface.get(), TruthMethod::curvature, {}, {}};
-      const CurvatureParams& p = model.curvature;
+      const TruthModel model{surface.get(), &kCurvature};
+      const CurvatureParams& p = kCurvature.params();
       const double s = height * spec.relief_px / radius;
       const double c = spec.size / 2.0;
       const Vec2 start{c - radius - 10.0, c};
@@ -103,8 +109,8 @@ TEST(GroundTruth, ConeAlongADiameterMatchesTheClosedForm) {
 
 TEST(GroundTruth, FlatOutsideIsTheIdentity) {
   const auto surface = make_target_surface(target(TargetShape::hole, TargetProfile::gaussian, 1.0, 200.0));
-  for (TruthMethod method : {TruthMethod::curvature, TruthMethod::depth}) {
-    const TruthModel model{surface.get(), method, {}, {}};
+  for (const Method* method : kMethods) {
+    const TruthModel model{surface.get(), method};
     // Along the top edge, 50 px from the rim: C/D is exactly 1.
     const Vec2 p{0.0, 0.0};
     const Vec2 end = truth_advance(model, p, {400.0, 0.0});
@@ -120,9 +126,9 @@ TEST(GroundTruth, HalvingTheToleranceChangesTheAnswerByLessThanIt) {
   surfaces.push_back(make_interrogation_surface({SurfaceKind::sphere, 512}));
   surfaces.push_back(make_interrogation_surface({SurfaceKind::monkey_saddle, 512}));
   for (std::size_t i = 0; i < surfaces.size(); ++i) {
-    for (TruthMethod method : {TruthMethod::curvature, TruthMethod::depth}) {
-      SCOPED_TRACE(testing::Message() << "surface " << i << " method " << int(method));
-      const TruthModel model{surfaces[i].get(), method, {}, {}};
+    for (const Method* method : kMethods) {
+      SCOPED_TRACE(testing::Message() << "surface " << i << " method " << method->name());
+      const TruthModel model{surfaces[i].get(), method};
       const Vec2 m{std::cos(0.3), std::sin(0.3)};
       const double coarse = truth_display_distance(model, {20.3, 170.1}, m, 450.0, {1e-9, 1e-9});
       const double fine = truth_display_distance(model, {20.3, 170.1}, m, 450.0, {5e-10, 1e-9});
@@ -141,11 +147,11 @@ TEST(GroundTruth, EngineOnAFloatFieldStaysCloseToTheTruth) {
   double worst = 0.0;
   for (const TargetSpec& spec : all_targets()) {
     const auto surface = make_target_surface(spec);
-    for (TruthMethod method : {TruthMethod::curvature, TruthMethod::depth}) {
+    for (const Method* method : kMethods) {
       Region region;
       region.name = spec.name();
       region.rect = {0, 0, spec.size, spec.size};
-      if (method == TruthMethod::curvature) {
+      if (method == &kCurvature) {
         region.fields.gradient = target_gradient_field(spec);
         region.method = std::make_shared<CurvatureMethod>(CurvatureParams{});
       } else {
@@ -155,7 +161,7 @@ TEST(GroundTruth, EngineOnAFloatFieldStaysCloseToTheTruth) {
       std::vector<Region> regions;
       regions.push_back(std::move(region));
       const Scene scene(std::move(regions));
-      const TruthModel model{surface.get(), method, {}, {}};
+      const TruthModel model{surface.get(), method};
       const Vec2 start{20.0, spec.size / 2.0 + 0.5};  // along the centres of a texel row
       CursorState cursor = cursor_at(start);
       Vec2 truth = start;
@@ -165,7 +171,7 @@ TEST(GroundTruth, EngineOnAFloatFieldStaysCloseToTheTruth) {
       }
       const double error = length(cursor.position - truth);
       worst = std::max(worst, error);
-      EXPECT_LT(error, kBoundPx) << spec.name() << (method == TruthMethod::curvature ? " curvature" : " depth");
+      EXPECT_LT(error, kBoundPx) << spec.name() << " " << method->name();
     }
   }
   RecordProperty("worst_end_error_px", std::to_string(worst));

@@ -110,7 +110,7 @@ TEST(SceneFileParse, ReadsEveryKey) {
   EXPECT_EQ(r.rect.y, -20);
   EXPECT_EQ(r.rect.w, 300);
   EXPECT_EQ(r.rect.h, 200);
-  EXPECT_EQ(r.method, MethodKind::curvature);
+  EXPECT_EQ(r.method, "curvature");
   ASSERT_TRUE(r.sources.normal_map);
   EXPECT_EQ(*r.sources.normal_map, fs::path("scenes") / "maps/left.normal.png");  // relative: against the folder
   ASSERT_TRUE(r.sources.depth_map);
@@ -119,16 +119,16 @@ TEST(SceneFileParse, ReadsEveryKey) {
   EXPECT_EQ(r.sources.normal_options.encoding, NormalEncoding::signed_values);
   EXPECT_DOUBLE_EQ(r.sources.depth_options.depth_zero, 0.5);
   EXPECT_DOUBLE_EQ(r.sources.depth_options.relief_px, 200.0);  // an integer where a number is wanted
-  EXPECT_DOUBLE_EQ(r.curvature.kmax_prime, 5.5);
-  EXPECT_DOUBLE_EQ(r.curvature.kmin_prime, 2.0);
-  EXPECT_DOUBLE_EQ(r.curvature.kmax_lo, 1.5);
-  EXPECT_DOUBLE_EQ(r.curvature.kmax_hi, 20.0);
-  EXPECT_DOUBLE_EQ(r.curvature.kmin_lo, 1.0);
-  EXPECT_DOUBLE_EQ(r.curvature.kmin_hi, 4.5);
-  EXPECT_DOUBLE_EQ(r.curvature.delta_beta_sign, -1.0);
-  EXPECT_DOUBLE_EQ(r.depth.gain, 2.5);
-  EXPECT_DOUBLE_EQ(r.depth.kmax, 3.0);
-  EXPECT_DOUBLE_EQ(r.depth.kmin, 2.0);
+  EXPECT_DOUBLE_EQ(method_params<CurvatureMethod>(r).kmax_prime, 5.5);
+  EXPECT_DOUBLE_EQ(method_params<CurvatureMethod>(r).kmin_prime, 2.0);
+  EXPECT_DOUBLE_EQ(method_params<CurvatureMethod>(r).kmax_lo, 1.5);
+  EXPECT_DOUBLE_EQ(method_params<CurvatureMethod>(r).kmax_hi, 20.0);
+  EXPECT_DOUBLE_EQ(method_params<CurvatureMethod>(r).kmin_lo, 1.0);
+  EXPECT_DOUBLE_EQ(method_params<CurvatureMethod>(r).kmin_hi, 4.5);
+  EXPECT_DOUBLE_EQ(method_params<CurvatureMethod>(r).delta_beta_sign, -1.0);
+  EXPECT_DOUBLE_EQ(method_params<DepthMethod>(r).gain, 2.5);
+  EXPECT_DOUBLE_EQ(method_params<DepthMethod>(r).kmax, 3.0);
+  EXPECT_DOUBLE_EQ(method_params<DepthMethod>(r).kmin, 2.0);
 }
 
 TEST(SceneFileParse, FillsDefaults) {
@@ -143,7 +143,7 @@ TEST(SceneFileParse, FillsDefaults) {
   EXPECT_EQ(r.rect.y, 0);
   EXPECT_EQ(r.rect.w, 64);
   EXPECT_EQ(r.rect.h, 32);
-  EXPECT_EQ(r.method, MethodKind::depth);
+  EXPECT_EQ(r.method, "depth");
   EXPECT_FALSE(r.sources.normal_map);
   ASSERT_TRUE(r.sources.depth_map);
   EXPECT_EQ(*r.sources.depth_map, fs::path("scenes") / "d.png");
@@ -151,27 +151,27 @@ TEST(SceneFileParse, FillsDefaults) {
   EXPECT_EQ(r.sources.normal_options.encoding, NormalEncoding::automatic);
   EXPECT_DOUBLE_EQ(r.sources.depth_options.depth_zero, 0.0);
   EXPECT_DOUBLE_EQ(r.sources.depth_options.relief_px, 100.0);
-  EXPECT_EQ(r.curvature.kmax_prime, curvature.kmax_prime);
-  EXPECT_EQ(r.curvature.kmin_prime, curvature.kmin_prime);
-  EXPECT_EQ(r.curvature.kmax_lo, curvature.kmax_lo);
-  EXPECT_EQ(r.curvature.kmax_hi, curvature.kmax_hi);
-  EXPECT_EQ(r.curvature.kmin_lo, curvature.kmin_lo);
-  EXPECT_EQ(r.curvature.kmin_hi, curvature.kmin_hi);
-  EXPECT_EQ(r.curvature.delta_beta_sign, 1.0);
-  EXPECT_EQ(r.depth.gain, depth.gain);
-  EXPECT_EQ(r.depth.kmax, depth.kmax);
-  EXPECT_EQ(r.depth.kmin, depth.kmin);
+  EXPECT_EQ(method_params<CurvatureMethod>(r).kmax_prime, curvature.kmax_prime);
+  EXPECT_EQ(method_params<CurvatureMethod>(r).kmin_prime, curvature.kmin_prime);
+  EXPECT_EQ(method_params<CurvatureMethod>(r).kmax_lo, curvature.kmax_lo);
+  EXPECT_EQ(method_params<CurvatureMethod>(r).kmax_hi, curvature.kmax_hi);
+  EXPECT_EQ(method_params<CurvatureMethod>(r).kmin_lo, curvature.kmin_lo);
+  EXPECT_EQ(method_params<CurvatureMethod>(r).kmin_hi, curvature.kmin_hi);
+  EXPECT_EQ(method_params<CurvatureMethod>(r).delta_beta_sign, 1.0);
+  EXPECT_EQ(method_params<DepthMethod>(r).gain, depth.gain);
+  EXPECT_EQ(method_params<DepthMethod>(r).kmax, depth.kmax);
+  EXPECT_EQ(method_params<DepthMethod>(r).kmin, depth.kmin);
 
   // The third: the largest side, a path out of the folder, an inline curvature table with one key.
   const RegionSpec& t = spec.regions[2];
   EXPECT_EQ(t.name, "region 2");
   EXPECT_EQ(t.rect.h, 16384);
-  EXPECT_EQ(t.method, MethodKind::curvature);
+  EXPECT_EQ(t.method, "curvature");
   ASSERT_TRUE(t.sources.normal_map);
   EXPECT_EQ(*t.sources.normal_map, fs::path("scenes") / "../up.png");
   EXPECT_EQ(t.sources.normal_options.encoding, NormalEncoding::unorm);
-  EXPECT_DOUBLE_EQ(t.curvature.kmax_prime, 3.0);
-  EXPECT_EQ(t.curvature.kmin_prime, curvature.kmin_prime);
+  EXPECT_DOUBLE_EQ(method_params<CurvatureMethod>(t).kmax_prime, 3.0);
+  EXPECT_EQ(method_params<CurvatureMethod>(t).kmin_prime, curvature.kmin_prime);
 }
 
 TEST(SceneFileParse, EmptySceneHasNoRegions) {
@@ -186,12 +186,12 @@ TEST(SceneFileParse, PathsOfASceneWithoutFolderStayAsWritten) {
 }
 
 TEST(SceneFileParse, MethodNamesAndMethods) {
-  EXPECT_EQ(parse_method_kind("curvature"), MethodKind::curvature);
-  EXPECT_EQ(parse_method_kind("depth"), MethodKind::depth);
-  EXPECT_FALSE(parse_method_kind("Depth"));
-  EXPECT_FALSE(parse_method_kind(""));
-  EXPECT_EQ(method_kind_name(MethodKind::curvature), "curvature");
-  EXPECT_EQ(method_kind_name(MethodKind::depth), "depth");
+  const MethodRegistry methods = builtin_methods();
+  EXPECT_EQ(methods.names(), "curvature, depth, none");
+  EXPECT_NE(methods.find("curvature"), nullptr);
+  EXPECT_NE(methods.find("depth"), nullptr);
+  EXPECT_EQ(methods.find("Depth"), nullptr);
+  EXPECT_EQ(methods.find(""), nullptr);
 
   const SceneSpec spec = parse_scene_text(kFullScene, kOrigin);
   const MethodPtr curvature = make_method(spec.regions[0]);
@@ -199,16 +199,15 @@ TEST(SceneFileParse, MethodNamesAndMethods) {
   EXPECT_DOUBLE_EQ(curvature->cd_upper_bound(), 20.0);     // kmax_limits upper
   EXPECT_DOUBLE_EQ(curvature->cd_lower_bound(), 1 / 4.5);  // 1 / kmin_limits upper
   RegionSpec as_depth = spec.regions[0];
-  as_depth.method = MethodKind::depth;
+  as_depth.method = "depth";
   const MethodPtr depth = make_method(as_depth);
   EXPECT_EQ(depth->name(), "depth");
   EXPECT_DOUBLE_EQ(depth->cd_upper_bound(), 3.0);
   EXPECT_DOUBLE_EQ(depth->cd_lower_bound(), 0.5);
   // "none": C/D 1, for a region rendered by its effects alone; it reads no field.
-  EXPECT_EQ(parse_method_kind("none"), MethodKind::none);
-  EXPECT_EQ(method_kind_name(MethodKind::none), "none");
+  EXPECT_NE(methods.find("none"), nullptr);
   RegionSpec as_none = spec.regions[0];
-  as_none.method = MethodKind::none;
+  as_none.method = "none";
   const MethodPtr none = make_method(as_none);
   EXPECT_EQ(none->name(), "none");
   EXPECT_EQ(none->cd_lower_bound(), 1.0);
@@ -415,7 +414,7 @@ TEST(SceneFileLoad, TargetFilesRoundTrip) {
     const SceneSpec spec = parse_scene_file(scenes[i]);
     ASSERT_EQ(spec.regions.size(), 1u);
     EXPECT_EQ(spec.regions[0].name, target.name());
-    EXPECT_EQ(spec.regions[0].method, MethodKind::curvature);
+    EXPECT_EQ(spec.regions[0].method, "curvature");
 
     SceneLoadReport report;
     const Scene curvature = load_scene(spec, &report);
@@ -433,7 +432,7 @@ TEST(SceneFileLoad, TargetFilesRoundTrip) {
     EXPECT_EQ(c.fields.gradient->height, 500);
 
     SceneSpec as_depth = spec;
-    as_depth.regions[0].method = MethodKind::depth;
+    as_depth.regions[0].method = "depth";
     const Scene depth = load_scene(as_depth);
     ASSERT_EQ(depth.regions().size(), 1u);
     const Region& d = depth.regions()[0];
@@ -480,7 +479,7 @@ TEST(SceneFileInterrogation, MaterialsAndWellsTablesAreRead) {
   const SceneSpec spec = parse_scene_text(text, kOrigin);
   ASSERT_EQ(spec.regions.size(), 1u);
   const RegionSpec& r = spec.regions[0];
-  EXPECT_EQ(r.method, MethodKind::none);
+  EXPECT_EQ(r.method, "none");
   ASSERT_TRUE(r.materials);
   EXPECT_EQ(r.materials->source, ClassSource::depth);
   EXPECT_EQ(r.materials->filter_radius, 4);

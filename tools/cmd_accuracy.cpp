@@ -69,6 +69,7 @@
 #include "core/decode.hpp"
 #include "core/engine_options.hpp"
 #include "core/ground_truth.hpp"
+#include "core/methods.hpp"
 #include "core/scene.hpp"
 #include "core/surfaces.hpp"
 #include "core/targets.hpp"
@@ -105,11 +106,22 @@ const char* name_of(Storage s) {
   return "?";
 }
 
-const char* name_of(TruthMethod m) { return m == TruthMethod::curvature ? "curvature" : "depth"; }
+// The methods measured: every method of the registry (core/methods.hpp) that is not C/D 1 throughout, with
+// its default parameters, in the registry's order.
+std::vector<MethodPtr> measured_methods() {
+  std::vector<MethodPtr> out;
+  const MethodRegistry registry = builtin_methods();
+  for (const auto& entry : registry.entries()) {
+    MethodPtr method = entry->make(entry->defaults());
+    if (method->cd_lower_bound() != 1.0 || method->cd_upper_bound() != 1.0) out.push_back(std::move(method));
+  }
+  return out;
+}
 
-// Storage variants per method: adding one is one entry here and one case in build_fields.
-std::vector<Storage> storages_for(TruthMethod m) {
-  if (m == TruthMethod::curvature) return {Storage::f32, Storage::n16, Storage::n8, Storage::d16, Storage::d8};
+// Storage variants per method: adding one is one entry here and one case in build_fields. A method that reads
+// heights has no normal-map storage (a normal map has none).
+std::vector<Storage> storages_for(const Method& method) {
+  if (!method.needs().depth) return {Storage::f32, Storage::n16, Storage::n8, Storage::d16, Storage::d8};
   return {Storage::f32, Storage::d16, Storage::d8};
 }
 
@@ -234,17 +246,14 @@ GradientField gradient_of_normals(const NormalImage& normals) {
   return g;
 }
 
-RegionFields build_fields(const Shape& shape, TruthMethod method, Storage storage, const Source& source) {
+// The fields a method with `needs` reads, from one storage.
+RegionFields build_fields(const Shape& shape, FieldNeeds needs, Storage storage, const Source& source) {
   RegionFields fields;
   DecodeReport report;
-  const bool curvature = method == TruthMethod::curvature;
   switch (storage) {
     case Storage::f32:
-      if (curvature) {
-        fields.gradient = shape.gradient_field();
-      } else {
-        fields.depth = shape.depth_field();
-      }
+      if (needs.gradient) fields.gradient = shape.gradient_field();
+      if (needs.depth) fields.depth = shape.depth_field();
       break;
     case Storage::n16:
     case Storage::n8:
@@ -253,27 +262,20 @@ RegionFields build_fields(const Shape& shape, TruthMethod method, Storage storag
     case Storage::d16:
     case Storage::d8: {
       DepthField depth = decode_depth(source.image, {0.5, 2.0 * shape.relief_px()}, report);
-      if (curvature) {
-        fields.gradient = gradient_from_depth(depth);
-      } else {
-        fields.depth = std::move(depth);
-      }
+      if (needs.gradient) fields.gradient = gradient_from_depth(depth);
+      if (needs.depth) fields.depth = std::move(depth);
       break;
     }
   }
   return fields;
 }
 
-Scene make_scene(const Shape& shape, TruthMethod method, RegionFields fields) {
+Scene make_scene(const Shape& shape, const MethodPtr& method, RegionFields fields) {
   Region region;
   region.name = shape.name();
   region.rect = {0, 0, shape.size(), shape.size()};
   region.fields = std::move(fields);
-  if (method == TruthMethod::curvature) {
-    region.method = std::make_shared<CurvatureMethod>(CurvatureParams{});
-  } else {
-    region.method = std::make_shared<DepthMethod>(DepthParams{});
-  }
+  region.method = method;
   std::vector<Region> regions;
   regions.push_back(std::move(region));
   return Scene(std::move(regions));
@@ -485,8 +487,9 @@ int run_accuracy(const AccuracyOptions& o) {
              engines.size());
 
   std::vector<VariantRow> rows;
-  for (TruthMethod method : {TruthMethod::curvature, TruthMethod::depth}) {
-    auto model_of = [&](std::size_t target) { return TruthModel{surfaces[target].get(), method, {}, {}}; };
+  const std::vector<MethodPtr> methods = measured_methods();
+  for (const MethodPtr& method : methods) {
+    auto model_of = [&](std::size_t target) { return TruthModel{surfaces[target].get(), method.get()}; };
     // The truth, once per method: where each stroke and each walk ends.
     const Clock::time_point t_truth = Clock::now();
     std::vector<Vec2> stroke_truth;
@@ -497,16 +500,16 @@ int run_accuracy(const AccuracyOptions& o) {
       walk_truth.emplace_back();
       walks.push_back(make_walk(config, w, model_of(w), 1000 + w, walk_truth.back()));
     }
-    fmt::print(stderr, "accuracy: {} ground truth in {:.1f} s\n", name_of(method), ms_since(t_truth) / 1000.0);
+    fmt::print(stderr, "accuracy: {} ground truth in {:.1f} s\n", method->name(), ms_since(t_truth) / 1000.0);
 
-    for (Storage storage : storages_for(method)) {
+    for (Storage storage : storages_for(*method)) {
       // Fields of every target, built once per storage; the build time is the storage's precompute cost.
       std::vector<Scene> scenes;
       double build_ms = 0.0;
       for (const Shape& shape : config.targets) {
         const Source source = make_source(shape, storage);
         const Clock::time_point t0 = Clock::now();
-        RegionFields fields = build_fields(shape, method, storage, source);
+        RegionFields fields = build_fields(shape, method->needs(), storage, source);
         build_ms += ms_since(t0);
         scenes.push_back(make_scene(shape, method, std::move(fields)));
       }
@@ -514,7 +517,7 @@ int run_accuracy(const AccuracyOptions& o) {
 
       for (const EngineOptions& engine : engines) {
         VariantRow row;
-        row.method = name_of(method);
+        row.method = std::string(method->name());
         row.traversal = traversal_label(engine);
         row.storage = name_of(storage);
         row.sampling = std::string(name_of(engine.sampling));
@@ -627,9 +630,9 @@ int run_accuracy(const AccuracyOptions& o) {
     const Shape& shape = config.targets[t];
     if (!shape.is_target()) continue;  // the paper's figure is of its targets
     const std::int32_t size = shape.size();
-    for (TruthMethod method : {TruthMethod::curvature, TruthMethod::depth}) {
-      const Scene scene = make_scene(shape, method, build_fields(shape, method, Storage::f32, {}));
-      const TruthModel model{surfaces[t].get(), method, {}, {}};
+    for (const MethodPtr& method : methods) {
+      const Scene scene = make_scene(shape, method, build_fields(shape, method->needs(), Storage::f32, {}));
+      const TruthModel model{surfaces[t].get(), method.get()};
       CursorState cursor = cursor_at({0.0, size / 2.0 + 0.5});
       CdError unused;
       StepLog log;
@@ -639,7 +642,7 @@ int run_accuracy(const AccuracyOptions& o) {
         advance(scene, cursor, {1.0, 0.0}, &log);
         score_frame(model, log.steps, start, cursor.position, {1.0, 0.0}, unused,
                     [&](double x, double cd, double truth) {
-                      fmt::print(f, "{},{},{:.4f},{:.6g},{:.6g}\n", shape.name(), name_of(method), x, cd, truth);
+                      fmt::print(f, "{},{},{:.4f},{:.6g},{:.6g}\n", shape.name(), method->name(), x, cd, truth);
                     });
       }
     }

@@ -50,7 +50,7 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
       bytes += effect->bytes();
     }
     fmt::format_to(to, "  [{}] '{}': {},{} {}x{} px, {}{}, {} bytes, {} invalid texels repaired\n", i, r.name, r.rect.x,
-                   r.rect.y, r.rect.w, r.rect.h, method_kind_name(r.method), effects, bytes,
+                   r.rect.y, r.rect.w, r.rect.h, r.method, effects, bytes,
                    fr.normals.invalid_texels + fr.depth.invalid_texels);
   }
   return fmt::to_string(out);

@@ -30,9 +30,9 @@ struct Range {
   double lo = 1.0, hi = 1.0;
 };
 
-Range stroke_range(const SceneSpec& target_scene, MethodKind method, double step) {
+Range stroke_range(const SceneSpec& target_scene, std::string_view method, double step) {
   SceneSpec spec = target_scene;
-  spec.regions.front().method = method;
+  spec.regions.front().method = std::string(method);
   const Scene scene = load_scene(spec);
   const Rect r = scene.regions().front().rect;
   StrokeSpec stroke;
@@ -67,8 +67,8 @@ Run add_demo_command(CLI::App& app) {
     for (const TargetSpec& t : targets) {
       fmt::print(stderr, "\r[{:2}/{}] {:<28}", ++done, targets.size(), t.name());
       const SceneSpec spec = parse_scene_file(target_file_paths(folder, t).scene);
-      const Range c = stroke_range(spec, MethodKind::curvature, *step);
-      const Range d = stroke_range(spec, MethodKind::depth, *step);
+      const Range c = stroke_range(spec, CurvatureMethod::kName, *step);
+      const Range d = stroke_range(spec, DepthMethod::kName, *step);
       fmt::print(stderr, "\r{:40}\r", "");
       fmt::print("{:<28} {:>8.3f} .. {:>6.3f} {:>8.3f} .. {:>6.3f}\n", t.name(), c.lo, c.hi, d.lo, d.hi);
       std::fflush(stdout);

@@ -34,19 +34,21 @@ struct TraceOptions {
 
 // The options that change a region's method, applied to every region of the traced scene.
 void apply_overrides(const TraceOptions& o, RegionSpec& r) {
-  if (!o.method.empty()) r.method = *parse_method_kind(o.method);
-  if (o.kmax_prime) r.curvature.kmax_prime = *o.kmax_prime;
-  if (o.kmin_prime) r.curvature.kmin_prime = *o.kmin_prime;
-  if (o.delta_beta_sign) r.curvature.delta_beta_sign = *o.delta_beta_sign;
+  if (!o.method.empty()) r.method = o.method;
+  CurvatureParams& curvature = method_params<CurvatureMethod>(r);
+  if (o.kmax_prime) curvature.kmax_prime = *o.kmax_prime;
+  if (o.kmin_prime) curvature.kmin_prime = *o.kmin_prime;
+  if (o.delta_beta_sign) curvature.delta_beta_sign = *o.delta_beta_sign;
   if (o.kmax_limits.size() == 2)
-    std::tie(r.curvature.kmax_lo, r.curvature.kmax_hi) = std::pair(o.kmax_limits[0], o.kmax_limits[1]);
+    std::tie(curvature.kmax_lo, curvature.kmax_hi) = std::pair(o.kmax_limits[0], o.kmax_limits[1]);
   if (o.kmin_limits.size() == 2)
-    std::tie(r.curvature.kmin_lo, r.curvature.kmin_hi) = std::pair(o.kmin_limits[0], o.kmin_limits[1]);
-  if (o.gain) r.depth.gain = *o.gain;
-  if (o.depth_kmax) r.depth.kmax = *o.depth_kmax;
-  if (o.depth_kmin) r.depth.kmin = *o.depth_kmin;
-  if (auto e = validate(r.curvature); !e.empty()) throw std::invalid_argument("curvature method: " + e);
-  if (auto e = validate(r.depth); !e.empty()) throw std::invalid_argument("depth method: " + e);
+    std::tie(curvature.kmin_lo, curvature.kmin_hi) = std::pair(o.kmin_limits[0], o.kmin_limits[1]);
+  DepthParams& depth = method_params<DepthMethod>(r);
+  if (o.gain) depth.gain = *o.gain;
+  if (o.depth_kmax) depth.kmax = *o.depth_kmax;
+  if (o.depth_kmin) depth.kmin = *o.depth_kmin;
+  if (auto e = validate(curvature); !e.empty()) throw std::invalid_argument("curvature method: " + e);
+  if (auto e = validate(depth); !e.empty()) throw std::invalid_argument("depth method: " + e);
 }
 
 // A one-region scene at (0, 0) covering the given image(s) at their own size. Loaded here rather than through a
@@ -64,7 +66,7 @@ Scene scene_from_maps(const TraceOptions& o, std::vector<std::string>& warnings)
                                                                       : NormalEncoding::automatic;
   r.sources.depth_options.depth_zero = o.depth_zero.value_or(0.0);
   r.sources.depth_options.relief_px = o.relief_px.value_or(100.0);
-  r.method = o.depth_map.empty() || !o.normal_map.empty() ? MethodKind::curvature : MethodKind::depth;
+  r.method = o.depth_map.empty() || !o.normal_map.empty() ? CurvatureMethod::kName : DepthMethod::kName;
   apply_overrides(o, r);
   Region region;
   region.name = r.name;
@@ -186,8 +188,13 @@ Run add_trace_command(CLI::App& app) {
       ->capture_default_str();
   app.add_option("--depth-zero", o->depth_zero, "Depth map value of height 0 (default 0)");
   app.add_option("--relief-px", o->relief_px, "Screen px of height per unit of depth map value (default 100)");
+  std::vector<std::string> methods;
+  const MethodRegistry registry = builtin_methods();
+  for (const auto& entry : registry.entries()) {
+    if (entry->name != FlatMethod::kName) methods.push_back(entry->name);  // a flat trace shows nothing
+  }
   app.add_option("--method", o->method, "C/D method for every region (default: the scene's, else curvature)")
-      ->check(CLI::IsMember({"curvature", "depth"}));
+      ->check(CLI::IsMember(methods));
   app.add_option("--kmax-prime", o->kmax_prime, "Curvature: k'max, largest C/D when delta-beta = 0 (default 4)");
   app.add_option("--kmin-prime", o->kmin_prime, "Curvature: k'min, 1 / smallest C/D when delta-beta = 0 (default 1.5)");
   app.add_option("--kmax-limits", o->kmax_limits, "Curvature: LO,HI limits of kmax (default 1,30)")
