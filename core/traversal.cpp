@@ -6,6 +6,7 @@
 
 #include "core/direction_lut.hpp"
 #include "core/fast_math.hpp"
+#include "core/grid_walk.hpp"
 #include "core/methods.hpp"
 #include "core/traversal_variants.hpp"
 
@@ -17,33 +18,12 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // More texel steps than any frame can take across regions of at most 2^14 px a side.
 constexpr std::uint64_t kMaxStepsPerFrame = std::uint64_t{1} << 26;
 
-int sign_of(double v) { return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0); }
-
-// Index of the grid cell a coordinate lies in, taking a coordinate on a cell boundary to belong to the
-// cell the motion came from (so a stop exactly on a boundary stays in the texel that was being walked).
-std::int32_t cell_behind(double v, int step) { return step > 0 ? -floor_to_int(-v) - 1 : floor_to_int(v); }
-
-// cell_behind without a branch on the step's sign, which is random from frame to frame: the two cells differ
-// only where v is a whole number, which is rare, so that branch is predicted.
-std::int32_t cell_behind_predictable(double v, double step) {
-  const std::int32_t below = floor_to_int(v);
-  if (v == static_cast<double>(below)) [[unlikely]]
-    return step > 0.0 ? below - 1 : below;
-  return below;
-}
-
-// Index of the cell a motion starting at a coordinate moves into.
-std::int32_t cell_ahead(double v, int step) { return step < 0 ? -floor_to_int(-v) - 1 : floor_to_int(v); }
-
 // Where a ray enters a region's box, if it does within `limit` of display travel.
 struct Entry {
   double t = kInf;
   std::size_t region = 0;
   bool via_x = true;
 };
-
-// A region's top-left corner in screen px (bilinear positions are region-local).
-Vec2 corner(const Region& region) { return {static_cast<double>(region.rect.x), static_cast<double>(region.rect.y)}; }
 
 // The variants that walk the exact texel sequence (core/engine_options.hpp): nearest is the default
 // engine; bilinear samples each texel at the midpoint of the ray's chord through it; lut takes each
@@ -106,41 +86,14 @@ class Walker {
     tmy_ = sy_ > 0 ? (texel_.y + 1.0 - p.y) * tdy_ : (sy_ < 0 ? (p.y - texel_.y) * tdy_ : kInf);
   }
 
-  template <typename M>
-  TexelSample sample_with(const M& method, Texel t) const {
-    const std::optional<std::size_t> owner = scene_.owner(t);
-    if (!owner) return method.sample(nullptr, {}, m_);
-    const Region& region = scene_.regions()[*owner];
-    return method.sample(&region.fields, region.local(t), m_);
-  }
-
   // Midpoint of the chord of the current line through a texel's box (the texel's centre when the line
   // misses the box: a history texel from another direction). For Sampling::bilinear: a function of the
   // texel and the line only, so splitting a frame does not change what a texel samples.
   Vec2 chord_mid(Texel box) const {
-    double lo = -kInf, hi = kInf;
-    const double o[2] = {origin_.x, origin_.y}, d[2] = {m_.x, m_.y};
-    const double b[2] = {static_cast<double>(box.x), static_cast<double>(box.y)};
-    for (int axis = 0; axis < 2; ++axis) {
-      if (d[axis] != 0.0) {
-        const double t0 = (b[axis] - o[axis]) / d[axis], t1 = (b[axis] + 1.0 - o[axis]) / d[axis];
-        lo = std::max(lo, std::min(t0, t1));
-        hi = std::min(hi, std::max(t0, t1));
-      } else if (o[axis] < b[axis] || o[axis] > b[axis] + 1.0) {
-        lo = kInf;
-      }
-    }
-    if (lo <= hi) return origin_ + m_ * (0.5 * (lo + hi));
+    const Vec2 lo{static_cast<double>(box.x), static_cast<double>(box.y)};
+    const RaySpan chord = ray_box(origin_, m_, lo, lo + Vec2{1.0, 1.0}, -kInf, kInf);
+    if (chord.hits()) return origin_ + m_ * (0.5 * (chord.t0 + chord.t1));
     return {box.x + 0.5, box.y + 0.5};
-  }
-
-  // Sample of `t` at `at` (bilinear mode): the fields of the region that owns t, read by `method`.
-  template <typename M>
-  TexelSample sample_at_with(const M& method, Texel t, Vec2 at) const {
-    const std::optional<std::size_t> owner = scene_.owner(t);
-    if (!owner) return method.sample(nullptr, {}, m_);
-    const Region& region = scene_.regions()[*owner];
-    return method.sample_at(&region.fields, region.local(t), at - corner(region), m_);
   }
 
   // Sample of the texel the walk is in (nearest: its value; bilinear: at its chord's midpoint).
@@ -164,9 +117,9 @@ class Walker {
   TexelSample sample_from(const M& method) {
     if constexpr (Mode == WalkMode::bilinear) {
       sample_point_ = chord_mid(from_);
-      return sample_at_with(method, from_, sample_point_);
+      return sample_owner(scene_, method, from_, m_, &sample_point_);
     } else {
-      return sample_with(method, from_);
+      return sample_owner(scene_, method, from_, m_);
     }
   }
 
@@ -206,9 +159,35 @@ class Walker {
   template <typename M>
   void walk_region(std::size_t index, const M& method, bool first_leg) {
     const Region& region = scene_.regions()[index];
-    TexelSample s_from = sample_from(method);
-    TexelSample s_cur = sample_here(region, method);
-    double cd = step_cd(region, method, s_from, s_cur, !first_leg);
+    TexelSample previous = sample_from(method);
+    step_through(index, first_leg, [&](bool entered) {
+      const TexelSample here = sample_here(region, method);
+      const double cd = step_cd(region, method, previous, here, entered);
+      previous = here;
+      return cd;
+    });
+  }
+
+  // The same with each texel's C/D from a direction table.
+  void walk_region_lut(std::size_t index, const DirectionLut& lut, bool first_leg) {
+    const Region& region = scene_.regions()[index];
+    step_through(index, first_leg, [&](bool entered) { return lut_cd(region, lut, entered); });
+  }
+
+  // C/D of the current texel from a direction table, with the bookkeeping of step_cd.
+  double lut_cd(const Region& region, const DirectionLut& lut, bool entered) {
+    const double cd = lut.cd(lut_k_, region.local(texel_));
+    if (observer_ != nullptr) observe_step(cd, empty_step_detail(), entered, region);
+    return count_step(cd, entered);
+  }
+
+  // The texel-stepping loop: spends the budget texel by texel while the texels belong to region `index`,
+  // each at the C/D that cd_here(entered) gives for the texel the walk is in (called once per texel, in
+  // order, so it may keep the previous texel's sample).
+  template <typename CdHere>
+  void step_through(std::size_t index, bool first_leg, CdHere&& cd_here) {
+    const Region& region = scene_.regions()[index];
+    double cd = cd_here(!first_leg);
     const bool topmost = index + 1 == scene_.regions().size();
     for (;;) {
       const double t_next = std::min(tmx_, tmy_);
@@ -236,51 +215,7 @@ class Walker {
         restart_at(position());
         return;  // another region or the flat outside takes over
       }
-      s_from = s_cur;
-      s_cur = sample_here(region, method);
-      cd = step_cd(region, method, s_from, s_cur, true);
-    }
-  }
-
-  // C/D of the current texel from a direction table, with the bookkeeping of step_cd.
-  double lut_cd(const Region& region, const DirectionLut& lut, bool entered) {
-    const double cd = lut.cd(lut_k_, region.local(texel_));
-    if (observer_ != nullptr) observe_step(cd, empty_step_detail(), entered, region);
-    return count_step(cd, entered);
-  }
-
-  // walk_region's loop with the C/D from the table (kept separate so the default loop stays as it is).
-  void walk_region_lut(std::size_t index, const DirectionLut& lut, bool first_leg) {
-    const Region& region = scene_.regions()[index];
-    double cd = lut_cd(region, lut, !first_leg);
-    const bool topmost = index + 1 == scene_.regions().size();
-    for (;;) {
-      const double t_next = std::min(tmx_, tmy_);
-      const double cost = cd * (t_next - t_);
-      if (cost >= budget_) {
-        t_ += budget_ / cd;
-        budget_ = 0.0;
-        return;
-      }
-      budget_ -= cost;
-      t_ = t_next;
-      if (++steps_ > kMaxStepsPerFrame) {
-        budget_ = 0.0;
-        return;
-      }
-      from_ = texel_;
-      if (tmx_ <= tmy_) {
-        texel_.x += sx_;
-        tmx_ += tdx_;
-      } else {
-        texel_.y += sy_;
-        tmy_ += tdy_;
-      }
-      if (!region.rect.contains(texel_) || (!topmost && scene_.owner(texel_) != index)) {
-        restart_at(position());
-        return;
-      }
-      cd = lut_cd(region, lut, true);
+      cd = cd_here(true);
     }
   }
 

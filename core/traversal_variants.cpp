@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/fast_math.hpp"
+#include "core/grid_walk.hpp"
 #include "core/methods.hpp"
 
 namespace ph {
@@ -16,24 +17,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Unit steps inside regions of at most 2^14 px a side: far fewer than this per frame; never spin.
 constexpr std::uint64_t kMaxUnitSteps = std::uint64_t{1} << 26;
 
-int sign_of(double v) { return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0); }
-
-// As in core/traversal.cpp: the cell a coordinate on a boundary belongs to, behind or ahead of the motion.
-std::int32_t cell_behind(double v, int step) { return step > 0 ? -floor_to_int(-v) - 1 : floor_to_int(v); }
-std::int32_t cell_ahead(double v, int step) { return step < 0 ? -floor_to_int(-v) - 1 : floor_to_int(v); }
-
-// What `method` reads at texel t (nearest) or at point p inside t (bilinear), from the fields of the
-// region that owns t; the flat surface's sample outside every region.
+// What `method` reads at texel t (nearest) or at point p inside t (bilinear).
 template <typename M>
 TexelSample probe(const Scene& scene, const M& method, Texel t, Vec2 p, Vec2 m, Sampling sampling) {
-  const std::optional<std::size_t> owner = scene.owner(t);
-  if (!owner) return method.sample(nullptr, {}, m);
-  const Region& region = scene.regions()[*owner];
-  if (sampling == Sampling::bilinear) {
-    const Vec2 local{p.x - region.rect.x, p.y - region.rect.y};
-    return method.sample_at(&region.fields, region.local(t), local, m);
-  }
-  return method.sample(&region.fields, region.local(t), m);
+  return sampling == Sampling::bilinear ? sample_owner(scene, method, t, m, &p) : sample_owner(scene, method, t, m);
 }
 
 // Display travel from p along m to where the ray first touches a region's closed box; kInf for none.
@@ -41,20 +28,9 @@ double next_region(const Scene& scene, Vec2 p, Vec2 m) {
   double best = kInf;
   for (const Region& region : scene.regions()) {
     const Rect& r = region.rect;
-    double lo = 0.0, hi = kInf;
-    const double o[2] = {p.x, p.y}, d[2] = {m.x, m.y};
-    const double b0[2] = {static_cast<double>(r.x), static_cast<double>(r.y)};
-    const double b1[2] = {static_cast<double>(r.x) + r.w, static_cast<double>(r.y) + r.h};
-    for (int axis = 0; axis < 2; ++axis) {
-      if (d[axis] != 0.0) {
-        const double t0 = (b0[axis] - o[axis]) / d[axis], t1 = (b1[axis] - o[axis]) / d[axis];
-        lo = std::max(lo, std::min(t0, t1));
-        hi = std::min(hi, std::max(t0, t1));
-      } else if (o[axis] < b0[axis] || o[axis] > b1[axis]) {
-        lo = kInf;
-      }
-    }
-    if (lo <= hi) best = std::min(best, lo);
+    const Vec2 hi{static_cast<double>(r.x) + r.w, static_cast<double>(r.y) + r.h};
+    const RaySpan span = ray_box(p, m, corner(region), hi, 0.0, kInf);
+    if (span.hits()) best = std::min(best, span.t0);
   }
   return best;
 }

@@ -68,6 +68,7 @@
 
 #include "core/decode.hpp"
 #include "core/engine_options.hpp"
+#include "core/grid_walk.hpp"
 #include "core/ground_truth.hpp"
 #include "core/methods.hpp"
 #include "core/scene.hpp"
@@ -413,20 +414,10 @@ struct CdError {
 
 // Clips the segment a + m s, s in [0, len], to a rect; returns [s0, s1] (s0 >= s1 when it misses).
 std::pair<double, double> clip(Vec2 a, Vec2 m, double len, const Rect& r) {
-  double s0 = 0.0, s1 = len;
-  const double lo[2] = {static_cast<double>(r.x), static_cast<double>(r.y)};
-  const double hi[2] = {static_cast<double>(r.x) + r.w, static_cast<double>(r.y) + r.h};
-  const double o[2] = {a.x, a.y}, d[2] = {m.x, m.y};
-  for (int k = 0; k < 2; ++k) {
-    if (d[k] == 0.0) {
-      if (o[k] < lo[k] || o[k] > hi[k]) return {1.0, 0.0};
-      continue;
-    }
-    const double t0 = (lo[k] - o[k]) / d[k], t1 = (hi[k] - o[k]) / d[k];
-    s0 = std::max(s0, std::min(t0, t1));
-    s1 = std::min(s1, std::max(t0, t1));
-  }
-  return {s0, s1};
+  const Vec2 lo{static_cast<double>(r.x), static_cast<double>(r.y)};
+  const Vec2 hi{static_cast<double>(r.x) + r.w, static_cast<double>(r.y) + r.h};
+  const RaySpan span = ray_box(a, m, lo, hi, 0.0, len);
+  return {span.t0, span.t1};
 }
 
 // Adds the frame's steps to the C/D error (definition at the top of the file).
