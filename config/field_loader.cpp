@@ -1,6 +1,5 @@
 #include "config/field_loader.hpp"
 
-#include <algorithm>
 #include <optional>
 #include <string>
 #include <utility>
@@ -40,19 +39,6 @@ NormalImage load_normals(const std::filesystem::path& path, const NormalDecodeOp
                          std::int32_t height, DecodeReport& report, const ImageLimits& limits) {
   const RawImage image = read_image(path, limits);
   return naming_file(path, [&] { return resample_normals(decode_normals(image, options, report), width, height); });
-}
-
-// A texel with n_z just above 0 is a wall: its slope stays finite so that later arithmetic never sees inf.
-Gradient finite_gradient(Normal n) {
-  constexpr float max_slope = 1.0e6f;
-  const Gradient g = gradient_from_normal(n);
-  return {std::clamp(g.x, -max_slope, max_slope), std::clamp(g.y, -max_slope, max_slope)};
-}
-
-GradientField gradient_from_normals(const NormalImage& normals) {
-  GradientField gradient(normals.width, normals.height);
-  std::transform(normals.values.begin(), normals.values.end(), gradient.values.begin(), finite_gradient);
-  return gradient;
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "core/field.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace ph {
@@ -9,6 +10,15 @@ Normal normal_from_gradient(Gradient g) {
   const double ny = -static_cast<double>(g.y);
   const double len = std::sqrt(nx * nx + ny * ny + 1.0);
   return {static_cast<float>(nx / len), static_cast<float>(ny / len), static_cast<float>(1.0 / len)};
+}
+
+GradientField gradient_from_normals(const NormalImage& normals) {
+  GradientField gradient(normals.width, normals.height);
+  std::transform(normals.values.begin(), normals.values.end(), gradient.values.begin(), [](Normal n) {
+    const Gradient g = gradient_from_normal(n);
+    return Gradient{std::clamp(g.x, -kMaxSlope, kMaxSlope), std::clamp(g.y, -kMaxSlope, kMaxSlope)};
+  });
+  return gradient;
 }
 
 GradientField gradient_from_depth(const DepthField& depth) {

@@ -63,6 +63,11 @@ struct RegionFields {
 // Gradient of a unit normal with n_z > 0: g = (-n_x / n_z, -n_y / n_z).
 inline Gradient gradient_from_normal(Normal n) { return {-n.x / n.z, -n.y / n.z}; }
 
+// Gradients of decoded normals, as a region's field holds them: a texel with n_z just above 0 is a wall, and
+// its slope is clamped to +-kMaxSlope so that later arithmetic never sees inf.
+inline constexpr float kMaxSlope = 1.0e6f;
+GradientField gradient_from_normals(const NormalImage& normals);
+
 // Unit normal of a height gradient.
 Normal normal_from_gradient(Gradient g);
 
