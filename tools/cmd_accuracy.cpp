@@ -5,7 +5,8 @@
 // every sampling it accepts, direction_lut with 8 and 16 directions). Storage is how a user's map reaches the
 // engine, built from the exact target in memory and decoded through the loader's own path (core/decode.hpp):
 //   f32  the exact field rasterised at texel centres (target_gradient_field / target_depth_field);
-//   n16, n8  a 16- / 8-bit normal map: codes round((n + 1) / 2 * cmax), decode_normals, g = -n_xy / n_z;
+//   n16, n8  a 16- / 8-bit normal map: codes round((n + 1) / 2 * cmax), decode_normals, then the loader's own
+//            gradient_from_normals (core/field.hpp: g = -n_xy / n_z, walls clamped);
 //   d16, d8  a 16- / 8-bit depth map: codes of (h / relief + 1) / 2, decode_depth; the curvature method takes
 //            central differences of it (gradient_from_depth), as the loader does for a depth-only region.
 //   The depth method reads heights, so it has f32, d16 and d8 only.
@@ -236,17 +237,6 @@ Source make_source(const Shape& shape, Storage storage) {
   return {};
 }
 
-// The loader's conversion of decoded normals (config/field_loader.cpp): a wall's slope stays finite.
-GradientField gradient_of_normals(const NormalImage& normals) {
-  constexpr float kMaxSlope = 1.0e6f;
-  GradientField g(normals.width, normals.height);
-  for (std::size_t i = 0; i < g.values.size(); ++i) {
-    const Gradient v = gradient_from_normal(normals.values[i]);
-    g.values[i] = {std::clamp(v.x, -kMaxSlope, kMaxSlope), std::clamp(v.y, -kMaxSlope, kMaxSlope)};
-  }
-  return g;
-}
-
 // The fields a method with `needs` reads, from one storage.
 RegionFields build_fields(const Shape& shape, FieldNeeds needs, Storage storage, const Source& source) {
   RegionFields fields;
@@ -258,7 +248,7 @@ RegionFields build_fields(const Shape& shape, FieldNeeds needs, Storage storage,
       break;
     case Storage::n16:
     case Storage::n8:
-      fields.gradient = gradient_of_normals(decode_normals(source.image, {}, report));
+      fields.gradient = gradient_from_normals(decode_normals(source.image, {}, report));
       break;
     case Storage::d16:
     case Storage::d8: {
@@ -465,144 +455,194 @@ void close_csv(std::FILE* f, const fs::path& path) {
   if (std::fclose(f) != 0) throw std::runtime_error(fmt::format("{}: write failed", path.string()));
 }
 
-int run_accuracy(const AccuracyOptions& o) {
-  const Clock::time_point t_start = Clock::now();
-  const Config config = make_config(o.small);
-  const fs::path outdir(o.outdir);
-  fs::create_directories(outdir);
-  const std::vector<Path> strokes = make_strokes(config);
-  std::vector<std::unique_ptr<AnalyticSurface>> surfaces;
-  for (const Shape& shape : config.targets) surfaces.push_back(shape.surface());
-  const std::vector<EngineOptions> engines = engine_variants();
-  fmt::print(stderr, "accuracy: {} shapes, {} strokes, {} engine variants\n", config.targets.size(), strokes.size(),
-             engines.size());
+// What every variant is measured on: the shapes, their exact surfaces, the strokes and the engine variants.
+struct Workload {
+  Config config;
+  std::vector<Path> strokes;
+  std::vector<std::unique_ptr<AnalyticSurface>> surfaces;  // one per shape
+  std::vector<EngineOptions> engines;
+};
 
-  std::vector<VariantRow> rows;
-  const std::vector<MethodPtr> methods = measured_methods();
-  for (const MethodPtr& method : methods) {
-    auto model_of = [&](std::size_t target) { return TruthModel{surfaces[target].get(), method.get()}; };
-    // The truth, once per method: where each stroke and each walk ends.
-    const Clock::time_point t_truth = Clock::now();
-    std::vector<Vec2> stroke_truth;
-    for (const Path& p : strokes) stroke_truth.push_back(truth_end_of(model_of(p.target), p));
-    std::vector<Path> walks;
-    std::vector<std::vector<Vec2>> walk_truth;
-    for (std::size_t w : config.walk_targets) {
-      walk_truth.emplace_back();
-      walks.push_back(make_walk(config, w, model_of(w), 1000 + w, walk_truth.back()));
+Workload make_workload(bool small) {
+  Workload w;
+  w.config = make_config(small);
+  w.strokes = make_strokes(w.config);
+  for (const Shape& shape : w.config.targets) w.surfaces.push_back(shape.surface());
+  w.engines = engine_variants();
+  return w;
+}
+
+// The truth for one method: where each stroke ends, and the walks with the truth's cursor every kDriftWindow
+// frames (the walks are steered by the true cursor, so they depend on the method).
+struct MethodTruth {
+  std::vector<Vec2> stroke_ends;
+  std::vector<Path> walks;
+  std::vector<std::vector<Vec2>> walk_marks;
+};
+
+TruthModel model_of(const Workload& w, std::size_t target, const Method& method) {
+  return TruthModel{w.surfaces[target].get(), &method};
+}
+
+MethodTruth compute_truth(const Workload& w, const Method& method) {
+  MethodTruth truth;
+  for (const Path& p : w.strokes) truth.stroke_ends.push_back(truth_end_of(model_of(w, p.target, method), p));
+  for (std::size_t target : w.config.walk_targets) {
+    truth.walk_marks.emplace_back();
+    truth.walks.push_back(
+        make_walk(w.config, target, model_of(w, target, method), 1000 + target, truth.walk_marks.back()));
+  }
+  return truth;
+}
+
+// One scene per shape with the fields of one storage; build_ms: the mean time to build a shape's fields.
+struct StorageScenes {
+  std::vector<Scene> scenes;
+  double build_ms = 0.0;
+};
+
+StorageScenes build_scenes(const Workload& w, const MethodPtr& method, Storage storage) {
+  StorageScenes out;
+  for (const Shape& shape : w.config.targets) {
+    const Source source = make_source(shape, storage);
+    const Clock::time_point t0 = Clock::now();
+    RegionFields fields = build_fields(shape, method->needs(), storage, source);
+    out.build_ms += ms_since(t0);
+    out.scenes.push_back(make_scene(shape, method, std::move(fields)));
+  }
+  out.build_ms /= static_cast<double>(w.config.targets.size());
+  return out;
+}
+
+// Selects the engine variant in every scene; fills the row's precompute time and bytes per texel.
+void select_engine(StorageScenes& s, const EngineOptions& engine, VariantRow& row) {
+  double options_ms = 0.0;
+  std::size_t bytes = 0;
+  std::int64_t area = 0;
+  for (Scene& scene : s.scenes) {
+    const Clock::time_point t0 = Clock::now();
+    scene.set_options(engine);
+    options_ms += ms_since(t0);
+    bytes += scene.bytes();
+    area += scene.regions().front().rect.area();
+  }
+  row.precompute_ms = s.build_ms + options_ms / static_cast<double>(s.scenes.size());
+  row.bytes_texel = static_cast<double>(bytes) / static_cast<double>(area);
+}
+
+// The C/D error along the strokes and the strokes' end errors.
+void measure_strokes(const Workload& w, const MethodTruth& truth, const std::vector<Scene>& scenes,
+                     const Method& method, VariantRow& row) {
+  CdError cd_err;
+  double end_sum2 = 0.0, end_max = 0.0;
+  StepLog log;
+  for (std::size_t i = 0; i < w.strokes.size(); ++i) {
+    const Path& p = w.strokes[i];
+    const TruthModel model = model_of(w, p.target, method);
+    CursorState cursor = cursor_at(p.start);
+    for (const Vec2& motor : p.motors) {
+      log.steps.clear();
+      const Vec2 start = cursor.position;
+      advance(scenes[p.target], cursor, motor, &log);
+      score_frame(model, log.steps, start, cursor.position, motor * (1.0 / length(motor)), cd_err);
     }
-    fmt::print(stderr, "accuracy: {} ground truth in {:.1f} s\n", method->name(), ms_since(t_truth) / 1000.0);
+    const double e = length(cursor.position - truth.stroke_ends[i]);
+    end_sum2 += e * e;
+    end_max = std::max(end_max, e);
+  }
+  row.cd_rms = cd_err.rms();
+  row.cd_max = cd_err.max;
+  row.end_rms = std::sqrt(end_sum2 / static_cast<double>(w.strokes.size()));
+  row.end_max = end_max;
+}
 
-    for (Storage storage : storages_for(*method)) {
-      // Fields of every target, built once per storage; the build time is the storage's precompute cost.
-      std::vector<Scene> scenes;
-      double build_ms = 0.0;
-      for (const Shape& shape : config.targets) {
-        const Source source = make_source(shape, storage);
-        const Clock::time_point t0 = Clock::now();
-        RegionFields fields = build_fields(shape, method->needs(), storage, source);
-        build_ms += ms_since(t0);
-        scenes.push_back(make_scene(shape, method, std::move(fields)));
+// RMS over the walks' windows of the distance to the truth at the window's end.
+double measure_drift(const MethodTruth& truth, const std::vector<Scene>& scenes) {
+  double drift2 = 0.0;
+  std::size_t windows = 0;
+  for (std::size_t w = 0; w < truth.walks.size(); ++w) {
+    const std::vector<Vec2>& marks = truth.walk_marks[w];
+    for (std::size_t k = 0; k + 1 < marks.size(); ++k) {
+      CursorState cursor = cursor_at(marks[k]);
+      for (std::size_t f = k * kDriftWindow; f < (k + 1) * kDriftWindow; ++f) {
+        advance(scenes[truth.walks[w].target], cursor, truth.walks[w].motors[f]);
       }
-      build_ms /= static_cast<double>(config.targets.size());
+      const double e = length(cursor.position - marks[k + 1]);
+      drift2 += e * e;
+      ++windows;
+    }
+  }
+  return windows > 0 ? std::sqrt(drift2 / static_cast<double>(windows)) : 0.0;
+}
 
-      for (const EngineOptions& engine : engines) {
-        VariantRow row;
-        row.method = std::string(method->name());
-        row.traversal = traversal_label(engine);
-        row.storage = name_of(storage);
-        row.sampling = std::string(name_of(engine.sampling));
-        row.variant = fmt::format("{}/{}/{}/{}", row.method, row.traversal, row.storage, row.sampling);
-        double options_ms = 0.0;
-        std::size_t bytes = 0;
-        std::int64_t area = 0;
-        for (Scene& scene : scenes) {
-          const Clock::time_point t0 = Clock::now();
-          scene.set_options(engine);
-          options_ms += ms_since(t0);
-          bytes += scene.bytes();
-          area += scene.regions().front().rect.area();
+// Speed from replaying the walks without an observer, one batch per drift window started at the truth's
+// position: a replay from the walk's start alone would part from the truth and spend its time on the flat
+// outside.
+void measure_speed(const MethodTruth& truth, const std::vector<Scene>& scenes, double timing_s, VariantRow& row) {
+  std::vector<double> per_frame;
+  double total_ns = 0.0;
+  std::uint64_t total_steps = 0;
+  const Clock::time_point t_timing = Clock::now();
+  do {
+    for (std::size_t w = 0; w < truth.walks.size(); ++w) {
+      const Scene& scene = scenes[truth.walks[w].target];
+      const std::vector<Vec2>& marks = truth.walk_marks[w];
+      for (std::size_t k = 0; k + 1 < marks.size(); ++k) {
+        CursorState cursor = cursor_at(marks[k]);
+        std::uint64_t steps = 0;
+        const Clock::time_point t0 = Clock::now();
+        for (std::size_t f = k * kDriftWindow; f < (k + 1) * kDriftWindow; ++f) {
+          steps += advance(scene, cursor, truth.walks[w].motors[f]).steps;
         }
-        row.precompute_ms = build_ms + options_ms / static_cast<double>(scenes.size());
-        row.bytes_texel = static_cast<double>(bytes) / static_cast<double>(area);
+        const double ns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count();
+        per_frame.push_back(ns / static_cast<double>(kDriftWindow));
+        total_ns += ns;
+        total_steps += steps;
+      }
+    }
+  } while (ms_since(t_timing) < timing_s * 1000.0);
+  row.ns_median = percentile(per_frame, 0.5);
+  row.ns_p99 = percentile(per_frame, 0.99);
+  row.ns_step = total_steps > 0 ? total_ns / static_cast<double>(total_steps) : 0.0;
+}
 
-        // Accuracy along the strokes.
-        CdError cd_err;
-        double end_sum2 = 0.0, end_max = 0.0;
-        StepLog log;
-        for (std::size_t i = 0; i < strokes.size(); ++i) {
-          const Path& p = strokes[i];
-          const Scene& scene = scenes[p.target];
-          const TruthModel model = model_of(p.target);
-          CursorState cursor = cursor_at(p.start);
-          for (const Vec2& motor : p.motors) {
-            log.steps.clear();
-            const Vec2 start = cursor.position;
-            advance(scene, cursor, motor, &log);
-            score_frame(model, log.steps, start, cursor.position, motor * (1.0 / length(motor)), cd_err);
-          }
-          const double e = length(cursor.position - stroke_truth[i]);
-          end_sum2 += e * e;
-          end_max = std::max(end_max, e);
-        }
-        row.cd_rms = cd_err.rms();
-        row.cd_max = cd_err.max;
-        row.end_rms = std::sqrt(end_sum2 / static_cast<double>(strokes.size()));
-        row.end_max = end_max;
+VariantRow measure_variant(const Workload& w, const MethodTruth& truth, const MethodPtr& method, Storage storage,
+                           StorageScenes& scenes, const EngineOptions& engine) {
+  VariantRow row;
+  row.method = std::string(method->name());
+  row.traversal = traversal_label(engine);
+  row.storage = name_of(storage);
+  row.sampling = std::string(name_of(engine.sampling));
+  row.variant = fmt::format("{}/{}/{}/{}", row.method, row.traversal, row.storage, row.sampling);
+  select_engine(scenes, engine, row);
+  measure_strokes(w, truth, scenes.scenes, *method, row);
+  row.drift = measure_drift(truth, scenes.scenes);
+  measure_speed(truth, scenes.scenes, w.config.timing_s, row);
+  return row;
+}
 
-        // Drift over the walks, and speed from replaying them without an observer.
-        double drift2 = 0.0;
-        std::size_t windows = 0;
-        for (std::size_t w = 0; w < walks.size(); ++w) {
-          const std::vector<Vec2>& marks = walk_truth[w];
-          for (std::size_t k = 0; k + 1 < marks.size(); ++k) {
-            CursorState cursor = cursor_at(marks[k]);
-            for (std::size_t f = k * kDriftWindow; f < (k + 1) * kDriftWindow; ++f) {
-              advance(scenes[walks[w].target], cursor, walks[w].motors[f]);
-            }
-            const double e = length(cursor.position - marks[k + 1]);
-            drift2 += e * e;
-            ++windows;
-          }
-        }
-        row.drift = windows > 0 ? std::sqrt(drift2 / static_cast<double>(windows)) : 0.0;
-
-        // One batch per drift window, started at the truth's position: a replay from the walk's start alone would
-        // part from the truth and spend its time on the flat outside.
-        std::vector<double> per_frame;
-        double total_ns = 0.0;
-        std::uint64_t total_steps = 0;
-        const Clock::time_point t_timing = Clock::now();
-        do {
-          for (std::size_t w = 0; w < walks.size(); ++w) {
-            const Scene& scene = scenes[walks[w].target];
-            const std::vector<Vec2>& marks = walk_truth[w];
-            for (std::size_t k = 0; k + 1 < marks.size(); ++k) {
-              CursorState cursor = cursor_at(marks[k]);
-              std::uint64_t steps = 0;
-              const Clock::time_point t0 = Clock::now();
-              for (std::size_t f = k * kDriftWindow; f < (k + 1) * kDriftWindow; ++f) {
-                steps += advance(scene, cursor, walks[w].motors[f]).steps;
-              }
-              const double ns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count();
-              per_frame.push_back(ns / static_cast<double>(kDriftWindow));
-              total_ns += ns;
-              total_steps += steps;
-            }
-          }
-        } while (ms_since(t_timing) < config.timing_s * 1000.0);
-        row.ns_median = percentile(per_frame, 0.5);
-        row.ns_p99 = percentile(per_frame, 0.99);
-        row.ns_step = total_steps > 0 ? total_ns / static_cast<double>(total_steps) : 0.0;
+// Every variant of every method: method x storage x engine.
+std::vector<VariantRow> measure_all(const Workload& w, const std::vector<MethodPtr>& methods) {
+  std::vector<VariantRow> rows;
+  for (const MethodPtr& method : methods) {
+    const Clock::time_point t_truth = Clock::now();
+    const MethodTruth truth = compute_truth(w, *method);
+    fmt::print(stderr, "accuracy: {} ground truth in {:.1f} s\n", method->name(), ms_since(t_truth) / 1000.0);
+    for (Storage storage : storages_for(*method)) {
+      StorageScenes scenes = build_scenes(w, method, storage);
+      for (const EngineOptions& engine : w.engines) {
+        rows.push_back(measure_variant(w, truth, method, storage, scenes, engine));
+        const VariantRow& row = rows.back();
         fmt::print(stderr, "accuracy: {:<44} end rms {:.3g} px, C/D rms {:.3g}, {:.0f} ns/frame\n", row.variant,
                    row.end_rms, row.cd_rms, row.ns_median);
-        rows.push_back(row);
       }
     }
   }
+  return rows;
+}
 
-  const fs::path variants_path = outdir / "variants.csv";
-  std::FILE* f = open_csv(variants_path);
+void write_variants(const fs::path& path, const std::vector<VariantRow>& rows) {
+  std::FILE* f = open_csv(path);
   fmt::print(f,
              "variant,method,traversal,storage,sampling,ns_per_frame_median,ns_per_frame_p99,ns_per_step,"
              "bytes_per_texel,precompute_ms,cd_err_rms,cd_err_max,end_err_rms_px,end_err_max_px,drift_px\n");
@@ -611,19 +651,20 @@ int run_accuracy(const AccuracyOptions& o) {
                r.method, r.traversal, r.storage, r.sampling, r.ns_median, r.ns_p99, r.ns_step, r.bytes_texel,
                r.precompute_ms, r.cd_rms, r.cd_max, r.end_rms, r.end_max, r.drift);
   }
-  close_csv(f, variants_path);
+  close_csv(f, path);
+}
 
-  // Fig. 5: the default variant's C/D along the centre row of each target, with the truth.
-  const fs::path traces_path = outdir / "fig5_traces.csv";
-  f = open_csv(traces_path);
+// Fig. 5: the default variant's C/D along the centre row of each target, with the truth.
+void write_fig5(const fs::path& path, const Workload& w, const std::vector<MethodPtr>& methods) {
+  std::FILE* f = open_csv(path);
   fmt::print(f, "target,method,x,cd,cd_truth\n");
-  for (std::size_t t = 0; t < config.targets.size(); ++t) {
-    const Shape& shape = config.targets[t];
+  for (std::size_t t = 0; t < w.config.targets.size(); ++t) {
+    const Shape& shape = w.config.targets[t];
     if (!shape.is_target()) continue;  // the paper's figure is of its targets
     const std::int32_t size = shape.size();
     for (const MethodPtr& method : methods) {
       const Scene scene = make_scene(shape, method, build_fields(shape, method->needs(), Storage::f32, {}));
-      const TruthModel model{surfaces[t].get(), method.get()};
+      const TruthModel model = model_of(w, t, *method);
       CursorState cursor = cursor_at({0.0, size / 2.0 + 0.5});
       CdError unused;
       StepLog log;
@@ -638,11 +679,12 @@ int run_accuracy(const AccuracyOptions& o) {
       }
     }
   }
-  close_csv(f, traces_path);
+  close_csv(f, path);
+}
 
-  // Fig. 2: the curvature method's formula over the paper's plane of cos(alpha) and delta-beta.
-  const fs::path grid_path = outdir / "fig2_grid.csv";
-  f = open_csv(grid_path);
+// Fig. 2: the curvature method's formula over the paper's plane of cos(alpha) and delta-beta.
+void write_fig2(const fs::path& path) {
+  std::FILE* f = open_csv(path);
   fmt::print(f, "cos_alpha,delta_beta_deg,cd\n");
   const CurvatureParams params{};
   for (int i = 0; i <= 40; ++i) {
@@ -654,7 +696,21 @@ int run_accuracy(const AccuracyOptions& o) {
                  curvature_cd(params, cos_alpha, theta1, cos_alpha, 0.0, nullptr));
     }
   }
-  close_csv(f, grid_path);
+  close_csv(f, path);
+}
+
+int run_accuracy(const AccuracyOptions& o) {
+  const Clock::time_point t_start = Clock::now();
+  const fs::path outdir(o.outdir);
+  fs::create_directories(outdir);
+  const Workload workload = make_workload(o.small);
+  fmt::print(stderr, "accuracy: {} shapes, {} strokes, {} engine variants\n", workload.config.targets.size(),
+             workload.strokes.size(), workload.engines.size());
+  const std::vector<MethodPtr> methods = measured_methods();
+  const std::vector<VariantRow> rows = measure_all(workload, methods);
+  write_variants(outdir / "variants.csv", rows);
+  write_fig5(outdir / "fig5_traces.csv", workload, methods);
+  write_fig2(outdir / "fig2_grid.csv");
   fmt::print("wrote {} variants to {} in {:.1f} s\n", rows.size(), outdir.string(), ms_since(t_start) / 1000.0);
   return 0;
 }
