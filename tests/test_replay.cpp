@@ -200,14 +200,14 @@ TEST(Replay, AbsoluteModeEmitsPositionsOnlyWithinTheDesktop) {
   EXPECT_FALSE(output.device.has(ev::kRel, ev::kRelY));
   EXPECT_TRUE(output.device.has(ev::kRel, ev::kRelWheel));
   EXPECT_TRUE(output.device.has(ev::kAbs, ev::kAbsX));
-  EXPECT_EQ(output.device.absinfo.at(ev::kAbsX).maximum, 799);
+  EXPECT_EQ(output.device.absinfo.at(ev::kAbsX).maximum, 1599);  // half pixels
   int positions = 0;
   for (const InputEvent& e : output.events) {
     ASSERT_FALSE(is_motion(e));
     if (e.type != ev::kAbs) continue;
     ++positions;
     ASSERT_GE(e.value, 0);
-    ASSERT_LE(e.value, e.code == ev::kAbsX ? 799 : 599);
+    ASSERT_LE(e.value, e.code == ev::kAbsX ? 1599 : 1199);
   }
   EXPECT_GT(positions, 300);
   // Pushed against the left edge, the model sits on it.
@@ -216,7 +216,7 @@ TEST(Replay, AbsoluteModeEmitsPositionsOnlyWithinTheDesktop) {
   f.events = {{0, ev::kRel, ev::kRelX, -50}, {0, ev::kSyn, ev::kSynReport, 0}};
   const Frame out = pipeline.process(f);
   EXPECT_EQ(out.events.front().type, ev::kAbs);
-  EXPECT_EQ(out.events.front().value, 0);
+  EXPECT_EQ(out.events.front().value, abs_value_of_pixel(0));  // the centre of the first pixel
 }
 
 TEST(Replay, RelativeModeCarriesFractions) {
