@@ -110,9 +110,9 @@ void Pipeline::clamp_to_desktop() {
   const double x = std::clamp(cursor_.position.x, static_cast<double>(d.x), std::nextafter(d.x + d.w, d.x));
   const double y = std::clamp(cursor_.position.y, static_cast<double>(d.y), std::nextafter(d.y + d.h, d.y));
   if (x != cursor_.position.x || y != cursor_.position.y) {
-    const EffectState effect = cursor_.effect;  // pushing against the edge is still the same hand
+    const EffectStates effects = cursor_.effects;  // pushing against the edge is still the same hand
     cursor_ = cursor_at({x, y});
-    cursor_.effect = effect;
+    cursor_.effects = effects;
   }
 }
 

@@ -18,8 +18,8 @@ namespace ph {
 struct CursorState {
   Vec2 position;
   Texel texel;
-  Texel came_from;     // == texel when there is no history (start, or after a flat stretch)
-  EffectState effect;  // what the frame effects of the region under the cursor remember
+  Texel came_from;       // == texel when there is no history (start, or after a flat stretch)
+  EffectStates effects;  // what the frame effects of the region under the cursor remember, one each
 };
 
 // A cursor with no history at a position (clamped to the world; a non-finite coordinate becomes 0).
