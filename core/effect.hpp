@@ -1,9 +1,9 @@
 // Frame effects: what acts on a whole frame's motor displacement before the per-texel traversal walks it.
-// The surface-interrogation renderings of the second paper are effects (ALGORITHMS.md section 7):
+// The surface-interrogation renderings of the second paper are effects (docs/INTERROGATION.md):
 // materials, whose stick and slip depend on the hand's history, and gravity wells, which depend on where
 // the nearest pattern lies. They act once per frame, at the texel under the cursor when the frame
 // starts; the geometric C/D methods (curvature, depth) act per texel. A region may have both: its
-// effects scale the motor travel, then its method walks it (ISSUE 5: "layer wells on top of a C/D method").
+// effects scale the motor travel, then its method walks it (docs/INTERROGATION.md, "In a scene file").
 #pragma once
 
 #include <array>

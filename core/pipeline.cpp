@@ -79,7 +79,7 @@ DeviceDescription output_device(const DeviceDescription& source, const PipelineC
   out.enable(ev::kRel, ev::kRelX);
   out.enable(ev::kRel, ev::kRelY);
   if (config.mode == OutputMode::absolute) {
-    // Never REL_X/REL_Y together with ABS_X/ABS_Y on one device (ALGORITHMS.md section 6).
+    // Never REL_X/REL_Y together with ABS_X/ABS_Y on one device (docs/METHODS.md, "Cursor and output").
     out.codes[ev::kRel].reset(ev::kRelX);
     out.codes[ev::kRel].reset(ev::kRelY);
     if (out.codes[ev::kRel].none()) out.codes[ev::kSyn].reset(ev::kRel);

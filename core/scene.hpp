@@ -1,5 +1,5 @@
 // A scene: regions on the screen, each with its fields and its method. Later regions lie on top of
-// earlier ones; outside every region the surface is flat (ALGORITHMS.md section 1).
+// earlier ones; outside every region the surface is flat (docs/METHODS.md, "Screen, regions and fields").
 #pragma once
 
 #include <cstddef>

@@ -1,4 +1,4 @@
-// The exact per-texel traversal of ALGORITHMS.md section 5: the cursor walks the texel grid along the
+// The exact per-texel traversal of docs/METHODS.md, "The traversal": the cursor walks the texel grid along the
 // motion direction (Amanatides-Woo), each texel segment costs C/D x length of motor travel, and the
 // cursor stops where the frame's motor travel runs out. The flat outside is crossed in one jump.
 #pragma once
