@@ -79,7 +79,7 @@ DeviceDescription output_device(const DeviceDescription& source, const PipelineC
   out.enable(ev::kRel, ev::kRelX);
   out.enable(ev::kRel, ev::kRelY);
   if (config.mode == OutputMode::absolute) {
-    // Never REL_X/REL_Y together with ABS_X/ABS_Y on one device (ALGORITHMS.md section 6).
+    // Never REL_X/REL_Y together with ABS_X/ABS_Y on one device (docs/METHODS.md, "Cursor and output").
     out.codes[ev::kRel].reset(ev::kRelX);
     out.codes[ev::kRel].reset(ev::kRelY);
     if (out.codes[ev::kRel].none()) out.codes[ev::kSyn].reset(ev::kRel);
@@ -126,9 +126,9 @@ void Pipeline::clamp_to_desktop() {
   const double x = std::clamp(cursor_.position.x, static_cast<double>(d.x), std::nextafter(d.x + d.w, d.x));
   const double y = std::clamp(cursor_.position.y, static_cast<double>(d.y), std::nextafter(d.y + d.h, d.y));
   if (x != cursor_.position.x || y != cursor_.position.y) {
-    const EffectState effect = cursor_.effect;  // pushing against the edge is still the same hand
+    const EffectStates effects = cursor_.effects;  // pushing against the edge is still the same hand
     cursor_ = cursor_at({x, y});
-    cursor_.effect = effect;
+    cursor_.effects = effects;
   }
 }
 

@@ -1,6 +1,6 @@
 // Everything between an event source and an event sink, shared by the daemon and the replay tool:
 // frames are assembled up to SYN_REPORT, their motion goes through the engine, and the frame is
-// re-emitted with every other event unchanged, in order (ALGORITHMS.md section 6).
+// re-emitted with every other event unchanged, in order (docs/METHODS.md, "Cursor and output").
 #pragma once
 
 #include <cstdint>
@@ -15,7 +15,7 @@
 
 namespace ph {
 
-// Where frames come from and go to: a live device or a recording (STYLE.md: one source, one sink).
+// Where frames come from and go to: a live device or a recording (docs/DESIGN.md, "One source, one sink").
 class EventSource {
  public:
   virtual ~EventSource() = default;

@@ -40,7 +40,7 @@ Configuration load_configuration(const ConfigChoice& choice) {
     const SceneSpec spec = parse_scene_file(*file);
     SceneLoadReport report;
     c.scene = std::make_shared<const Scene>(load_scene(spec, &report));
-    // ALGORITHMS.md section 1: invalid texels are counted and reported at load (and repaired).
+    // Invalid texels are counted, repaired and reported at load (docs/METHODS.md, "Screen, regions and fields").
     for (std::string& warning : invalid_texel_warnings(spec, report)) c.warnings.push_back(std::move(warning));
     c.settings = spec.daemon;
     c.source = file->string();

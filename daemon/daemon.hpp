@@ -1,6 +1,6 @@
 // pseudohapticd's event loop: one epoll over the grabbed mice, the udev monitor, a signalfd and two
 // timers. Every mouse it takes gets its own virtual device and frame assembler; all share one pipeline,
-// so one cursor model, however many mice move it (ALGORITHMS.md section 6).
+// so one cursor model, however many mice move it (docs/METHODS.md, "Cursor and output").
 #pragma once
 
 #include <chrono>

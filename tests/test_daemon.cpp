@@ -150,7 +150,7 @@ TEST(DaemonConfiguration, ReloadKeepsThePipelineWhenOnlyTheSceneChanged) {
   EXPECT_FALSE(only_scene_differs(base, pickier));
 }
 
-// ALGORITHMS.md section 1: invalid texels are counted and reported at load. The daemon logs every
+// Invalid texels are reported at load (docs/METHODS.md, "Screen, regions and fields"): the daemon logs every
 // Configuration warning (Daemon::log_notes), one per region and map that had any, naming both.
 TEST(DaemonConfiguration, InvalidTexelsAreWarnedPerRegionAndMap) {
   const ScratchDir dir("daemon-config");

@@ -251,8 +251,8 @@ TEST(Replay, IsDeterministic) {
 }
 
 TEST(Replay, RealRecordingsOnFlatSceneAreBitIdentical) {
-  const auto files = testing::shared_recordings();
-  if (files.empty()) GTEST_SKIP() << "no shared recordings beside the project";
+  const auto files = testing::recorded_mice();
+  ASSERT_EQ(testing::missing_file(files), "");
   for (const auto& file : files) {
     const Recording input = read_recording_file(file.string());
     ASSERT_GT(input.events.size(), 100u);
@@ -264,8 +264,8 @@ TEST(Replay, RealRecordingsOnFlatSceneAreBitIdentical) {
 // Over the default scene, in both output modes, every non-motion event of the real recordings stays in its
 // frame, in order; the cursor model starts on each target in turn so that the texture changes the motion.
 TEST(Replay, RealRecordingsKeepNonMotionEventsInTheirFrame) {
-  const auto files = testing::shared_recordings();
-  if (files.empty()) GTEST_SKIP() << "no shared recordings beside the project";
+  const auto files = testing::recorded_mice();
+  ASSERT_EQ(testing::missing_file(files), "");
   const Scene scene = default_scene();
   for (const auto& file : files) {
     const Recording input = read_recording_file(file.string());

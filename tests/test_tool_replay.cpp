@@ -622,8 +622,8 @@ TEST(ReplayTool, ReplacesARegularFileKeepingItsMode) {
 
 TEST(ReplayTool, IsDeterministicAcrossProcesses) {
   ScratchDir dir;
-  const auto shared = testing::shared_recordings();
-  const fs::path in = shared.empty() ? stroke_file(dir, "in.evemu", 2000, 4, 3) : shared.front();
+  const fs::path in = testing::recorded_mice().front();
+  ASSERT_EQ(testing::missing_file({in}), "");
   for (const char* run : {"a", "b"}) {
     const ToolResult r = run_tool("replay --trace " + quote(dir / (std::string(run) + ".csv")) + " " + quote(in) + " " +
                                       quote(dir / (std::string(run) + ".evemu")),

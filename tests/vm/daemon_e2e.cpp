@@ -12,8 +12,8 @@
 // Three parts, each with a fresh daemon (or none): latency of the test mouse's own node; the daemon with a
 // flat config file (held button at start, identity, latency, SIGHUP reloads, SIGTERM with a held button);
 // the daemon with the embedded default scene (grab exclusivity, the offline pipeline's output over a
-// texture, latency, hotplug, two mice, SYN_DROPPED, SIGTERM). Numbers in brackets are the items of the
-// issue's "VM end-to-end tests".
+// texture, latency, hotplug, two mice, SYN_DROPPED, SIGTERM). Numbers in brackets number the cases; tests/vm/README.md
+// lists them.
 #include <fmt/format.h>
 
 #include <algorithm>
