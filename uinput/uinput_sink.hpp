@@ -1,4 +1,4 @@
-// The daemon's virtual output device, through libevdev's uinput API (ALGORITHMS.md section 6).
+// The daemon's virtual output device, through libevdev's uinput API (docs/METHODS.md, "Cursor and output").
 #pragma once
 
 #include <libevdev/libevdev-uinput.h>
@@ -52,6 +52,7 @@ class UinputSink final : public EventSink {
   void write(const Frame& frame) override;
   // The /dev/input/eventN node of the virtual device ("" when the kernel did not say).
   std::string devnode() const;
+  bool holds_keys() const { return held_.any(); }
   std::string syspath() const;
 
  private:
