@@ -1,4 +1,4 @@
-// Cost of the frame effects (core/effect.hpp) of surface interrogation: per frame of ph::advance with an effect
+// Cost of the frame effects (core/engine/effect.hpp) of surface interrogation: per frame of ph::advance with an effect
 // against the same region without, and the precompute (time, bytes per texel) for a full-HD region.
 // docs/PERFORMANCE.md ("Surface interrogation: materials") gives the figures and the command.
 //
@@ -21,12 +21,12 @@
 #include <vector>
 
 #include "bench/relief.hpp"
-#include "core/effect.hpp"
-#include "core/effect_materials.hpp"
-#include "core/field.hpp"
-#include "core/method_flat.hpp"
-#include "core/scene.hpp"
-#include "core/traversal.hpp"
+#include "core/effects/effect_materials.hpp"
+#include "core/engine/effect.hpp"
+#include "core/engine/field.hpp"
+#include "core/engine/method_flat.hpp"
+#include "core/engine/scene.hpp"
+#include "core/engine/traversal.hpp"
 
 namespace {
 

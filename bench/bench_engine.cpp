@@ -25,13 +25,13 @@
 #include <utility>
 #include <vector>
 
-#include "core/direction_lut.hpp"
-#include "core/engine_options.hpp"
-#include "core/method_curvature.hpp"
-#include "core/method_depth.hpp"
-#include "core/scene.hpp"
-#include "core/targets.hpp"
-#include "core/traversal.hpp"
+#include "core/engine/direction_lut.hpp"
+#include "core/engine/engine_options.hpp"
+#include "core/engine/method_curvature.hpp"
+#include "core/engine/method_depth.hpp"
+#include "core/engine/scene.hpp"
+#include "core/engine/targets.hpp"
+#include "core/engine/traversal.hpp"
 
 namespace {
 
@@ -296,7 +296,7 @@ void register_outside() {
   });
 }
 
-// Every variant of core/engine_options.hpp on all 24 targets, as typical frames and flicks. For
+// Every variant of core/engine/engine_options.hpp on all 24 targets, as typical frames and flicks. For
 // unit_steps and frame_midpoint, steps_per_frame counts C/D evaluations inside regions, not texel steps.
 void register_variants() {
   for (const ph::EngineOptions& options : ph::all_engine_variants()) {

@@ -1,5 +1,5 @@
 // Cost of recomputing a region's gravity-well data when the light, the levels or a tolerance change on
-// reload (core/patterns.hpp, core/distance_transform.hpp), for a full-HD region. docs/PERFORMANCE.md
+// reload (core/effects/patterns.hpp, core/effects/distance_transform.hpp), for a full-HD region. docs/PERFORMANCE.md
 // ("Surface interrogation: pattern fields") gives the figures and the command.
 //
 // Counters: time_per_texel (CPU seconds per texel, printed with an SI prefix), pattern_fraction (share of
@@ -12,9 +12,9 @@
 #include <random>
 
 #include "bench/relief.hpp"
-#include "core/distance_transform.hpp"
-#include "core/field.hpp"
-#include "core/patterns.hpp"
+#include "core/effects/distance_transform.hpp"
+#include "core/effects/patterns.hpp"
+#include "core/engine/field.hpp"
 
 namespace {
 

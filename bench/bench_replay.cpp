@@ -14,10 +14,10 @@
 #include <random>
 #include <sstream>
 
-#include "core/default_scene.hpp"
-#include "core/method_curvature.hpp"
-#include "core/method_flat.hpp"
-#include "core/replay.hpp"
+#include "core/engine/default_scene.hpp"
+#include "core/engine/method_curvature.hpp"
+#include "core/engine/method_flat.hpp"
+#include "core/lab/replay.hpp"
 #include "recording/evemu.hpp"
 
 namespace {

@@ -1,4 +1,4 @@
-// Gravity wells (core/effect_wells.hpp) on a full-HD region: what they add to a frame of advance(), and
+// Gravity wells (core/effects/effect_wells.hpp) on a full-HD region: what they add to a frame of advance(), and
 // what a reload costs (make_wells_effect: the mask and the nearest-pattern field). docs/PERFORMANCE.md
 // ("Surface interrogation: gravity wells") gives the figures and the command.
 //
@@ -15,11 +15,11 @@
 #include <vector>
 
 #include "bench/relief.hpp"
-#include "core/effect_wells.hpp"
-#include "core/method_curvature.hpp"
-#include "core/method_flat.hpp"
-#include "core/scene.hpp"
-#include "core/traversal.hpp"
+#include "core/effects/effect_wells.hpp"
+#include "core/engine/method_curvature.hpp"
+#include "core/engine/method_flat.hpp"
+#include "core/engine/scene.hpp"
+#include "core/engine/traversal.hpp"
 
 namespace {
 

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstdint>
 
-#include "core/field.hpp"
+#include "core/engine/field.hpp"
 
 namespace ph::bench {
 

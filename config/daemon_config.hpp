@@ -9,9 +9,9 @@
 #include <string_view>
 #include <vector>
 
-#include "core/engine_options.hpp"
-#include "core/geometry.hpp"
-#include "core/pipeline.hpp"
+#include "core/engine/engine_options.hpp"
+#include "core/engine/geometry.hpp"
+#include "core/engine/pipeline.hpp"
 
 namespace ph {
 

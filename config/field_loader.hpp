@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "config/image_io.hpp"
-#include "core/decode.hpp"
-#include "core/field.hpp"
+#include "core/engine/decode.hpp"
+#include "core/engine/field.hpp"
 
 namespace ph {
 

@@ -14,7 +14,7 @@
 #include <filesystem>
 
 #include "config/image_io.hpp"
-#include "core/decode.hpp"
+#include "core/engine/decode.hpp"
 
 namespace ph::image_backend {
 

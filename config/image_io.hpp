@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <vector>
 
-#include "core/decode.hpp"
-#include "core/field.hpp"
+#include "core/engine/decode.hpp"
+#include "core/engine/field.hpp"
 
 namespace ph {
 

@@ -85,7 +85,7 @@ void check_key(const Reporter& rep, const toml::table& t, std::string_view key, 
 
 bool positive_finite(double v) { return std::isfinite(v) && v > 0.0; }
 
-// A method's [region.NAME] table as its parser reads it (core/method_registry.hpp).
+// A method's [region.NAME] table as its parser reads it (core/engine/method_registry.hpp).
 class TomlParamReader final : public ParamReader {
  public:
   TomlParamReader(const Reporter& rep, const toml::table& table, std::string_view where)

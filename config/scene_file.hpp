@@ -15,10 +15,10 @@
 
 #include "config/daemon_config.hpp"
 #include "config/field_loader.hpp"
-#include "core/effect_materials.hpp"
-#include "core/effect_wells.hpp"
-#include "core/methods.hpp"
-#include "core/scene.hpp"
+#include "core/effects/effect_materials.hpp"
+#include "core/effects/effect_wells.hpp"
+#include "core/engine/methods.hpp"
+#include "core/engine/scene.hpp"
 
 namespace ph {
 
@@ -34,7 +34,7 @@ class ConfigError : public std::runtime_error {
 struct RegionSpec {
   std::string name;
   Rect rect;
-  // A method of the scene's registry (core/methods.hpp); "none" is C/D 1, a region rendered by its
+  // A method of the scene's registry (core/engine/methods.hpp); "none" is C/D 1, a region rendered by its
   // effects only (materials, gravity wells).
   std::string method = "curvature";
   FieldSources sources;  // paths already resolved against the scene file's folder

@@ -1,4 +1,4 @@
-// Writes the 24 targets of the curvature paper (core/targets.hpp) as files the daemon loads: for each target a
+// Writes the 24 targets of the curvature paper (core/engine/targets.hpp) as files the daemon loads: for each target a
 // 16-bit normal map, a 16-bit depth map and a one-region scene file that names both.
 #pragma once
 
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "core/targets.hpp"
+#include "core/engine/targets.hpp"
 
 namespace ph {
 

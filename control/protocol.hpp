@@ -9,7 +9,7 @@
 #include <string_view>
 #include <variant>
 
-#include "core/geometry.hpp"
+#include "core/engine/geometry.hpp"
 
 namespace ph::control {
 

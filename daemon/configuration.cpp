@@ -6,7 +6,7 @@
 
 #include "config/desktop_geometry.hpp"
 #include "config/scene_file.hpp"
-#include "core/default_scene.hpp"
+#include "core/engine/default_scene.hpp"
 
 namespace ph {
 

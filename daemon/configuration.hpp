@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "config/daemon_config.hpp"
-#include "core/pipeline.hpp"
-#include "core/scene.hpp"
+#include "core/engine/pipeline.hpp"
+#include "core/engine/scene.hpp"
 
 namespace ph {
 

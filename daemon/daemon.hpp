@@ -11,7 +11,7 @@
 #include <set>
 #include <string>
 
-#include "core/pipeline.hpp"
+#include "core/engine/pipeline.hpp"
 #include "daemon/configuration.hpp"
 #include "daemon/control_server.hpp"
 #include "daemon/evdev_device.hpp"

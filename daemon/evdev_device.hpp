@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/device.hpp"
-#include "core/event.hpp"
+#include "core/engine/device.hpp"
+#include "core/engine/event.hpp"
 #include "uinput/uinput_sink.hpp"  // LibevdevPtr
 
 namespace ph {

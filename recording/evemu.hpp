@@ -5,7 +5,7 @@
 #include <ostream>
 #include <string>
 
-#include "core/device.hpp"
+#include "core/engine/device.hpp"
 #include "recording/recording_error.hpp"
 
 namespace ph {

@@ -4,7 +4,7 @@
 #include <istream>
 #include <string>
 
-#include "core/device.hpp"
+#include "core/engine/device.hpp"
 #include "recording/recording_error.hpp"
 
 namespace ph {

@@ -6,7 +6,7 @@
 #include <istream>
 #include <string>
 
-#include "core/device.hpp"
+#include "core/engine/device.hpp"
 #include "recording/libinput_record.hpp"
 #include "recording/recording_error.hpp"
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/device.hpp"
+#include "core/engine/device.hpp"
 
 namespace ph::testing {
 

@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "core/acceleration.hpp"
-#include "core/pipeline.hpp"
+#include "core/engine/acceleration.hpp"
+#include "core/engine/pipeline.hpp"
 
 namespace ph {
 namespace {

@@ -1,6 +1,6 @@
-// Curvature fields and classes (core/curvature_field, core/curvature_class) on the analytic surfaces, quantised
-// the way the files `pseudohaptic surfaces` writes are, and on degenerate input.
-#include "core/curvature_field.hpp"
+// Curvature fields and classes (core/effects/curvature_field, core/effects/curvature_class) on the analytic surfaces,
+// quantised the way the files `pseudohaptic surfaces` writes are, and on degenerate input.
+#include "core/effects/curvature_field.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,9 +9,9 @@
 #include <cstdio>
 #include <limits>
 
-#include "core/curvature_class.hpp"
-#include "core/decode.hpp"
-#include "core/surfaces.hpp"
+#include "core/effects/curvature_class.hpp"
+#include "core/engine/decode.hpp"
+#include "core/lab/surfaces.hpp"
 
 namespace ph {
 namespace {

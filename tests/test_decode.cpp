@@ -1,6 +1,6 @@
 // Decoding of normal and depth images and resampling to a region's size, as docs/METHODS.md specifies in
 // "Screen, regions and fields".
-#include "core/decode.hpp"
+#include "core/engine/decode.hpp"
 #include "tests/thrown_message.hpp"
 
 #include <gtest/gtest.h>

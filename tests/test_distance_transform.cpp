@@ -1,6 +1,6 @@
-// The exact Euclidean distance transform with nearest feature (core/distance_transform.hpp), against a
+// The exact Euclidean distance transform with nearest feature (core/effects/distance_transform.hpp), against a
 // brute-force search.
-#include "core/distance_transform.hpp"
+#include "core/effects/distance_transform.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Curvature classes as materials (core/effect_materials.hpp): scripted, timed frame streams through
+// Curvature classes as materials (core/effects/effect_materials.hpp): scripted, timed frame streams through
 // advance() and the pipeline on regions whose class is known, and a no-trap property test over random scenes.
 #include <gtest/gtest.h>
 
@@ -10,13 +10,13 @@
 #include <random>
 #include <vector>
 
-#include "core/effect_materials.hpp"
-#include "core/effect_wells.hpp"
-#include "core/method_flat.hpp"
-#include "core/pipeline.hpp"
-#include "core/scene.hpp"
-#include "core/surfaces.hpp"
-#include "core/traversal.hpp"
+#include "core/effects/effect_materials.hpp"
+#include "core/effects/effect_wells.hpp"
+#include "core/engine/method_flat.hpp"
+#include "core/engine/pipeline.hpp"
+#include "core/engine/scene.hpp"
+#include "core/engine/traversal.hpp"
+#include "core/lab/surfaces.hpp"
 
 namespace ph {
 namespace {

@@ -1,4 +1,4 @@
-// Gravity wells (core/effect_wells.hpp): on analytic fields whose patterns are circles (a paraboloid's
+// Gravity wells (core/effects/effect_wells.hpp): on analytic fields whose patterns are circles (a paraboloid's
 // contours, a sphere's isophote), motion toward the pattern is faster, away slower, tangential about
 // unchanged; nothing happens beyond R (bit for bit); the gain stays within its bounds; snap pulls onto
 // the pattern and a push away still escapes; wells layer on a C/D method; no random scene traps.
@@ -13,12 +13,12 @@
 #include <stdexcept>
 #include <vector>
 
-#include "core/effect_wells.hpp"
-#include "core/method_curvature.hpp"
-#include "core/method_flat.hpp"
-#include "core/scene.hpp"
-#include "core/surfaces.hpp"
-#include "core/traversal.hpp"
+#include "core/effects/effect_wells.hpp"
+#include "core/engine/method_curvature.hpp"
+#include "core/engine/method_flat.hpp"
+#include "core/engine/scene.hpp"
+#include "core/engine/traversal.hpp"
+#include "core/lab/surfaces.hpp"
 
 namespace ph {
 namespace {

@@ -1,4 +1,4 @@
-// The frame-effect layer of the traversal (core/effect.hpp): effects of the region under the cursor
+// The frame-effect layer of the traversal (core/engine/effect.hpp): effects of the region under the cursor
 // rescale a frame's motor travel before the walk, keep their state in the cursor, see the frame's time,
 // and can never make the cursor's motion non-finite or larger than they promise.
 #include <gtest/gtest.h>
@@ -9,11 +9,11 @@
 #include <stdexcept>
 #include <vector>
 
-#include "core/effect.hpp"
-#include "core/method_flat.hpp"
-#include "core/pipeline.hpp"
-#include "core/scene.hpp"
-#include "core/traversal.hpp"
+#include "core/engine/effect.hpp"
+#include "core/engine/method_flat.hpp"
+#include "core/engine/pipeline.hpp"
+#include "core/engine/scene.hpp"
+#include "core/engine/traversal.hpp"
 
 namespace ph {
 namespace {

@@ -1,9 +1,9 @@
-// core/event.hpp restates the kernel's evdev codes so that the core includes no Linux header; this test
+// core/engine/event.hpp restates the kernel's evdev codes so that the core includes no Linux header; this test
 // holds them to the real header.
 #include <gtest/gtest.h>
 #include <linux/input-event-codes.h>
 
-#include "core/event.hpp"
+#include "core/engine/event.hpp"
 
 namespace ph {
 namespace {

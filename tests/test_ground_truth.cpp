@@ -1,5 +1,5 @@
-// The ground truth of core/ground_truth against closed forms, its own convergence, and the engine.
-#include "core/ground_truth.hpp"
+// The ground truth of core/lab/ground_truth against closed forms, its own convergence, and the engine.
+#include "core/lab/ground_truth.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,10 +8,10 @@
 #include <random>
 #include <vector>
 
-#include "core/methods.hpp"
-#include "core/scene.hpp"
-#include "core/targets.hpp"
-#include "core/traversal.hpp"
+#include "core/engine/methods.hpp"
+#include "core/engine/scene.hpp"
+#include "core/engine/targets.hpp"
+#include "core/engine/traversal.hpp"
 
 namespace ph {
 namespace {

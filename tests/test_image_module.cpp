@@ -21,7 +21,7 @@
 
 #include "config/image_io.hpp"
 #include "config/scene_file.hpp"
-#include "core/default_scene.hpp"
+#include "core/engine/default_scene.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {

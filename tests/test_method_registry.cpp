@@ -15,10 +15,10 @@
 
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
-#include "core/ground_truth.hpp"
-#include "core/methods.hpp"
-#include "core/stroke.hpp"
-#include "core/targets.hpp"
+#include "core/engine/methods.hpp"
+#include "core/engine/targets.hpp"
+#include "core/lab/ground_truth.hpp"
+#include "core/lab/stroke.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {
@@ -108,7 +108,7 @@ TEST(MethodRegistry, AddsAMethodByItsEntryOnly) {
   EXPECT_THROW(methods.add(method_entry<BlendMethod>()), std::invalid_argument);
   const MethodPtr blend = make_default_method(methods, "blend");
   EXPECT_EQ(blend->name(), "blend");
-  EXPECT_EQ(blend->tag(), nullptr);  // not in core/methods.hpp's list: reached through virtual calls
+  EXPECT_EQ(blend->tag(), nullptr);  // not in core/engine/methods.hpp's list: reached through virtual calls
   EXPECT_THROW(make_default_method(methods, "nope"), std::invalid_argument);
 }
 

@@ -5,9 +5,9 @@
 #include <numbers>
 #include <random>
 
-#include "core/fast_math.hpp"
-#include "core/method_curvature.hpp"
-#include "core/method_depth.hpp"
+#include "core/engine/fast_math.hpp"
+#include "core/engine/method_curvature.hpp"
+#include "core/engine/method_depth.hpp"
 
 namespace ph {
 namespace {

@@ -1,6 +1,6 @@
-// Isophote and contour masks (core/patterns.hpp) on small analytic height fields built here, against
+// Isophote and contour masks (core/effects/patterns.hpp) on small analytic height fields built here, against
 // the analytic curves.
-#include "core/patterns.hpp"
+#include "core/effects/patterns.hpp"
 
 #include <gtest/gtest.h>
 

@@ -5,10 +5,10 @@
 #include <sstream>
 #include <utility>
 
-#include "core/default_scene.hpp"
-#include "core/method_curvature.hpp"
-#include "core/replay.hpp"
-#include "core/targets.hpp"
+#include "core/engine/default_scene.hpp"
+#include "core/engine/method_curvature.hpp"
+#include "core/engine/targets.hpp"
+#include "core/lab/replay.hpp"
 #include "recording/evemu.hpp"
 #include "recording/recording_file.hpp"
 #include "tests/recordings.hpp"

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "config/target_files.hpp"
-#include "core/targets.hpp"
+#include "core/engine/targets.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {

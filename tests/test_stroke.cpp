@@ -1,5 +1,5 @@
-// Strokes of the hand (core/stroke): constant motor steps until the cursor reaches the end, and no further.
-#include "core/stroke.hpp"
+// Strokes of the hand (core/lab/stroke): constant motor steps until the cursor reaches the end, and no further.
+#include "core/lab/stroke.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "core/method_curvature.hpp"
+#include "core/engine/method_curvature.hpp"
 
 namespace ph {
 namespace {

@@ -1,6 +1,6 @@
-// The analytic test surfaces (core/surfaces): closed-form derivatives against finite differences of the exact
+// The analytic test surfaces (core/lab/surfaces): closed-form derivatives against finite differences of the exact
 // height, the curvature formulas against known values, ranges and classes.
-#include "core/surfaces.hpp"
+#include "core/lab/surfaces.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// The 24 analytic targets (core/targets) and the files written from them (config/target_files).
+// The 24 analytic targets (core/engine/targets) and the files written from them (config/target_files).
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -13,8 +13,8 @@
 
 #include "config/image_io.hpp"
 #include "config/target_files.hpp"
-#include "core/decode.hpp"
-#include "core/targets.hpp"
+#include "core/engine/decode.hpp"
+#include "core/engine/targets.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {

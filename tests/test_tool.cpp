@@ -18,7 +18,7 @@
 
 #include "config/image_io.hpp"
 #include "config/target_files.hpp"
-#include "core/targets.hpp"
+#include "core/engine/targets.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/tool_runner.hpp"
 

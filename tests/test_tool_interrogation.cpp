@@ -14,9 +14,9 @@
 
 #include "config/field_loader.hpp"
 #include "config/image_io.hpp"
-#include "core/curvature_class.hpp"
-#include "core/surfaces.hpp"
-#include "core/targets.hpp"
+#include "core/effects/curvature_class.hpp"
+#include "core/engine/targets.hpp"
+#include "core/lab/surfaces.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/tool_runner.hpp"
 

@@ -6,10 +6,10 @@
 #include <numbers>
 #include <random>
 
-#include "core/method_curvature.hpp"
-#include "core/method_depth.hpp"
-#include "core/targets.hpp"
-#include "core/traversal.hpp"
+#include "core/engine/method_curvature.hpp"
+#include "core/engine/method_depth.hpp"
+#include "core/engine/targets.hpp"
+#include "core/engine/traversal.hpp"
 
 namespace ph {
 namespace {
@@ -339,7 +339,7 @@ TEST(Cursor, WorldLimitKeepsTexelIndicesValid) {
 namespace ph {
 namespace {
 
-// A method outside core/methods.hpp's list (no tag), so the traversal reaches it through the virtual
+// A method outside core/engine/methods.hpp's list (no tag), so the traversal reaches it through the virtual
 // interface only. Its C/D is `base` + `to_weight` x the entered texel's height + `from_weight` x the height of
 // the texel it was entered from, with the heights of the region's depth field (0 outside every region).
 class PluginMethod final : public Method {
@@ -376,7 +376,7 @@ TEST(Traversal, PluginMethodThroughTheVirtualInterface) {
   {
     SCOPED_TRACE("constant C/D 2 halves the display travel, exactly");
     auto two = std::make_shared<const PluginMethod>(2.0, 0.0, 0.0, 2.0, 2.0);
-    ASSERT_EQ(two->tag(), nullptr);  // not in core/methods.hpp's list
+    ASSERT_EQ(two->tag(), nullptr);  // not in core/engine/methods.hpp's list
     const Scene scene = scene_of({plugin_region({0, 0, 1000, 1000}, two, [](int, int) { return 0.0f; })});
     // Dyadic starts and motions along the axes and the diagonal: every half is exact.
     const Vec2 motions[] = {{10.0, 0.0}, {0.0, -7.25}, {-3.5, 0.0}, {6.0, 6.0}, {-0.125, 0.0625}, {300.0, -200.0}};

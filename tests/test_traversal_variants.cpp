@@ -1,5 +1,6 @@
-// The traversal variants (core/engine_options.hpp; docs/METHODS.md, "Traversal variants"): the invariants every variant
-// keeps, and how far each ends from the exact traversal on the paper's targets (the bounds docs/METHODS.md gives).
+// The traversal variants (core/engine/engine_options.hpp; docs/METHODS.md, "Traversal variants"): the invariants every
+// variant keeps, and how far each ends from the exact traversal on the paper's targets (the bounds docs/METHODS.md
+// gives).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,12 +9,12 @@
 #include <numbers>
 #include <random>
 
-#include "core/direction_lut.hpp"
-#include "core/method_curvature.hpp"
-#include "core/method_depth.hpp"
-#include "core/method_flat.hpp"
-#include "core/targets.hpp"
-#include "core/traversal.hpp"
+#include "core/engine/direction_lut.hpp"
+#include "core/engine/method_curvature.hpp"
+#include "core/engine/method_depth.hpp"
+#include "core/engine/method_flat.hpp"
+#include "core/engine/targets.hpp"
+#include "core/engine/traversal.hpp"
 
 namespace ph {
 namespace {

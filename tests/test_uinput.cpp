@@ -5,7 +5,7 @@
 #include <cerrno>
 #include <filesystem>
 
-#include "core/pipeline.hpp"
+#include "core/engine/pipeline.hpp"
 #include "tests/recordings.hpp"
 #include "uinput/uinput_sink.hpp"
 

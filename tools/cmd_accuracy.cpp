@@ -1,18 +1,18 @@
 // `pseudohaptic accuracy OUTDIR [--small]`: speed against accuracy of every variant of the engine
 // (docs/SPEED_VS_ACCURACY.md), from one binary, as CSV for tools/charts.py.
 //
-// Variants: method (curvature, depth) x storage x engine options (core/engine_options.hpp: every traversal with
+// Variants: method (curvature, depth) x storage x engine options (core/engine/engine_options.hpp: every traversal with
 // every sampling it accepts, direction_lut with 8 and 16 directions). Storage is how a user's map reaches the
-// engine, built from the exact target in memory and decoded through the loader's own path (core/decode.hpp):
+// engine, built from the exact target in memory and decoded through the loader's own path (core/engine/decode.hpp):
 //   f32  the exact field rasterised at texel centres (target_gradient_field / target_depth_field);
 //   n16, n8  a 16- / 8-bit normal map: codes round((n + 1) / 2 * cmax), decode_normals, then the loader's own
-//            gradient_from_normals (core/field.hpp: g = -n_xy / n_z, walls clamped);
+//            gradient_from_normals (core/engine/field.hpp: g = -n_xy / n_z, walls clamped);
 //   d16, d8  a 16- / 8-bit depth map: codes of (h / relief + 1) / 2, decode_depth; the curvature method takes
 //            central differences of it (gradient_from_depth), as the loader does for a depth-only region.
 //   The depth method reads heights, so it has f32, d16 and d8 only.
-// Ground truth: core/ground_truth.hpp (exact continuous C/D, adaptive Gauss-Kronrod, 1e-9 px), per method.
+// Ground truth: core/lab/ground_truth.hpp (exact continuous C/D, adaptive Gauss-Kronrod, 1e-9 px), per method.
 //
-// Shapes: the 24 targets of the curvature paper and the 9 interrogation surfaces of core/surfaces.hpp at 256 px
+// Shapes: the 24 targets of the curvature paper and the 9 interrogation surfaces of core/lab/surfaces.hpp at 256 px
 // (a square relief, flat outside it; its "radius" for the strokes and the walks is half its size).
 // Strokes (fixed, seeded): for each shape, directions 0, 30, 45, 90, 150, 250 degrees, motor px per frame 0.5, 2,
 // 8, 30, without and with hand jitter (each frame's motor vector turned by N(0, 10 deg) and scaled by
@@ -67,15 +67,15 @@
 #include <variant>
 #include <vector>
 
-#include "core/decode.hpp"
-#include "core/engine_options.hpp"
-#include "core/grid_walk.hpp"
-#include "core/ground_truth.hpp"
-#include "core/methods.hpp"
-#include "core/scene.hpp"
-#include "core/surfaces.hpp"
-#include "core/targets.hpp"
-#include "core/traversal.hpp"
+#include "core/engine/decode.hpp"
+#include "core/engine/engine_options.hpp"
+#include "core/engine/grid_walk.hpp"
+#include "core/engine/methods.hpp"
+#include "core/engine/scene.hpp"
+#include "core/engine/targets.hpp"
+#include "core/engine/traversal.hpp"
+#include "core/lab/ground_truth.hpp"
+#include "core/lab/surfaces.hpp"
 #include "tools/commands.hpp"
 
 namespace ph::tools {
@@ -108,7 +108,7 @@ const char* name_of(Storage s) {
   return "?";
 }
 
-// The methods measured: every method of the registry (core/methods.hpp) that is not C/D 1 throughout, with
+// The methods measured: every method of the registry (core/engine/methods.hpp) that is not C/D 1 throughout, with
 // its default parameters, in the registry's order.
 std::vector<MethodPtr> measured_methods() {
   std::vector<MethodPtr> out;

@@ -8,8 +8,8 @@
 
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
-#include "core/stroke.hpp"
-#include "core/targets.hpp"
+#include "core/engine/targets.hpp"
+#include "core/lab/stroke.hpp"
 #include "tools/commands.hpp"
 
 namespace ph::tools {

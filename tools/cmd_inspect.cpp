@@ -12,9 +12,9 @@
 
 #include "config/field_loader.hpp"
 #include "config/image_io.hpp"
-#include "core/curvature_class.hpp"
-#include "core/curvature_field.hpp"
-#include "core/patterns.hpp"
+#include "core/effects/curvature_class.hpp"
+#include "core/effects/curvature_field.hpp"
+#include "core/effects/patterns.hpp"
 #include "tools/commands.hpp"
 
 namespace ph::tools {

@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "config/scene_file.hpp"
-#include "core/default_scene.hpp"
-#include "core/replay.hpp"
+#include "core/engine/default_scene.hpp"
+#include "core/lab/replay.hpp"
 #include "recording/evemu.hpp"
 #include "recording/recording_file.hpp"
 #include "tools/commands.hpp"

@@ -1,4 +1,4 @@
-// `pseudohaptic surfaces`: the analytic test surfaces of the second paper as files (core/surfaces.hpp).
+// `pseudohaptic surfaces`: the analytic test surfaces of the second paper as files (core/lab/surfaces.hpp).
 #include <fmt/core.h>
 
 #include <filesystem>
@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "config/image_io.hpp"
-#include "core/surfaces.hpp"
+#include "core/lab/surfaces.hpp"
 #include "tools/commands.hpp"
 
 namespace ph::tools {

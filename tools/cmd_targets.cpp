@@ -1,7 +1,7 @@
 #include <fmt/core.h>
 
 #include "config/target_files.hpp"
-#include "core/targets.hpp"
+#include "core/engine/targets.hpp"
 #include "tools/commands.hpp"
 
 namespace ph::tools {

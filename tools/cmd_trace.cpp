@@ -12,8 +12,8 @@
 #include "config/field_loader.hpp"
 #include "config/image_io.hpp"
 #include "config/scene_file.hpp"
-#include "core/stroke.hpp"
-#include "core/targets.hpp"
+#include "core/engine/targets.hpp"
+#include "core/lab/stroke.hpp"
 #include "tools/commands.hpp"
 
 namespace ph::tools {

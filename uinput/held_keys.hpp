@@ -4,7 +4,7 @@
 
 #include <bitset>
 
-#include "core/event.hpp"
+#include "core/engine/event.hpp"
 
 namespace ph {
 

@@ -9,8 +9,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/device.hpp"
-#include "core/pipeline.hpp"
+#include "core/engine/device.hpp"
+#include "core/engine/pipeline.hpp"
 #include "uinput/held_keys.hpp"
 
 namespace ph {

@@ -29,9 +29,9 @@
 
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
-#include "core/default_scene.hpp"
-#include "core/pipeline.hpp"
-#include "core/targets.hpp"
+#include "core/engine/default_scene.hpp"
+#include "core/engine/pipeline.hpp"
+#include "core/engine/targets.hpp"
 #include "tests/vm/e2e_support.hpp"
 
 namespace {

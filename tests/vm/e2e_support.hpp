@@ -37,7 +37,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/event.hpp"
+#include "core/engine/event.hpp"
 #include "daemon/unique_fd.hpp"
 #include "tests/vm/vm_check.hpp"
 #include "uinput/uinput_sink.hpp"

@@ -12,7 +12,7 @@
 #include <thread>
 #include <vector>
 
-#include "core/event.hpp"
+#include "core/engine/event.hpp"
 #include "tests/vm/vm_check.hpp"
 #include "uinput/uinput_sink.hpp"
 

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <string>
 
-#include "core/device.hpp"
+#include "core/engine/device.hpp"
 
 namespace ph::vm {
 

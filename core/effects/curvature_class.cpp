@@ -1,0 +1,54 @@
+#include "core/effects/curvature_class.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ph {
+
+const char* class_name(CurvatureClass c) {
+  switch (c) {
+    case CurvatureClass::planar:
+      return "planar";
+    case CurvatureClass::parabolic:
+      return "parabolic";
+    case CurvatureClass::elliptic:
+      return "elliptic";
+    case CurvatureClass::hyperbolic:
+      return "hyperbolic";
+  }
+  return "unknown";
+}
+
+CurvatureClass classify(double k1, double k2, const ClassTolerances& tolerances) {
+  if (!std::isfinite(k1) || !std::isfinite(k2)) return CurvatureClass::planar;
+  const double curvedness = std::sqrt((k1 * k1 + k2 * k2) / 2.0);
+  if (curvedness < tolerances.planar_curvedness) return CurvatureClass::planar;
+  const double small = std::min(std::abs(k1), std::abs(k2));
+  const double large = std::max(std::abs(k1), std::abs(k2));  // > 0: the curvedness is not 0
+  if (small < tolerances.parabolic_ratio * large) return CurvatureClass::parabolic;
+  return k1 * k2 > 0.0 ? CurvatureClass::elliptic : CurvatureClass::hyperbolic;
+}
+
+Grid<std::uint8_t> class_map(const CurvatureFields& fields, const ClassTolerances& tolerances) {
+  const bool principal = !fields.k1.empty() && !fields.k2.empty();
+  const bool from_kh = !fields.gaussian.empty() && !fields.mean.empty();
+  if (!principal && !from_kh) return {};
+  const Grid<float>& shape = principal ? fields.k1 : fields.gaussian;
+  Grid<std::uint8_t> out(shape.width, shape.height);
+  for (std::size_t i = 0; i < out.values.size(); ++i) {
+    double k1 = 0.0, k2 = 0.0;
+    if (principal) {
+      k1 = fields.k1.values[i];
+      k2 = fields.k2.values[i];
+    } else {
+      const double h = fields.mean.values[i];
+      const double spread = std::sqrt(std::max(h * h - double(fields.gaussian.values[i]), 0.0));
+      k1 = h + spread;
+      k2 = h - spread;
+    }
+    out.values[i] = static_cast<std::uint8_t>(classify(k1, k2, tolerances));
+  }
+  return out;
+}
+
+}  // namespace ph

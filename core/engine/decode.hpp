@@ -1,0 +1,64 @@
+// Decoding of normal and depth images into fields (docs/METHODS.md, "Screen, regions and fields"), and the one-time
+// resampling to a region's on-screen size. Pure functions: the pixels come from config/image_io.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/engine/field.hpp"
+
+namespace ph {
+
+// Pixels as read from an image file, before any interpretation.
+struct RawImage {
+  std::int32_t width = 0;
+  std::int32_t height = 0;
+  std::int32_t channels = 0;
+  bool is_float = false;       // float/half pixels hold signed values as stored
+  std::vector<float> pixels;   // row-major, channels interleaved; integer formats scaled to [0, 1]
+  std::uint32_t code_max = 0;  // largest code of an integer format (255, 65535); 0 when unknown or float
+};
+
+// Raised for an image or field that cannot be used; the message names the file when one is known.
+class FieldError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class GreenConvention { opengl, directx };  // OpenGL: +green points to the top of the image (screen -y)
+enum class NormalEncoding { automatic, unorm, signed_values };  // automatic: unorm for integer images
+
+struct NormalDecodeOptions {
+  GreenConvention green = GreenConvention::opengl;
+  NormalEncoding encoding = NormalEncoding::automatic;
+};
+
+struct DepthDecodeOptions {
+  double depth_zero = 0.0;   // stored value that means height 0
+  double relief_px = 100.0;  // screen px of height per unit of stored value
+};
+
+// What decoding found; invalid texels were repaired.
+struct DecodeReport {
+  std::size_t texels = 0;
+  std::size_t invalid_texels = 0;
+};
+
+// Unit normals in the screen frame. A unorm image cannot store 0 (2c/cmax - 1 is +-1/cmax around it), so
+// tangent components within one code of 0 are taken as 0: a flat area of an 8- or 16-bit map is exactly
+// flat (C/D exactly 1) rather than tilted by 1/cmax. Invalid texels (length < 0.5, n_z <= 0, non-finite) take the value
+// of the nearest valid texel, or flat when there is none. Throws FieldError on a wrong channel count.
+NormalImage decode_normals(const RawImage& image, const NormalDecodeOptions& options, DecodeReport& report);
+
+// Heights in screen px, h = (v - depth_zero) * relief_px. Non-finite texels are repaired like normals.
+DepthField decode_depth(const RawImage& image, const DepthDecodeOptions& options, DecodeReport& report);
+
+// Resampling to w x h texels: bilinear when enlarging, area average when shrinking.
+// Normals are renormalised afterwards. Same size returns a copy.
+NormalImage resample_normals(const NormalImage& image, std::int32_t width, std::int32_t height);
+DepthField resample_depth(const DepthField& depth, std::int32_t width, std::int32_t height);
+
+}  // namespace ph

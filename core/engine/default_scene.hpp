@@ -1,0 +1,14 @@
+// The scene used when no scene file is given: three targets of the curvature paper, built in memory
+// from their exact analytic normals (no files), side by side in the middle of a 1920 x 1080 desktop:
+//   bump-gaussian-h1-r200 at (135, 290), hole-polynomial-h1-r200 at (710, 290),
+//   bump-linear-h1-r100 at (1285, 290); each 500 x 500 px, curvature method with default parameters.
+// About 6 MB of fields (8 bytes per texel).
+#pragma once
+
+#include "core/engine/scene.hpp"
+
+namespace ph {
+
+Scene default_scene();
+
+}  // namespace ph

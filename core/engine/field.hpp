@@ -1,0 +1,77 @@
+// The per-texel data a region's methods read, stored once at the region's on-screen size.
+//
+// Normals are not stored as normals: every method that reads orientation only needs the slope of the
+// surface along a direction, so a texel keeps the height gradient g = (dh/dx, dh/dy) in screen pixels
+// per pixel (y down) as two floats: 8 bytes per texel. A unit normal n with n_z > 0 is
+// n = (-g_x, -g_y, 1) / |(-g_x, -g_y, 1)|, so nothing is lost (docs/METHODS.md, "Screen, regions and fields").
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+#include "core/engine/geometry.hpp"
+
+namespace ph {
+
+struct Gradient {
+  float x = 0.0f;  // dh/dx, screen px of height per px
+  float y = 0.0f;  // dh/dy, y down
+};
+
+struct Normal {
+  float x = 0.0f;  // screen frame: x right, y down, z toward the viewer
+  float y = 0.0f;
+  float z = 1.0f;
+};
+
+// A w x h grid of values in row-major order.
+template <typename T>
+struct Grid {
+  std::int32_t width = 0;
+  std::int32_t height = 0;
+  std::vector<T> values;
+
+  Grid() = default;
+  Grid(std::int32_t w, std::int32_t h, T fill = T{})
+      : width(w), height(h), values(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), fill) {}
+
+  T& at(std::int32_t x, std::int32_t y) { return values[static_cast<std::size_t>(y) * width + x]; }
+  const T& at(std::int32_t x, std::int32_t y) const { return values[static_cast<std::size_t>(y) * width + x]; }
+  bool empty() const { return values.empty(); }
+  std::size_t bytes() const { return values.capacity() * sizeof(T); }
+};
+
+using GradientField = Grid<Gradient>;  // from a normal map, or derived from depth
+using DepthField = Grid<float>;        // height h in screen px (toward the viewer)
+using NormalImage = Grid<Normal>;      // decoded unit normals, only while loading
+
+// What a method declares it reads; the loader builds nothing else.
+struct FieldNeeds {
+  bool gradient = false;
+  bool depth = false;
+};
+
+// The fields of one region, each present only when the region's method needs it.
+struct RegionFields {
+  std::optional<GradientField> gradient;
+  std::optional<DepthField> depth;
+
+  std::size_t bytes() const { return (gradient ? gradient->bytes() : 0) + (depth ? depth->bytes() : 0); }
+};
+
+// Gradient of a unit normal with n_z > 0: g = (-n_x / n_z, -n_y / n_z).
+inline Gradient gradient_from_normal(Normal n) { return {-n.x / n.z, -n.y / n.z}; }
+
+// Gradients of decoded normals, as a region's field holds them: a texel with n_z just above 0 is a wall, and
+// its slope is clamped to +-kMaxSlope so that later arithmetic never sees inf.
+inline constexpr float kMaxSlope = 1.0e6f;
+GradientField gradient_from_normals(const NormalImage& normals);
+
+// Unit normal of a height gradient.
+Normal normal_from_gradient(Gradient g);
+
+// Gradient of a height field by central differences (one-sided at the border).
+GradientField gradient_from_depth(const DepthField& depth);
+
+}  // namespace ph

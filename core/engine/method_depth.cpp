@@ -1,0 +1,37 @@
+#include "core/engine/method_depth.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace ph {
+
+std::string validate(const DepthParams& p) {
+  if (!std::isfinite(p.gain)) return "gain must be a finite number";
+  if (!std::isfinite(p.kmax) || p.kmax < 1.0) return "kmax must be a finite number >= 1";
+  if (!std::isfinite(p.kmin) || p.kmin < 1.0) return "kmin must be a finite number >= 1";
+  return {};
+}
+
+DepthParams DepthMethod::parse_params(const ParamReader& reader) {
+  DepthParams p;
+  auto number = [&](std::string_view key, double& value, bool (*ok)(double), std::string_view allowed) {
+    if (const std::optional<double> v = reader.number(key)) value = *v;
+    if (!ok(value)) reader.reject(key, allowed);
+  };
+  number(
+      "gain", p.gain, [](double v) { return static_cast<bool>(std::isfinite(v)); }, "must be a finite number");
+  number(
+      "kmax", p.kmax, [](double v) { return std::isfinite(v) && v >= 1.0; }, "must be a finite number >= 1");
+  number(
+      "kmin", p.kmin, [](double v) { return std::isfinite(v) && v >= 1.0; }, "must be a finite number >= 1");
+  if (auto error = validate(p); !error.empty()) reader.reject("", error);
+  return p;
+}
+
+DepthMethod::DepthMethod(const DepthParams& params) : Method(method_tag<DepthMethod>()), params_(params) {
+  if (auto error = validate(params); !error.empty()) throw std::invalid_argument("depth method: " + error);
+}
+
+}  // namespace ph

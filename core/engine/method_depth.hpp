@@ -1,0 +1,106 @@
+// Depth-based C/D ratio of Lécuyer et al. 2004, as the curvature paper describes it (docs/METHODS.md,
+// "Depth-based C/D").
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "core/engine/field_sampling.hpp"
+#include "core/engine/method.hpp"
+#include "core/engine/method_registry.hpp"
+
+namespace ph {
+
+struct DepthParams {
+  double gain = 3.0;  // C/D change per px of height change per px travelled
+  double kmax = 4.0;  // largest C/D
+  double kmin = 1.5;  // 1 / smallest C/D
+};
+
+std::string validate(const DepthParams& params);
+
+// CD = clamp(1 + gain * dh / step, 1 / kmin, kmax). detail may be null.
+inline double depth_cd(const DepthParams& p, double h1, double h2, double step_px, StepDetail* detail) {
+  const double dh = h2 - h1;
+  const double slope = step_px > 0.0 ? dh / step_px : 0.0;
+  double cd = std::clamp(1.0 + p.gain * slope, 1.0 / p.kmin, p.kmax);
+  if (!std::isfinite(cd)) cd = 1.0;  // only for non-finite heights, which scenes never hold
+  if (detail != nullptr) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    *detail = {nan, nan, nan, nan, dh};
+  }
+  return cd;
+}
+
+class DepthMethod final : public Method {
+ public:
+  using Params = DepthParams;
+  static constexpr std::string_view kName = "depth";
+  static constexpr std::array<std::string_view, 3> kParamKeys = {"gain", "kmax", "kmin"};
+  // The [region.depth] table; each value is checked where it is written.
+  static DepthParams parse_params(const ParamReader& reader);
+
+  explicit DepthMethod(const DepthParams& params);  // throws std::invalid_argument if invalid
+
+  std::string_view name() const override { return kName; }
+  FieldNeeds needs() const override { return {.gradient = false, .depth = true}; }
+  // Inline: the traversal calls these directly on the final class (core/engine/traversal.cpp).
+  //
+  // The nearest reading of a texel for motion along `direction` m: its height (v0) and the height change
+  // per px along the motion (v1), from upwind differences: m_x times the change from the neighbour the
+  // motion comes from along x, plus m_y times the change from the one along y (|m_x| (h - h[x - sx]) +
+  // |m_y| (h - h[y - sy]), s the sign of m's component). It is exact on a plane, in any direction. The
+  // neighbour a texel walk came from is always a 4-neighbour, so pairing the two texels instead would see,
+  // on a diagonal, the height change per axis step and not per px along the motion (a mean slope of
+  // (h_x + h_y)/2 instead of (h_x + h_y)/sqrt 2 at 45 degrees). Where a neighbour needed lies outside the
+  // region, v1 is kNoBehind and cd() falls back to the texel the walk came from, which keeps the step at a
+  // region's border.
+#if defined(__GNUC__)
+  [[gnu::always_inline]]  // once per texel step in the walk; GCC otherwise leaves it out of line
+#endif
+  TexelSample
+  sample(const RegionFields* fields, Texel local, Vec2 direction) const override {
+    if (fields == nullptr || !fields->depth) return {0.0, kNoBehind};
+    const DepthField& f = *fields->depth;
+    // Offsets to the upwind neighbours; none along an axis the motion does not move along.
+    const std::int32_t ox = direction.x > 0.0 ? -1 : (direction.x < 0.0 ? 1 : 0);
+    const std::int32_t oy = direction.y > 0.0 ? -1 : (direction.y < 0.0 ? 1 : 0);
+    const float* texel = &f.values[static_cast<std::size_t>(local.y) * f.width + local.x];
+    const double here = *texel;
+    const std::int32_t nx = local.x + ox, ny = local.y + oy;
+    if (nx < 0 || ny < 0 || nx >= f.width || ny >= f.height) [[unlikely]]
+      return {here, kNoBehind};
+    // Differences first: a constant field gives exactly 0, so a flat region stays exactly C/D 1.
+    const double change = std::abs(direction.x) * (here - texel[ox]) +
+                          std::abs(direction.y) * (here - texel[static_cast<std::ptrdiff_t>(oy) * f.width]);
+    return {here, change};
+  }
+  // The height interpolated at `at` (Sampling::bilinear); the walk pairs it with the previous sample point.
+  TexelSample sample_at(const RegionFields* fields, Texel /*local*/, Vec2 at, Vec2 /*direction*/) const override {
+    if (fields == nullptr || !fields->depth) return {0.0, kNoBehind};
+    return {bilinear(*fields->depth, at), kNoBehind};
+  }
+  // The exact height at a point; cd() pairs it with the point the ground truth puts 1 px behind.
+  TexelSample sample_exact(const SurfacePoint& point, Vec2 /*direction*/) const override {
+    return {point.height, kNoBehind};
+  }
+  double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
+    if (std::isnan(to.v1)) return depth_cd(params_, from.v0, to.v0, step_px, detail);
+    return depth_cd(params_, 0.0, to.v1, 1.0, detail);  // the change along 1 px of the motion
+  }
+  double cd_lower_bound() const override { return 1.0 / params_.kmin; }
+  double cd_upper_bound() const override { return params_.kmax; }
+  const DepthParams& params() const { return params_; }
+
+ private:
+  // v1 of a sample whose upwind neighbours are not all in the region (a marker, never a height change:
+  // heights are finite).
+  static constexpr double kNoBehind = std::numeric_limits<double>::quiet_NaN();
+
+  DepthParams params_;
+};
+
+}  // namespace ph

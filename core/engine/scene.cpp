@@ -1,0 +1,93 @@
+#include "core/engine/scene.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "core/engine/direction_lut.hpp"
+
+namespace ph {
+
+namespace {
+
+template <typename T>
+bool matches(const std::optional<Grid<T>>& grid, Rect r) {
+  return grid && grid->width == r.w && grid->height == r.h &&
+         grid->values.size() == static_cast<std::size_t>(r.w) * static_cast<std::size_t>(r.h);
+}
+
+void check_region(const Region& region) {
+  const std::string who = "region '" + region.name + "': ";
+  if (region.rect.w <= 0 || region.rect.h <= 0) throw std::invalid_argument(who + "width and height must be > 0");
+  if (!region.method) throw std::invalid_argument(who + "no method");
+  for (const EffectPtr& effect : region.effects) {
+    if (!effect) throw std::invalid_argument(who + "an empty effect");
+  }
+  if (region.effects.size() > kMaxEffectsPerRegion) {
+    throw std::invalid_argument(who + "more than " + std::to_string(kMaxEffectsPerRegion) + " effects");
+  }
+  const FieldNeeds needs = region.method->needs();
+  if (needs.gradient && !matches(region.fields.gradient, region.rect)) {
+    throw std::invalid_argument(who + "the method needs normals matching the region's size");
+  }
+  if (needs.depth && !matches(region.fields.depth, region.rect)) {
+    throw std::invalid_argument(who + "the method needs a depth field matching the region's size");
+  }
+}
+
+// Loaders repair invalid texels; this keeps the no-NaN promise for scenes built any other way.
+void flatten_non_finite(RegionFields& fields) {
+  if (fields.gradient) {
+    for (Gradient& g : fields.gradient->values) {
+      if (!std::isfinite(g.x) || !std::isfinite(g.y)) g = {};
+    }
+  }
+  if (fields.depth) {
+    for (float& h : fields.depth->values) {
+      if (!std::isfinite(h)) h = 0.0f;
+    }
+  }
+}
+
+}  // namespace
+
+Scene::Scene(std::vector<Region> regions) : regions_(std::move(regions)) {
+  for (Region& region : regions_) {
+    check_region(region);
+    flatten_non_finite(region.fields);
+    has_effects_ = has_effects_ || !region.effects.empty();
+  }
+}
+
+std::size_t Scene::bytes() const {
+  std::size_t total = 0;
+  for (const Region& region : regions_) {
+    total += region.fields.bytes();
+    for (const EffectPtr& effect : region.effects) total += effect->bytes();
+  }
+  return total + lut_bytes();
+}
+
+void Scene::set_options(const EngineOptions& options) {
+  if (auto error = validate(options); !error.empty()) throw std::invalid_argument("engine options: " + error);
+  const bool keep_luts = options.traversal == Traversal::direction_lut && options_ == options && !luts_.empty();
+  options_ = options;
+  if (keep_luts) return;
+  luts_.clear();
+  luts_.shrink_to_fit();
+  if (options.traversal != Traversal::direction_lut) return;
+  luts_.resize(regions_.size());
+  for (std::size_t i = 0; i < regions_.size(); ++i) {
+    const Method& method = *regions_[i].method;
+    if (method.cd_lower_bound() == 1.0 && method.cd_upper_bound() == 1.0) continue;  // C/D 1: nothing to look up
+    luts_[i] = std::make_shared<const DirectionLut>(build_direction_lut(*this, i, options.lut_directions));
+  }
+}
+
+std::size_t Scene::lut_bytes() const {
+  std::size_t total = 0;
+  for (const auto& lut : luts_) total += lut ? lut->bytes() : 0;
+  return total;
+}
+
+}  // namespace ph

@@ -1,0 +1,491 @@
+#include "core/engine/traversal.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/engine/direction_lut.hpp"
+#include "core/engine/fast_math.hpp"
+#include "core/engine/grid_walk.hpp"
+#include "core/engine/methods.hpp"
+#include "core/engine/traversal_variants.hpp"
+
+namespace ph {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// More texel steps than any frame can take across regions of at most 2^14 px a side.
+constexpr std::uint64_t kMaxStepsPerFrame = std::uint64_t{1} << 26;
+
+// Where a ray enters a region's box, if it does within `limit` of display travel.
+struct Entry {
+  double t = kInf;
+  std::size_t region = 0;
+  bool via_x = true;
+};
+
+// The variants that walk the exact texel sequence (core/engine/engine_options.hpp): nearest is the default
+// engine; bilinear samples each texel at the midpoint of the ray's chord through it; lut takes each
+// texel's C/D from the region's direction table. Each is its own instantiation, so the default's loop
+// has no per-texel branch on the variant.
+enum class WalkMode { nearest, bilinear, lut };
+
+template <WalkMode Mode>
+class Walker {
+ public:
+  Walker(const Scene& scene, CursorState& cursor, Vec2 m, StepObserver* observer, FrameResult& result)
+      : scene_(scene),
+        m_(m),
+        observer_(observer),
+        result_(result),
+        sx_(sign_of(m.x)),
+        sy_(sign_of(m.y)),
+        tdx_(m.x != 0.0 ? 1.0 / std::abs(m.x) : kInf),
+        tdy_(m.y != 0.0 ? 1.0 / std::abs(m.y) : kInf),
+        texel_(cursor.texel),
+        from_(cursor.came_from) {
+    if constexpr (Mode == WalkMode::lut) lut_k_ = DirectionLut::direction_index(m, scene.options().lut_directions);
+    restart_at(cursor.position);
+  }
+
+  // Walks `budget` px of motor travel; returns the end state.
+  CursorState run(double budget) {
+    budget_ = budget;
+    bool first = true;
+    while (budget_ > 0.0) {
+      const std::optional<std::size_t> owner = scene_.owner(texel_);
+      const DirectionLut* lut = nullptr;
+      if constexpr (Mode == WalkMode::lut) lut = owner ? scene_.direction_lut(*owner) : nullptr;
+      if (lut != nullptr) {
+        walk_region_lut(*owner, *lut, first);
+      } else if (owner) {
+        // One dispatch per leg: the listed methods' sample() and cd() then inline into the loop.
+        visit_method(*scene_.regions()[*owner].method, [&](const auto& method) { walk_region(*owner, method, first); });
+      } else {
+        cross_flat();
+      }
+      first = false;
+    }
+    return end_state();
+  }
+
+  bool all_unit() const { return all_unit_; }
+
+ private:
+  Vec2 position() const { return origin_ + m_ * t_; }
+
+  // Starts a straight leg at p inside (or on the boundary of) the current texel.
+  void restart_at(Vec2 p) {
+    // Keep the position inside the texel's closed box: rounding must not put it in a neighbour.
+    p.x = std::clamp(p.x, static_cast<double>(texel_.x), static_cast<double>(texel_.x) + 1.0);
+    p.y = std::clamp(p.y, static_cast<double>(texel_.y), static_cast<double>(texel_.y) + 1.0);
+    origin_ = p;
+    t_ = 0.0;
+    tmx_ = sx_ > 0 ? (texel_.x + 1.0 - p.x) * tdx_ : (sx_ < 0 ? (p.x - texel_.x) * tdx_ : kInf);
+    tmy_ = sy_ > 0 ? (texel_.y + 1.0 - p.y) * tdy_ : (sy_ < 0 ? (p.y - texel_.y) * tdy_ : kInf);
+  }
+
+  // Midpoint of the chord of the current line through a texel's box (the texel's centre when the line
+  // misses the box: a history texel from another direction). For Sampling::bilinear: a function of the
+  // texel and the line only, so splitting a frame does not change what a texel samples.
+  Vec2 chord_mid(Texel box) const {
+    const Vec2 lo{static_cast<double>(box.x), static_cast<double>(box.y)};
+    const RaySpan chord = ray_box(origin_, m_, lo, lo + Vec2{1.0, 1.0}, -kInf, kInf);
+    if (chord.hits()) return origin_ + m_ * (0.5 * (chord.t0 + chord.t1));
+    return {box.x + 0.5, box.y + 0.5};
+  }
+
+  // Sample of the texel the walk is in (nearest: its value; bilinear: at its chord's midpoint).
+  template <typename M>
+  TexelSample sample_here(const Region& region, const M& method) {
+    if constexpr (Mode == WalkMode::bilinear) {
+      // The current texel's chord from the walk's own boundary distances: no division.
+      const double t_in = std::max(sx_ != 0 ? tmx_ - tdx_ : -kInf, sy_ != 0 ? tmy_ - tdy_ : -kInf);
+      const Vec2 at = origin_ + m_ * (0.5 * (t_in + std::min(tmx_, tmy_)));
+      const Vec2 gap = at - sample_point_;
+      step_px_ = std::max(fast_length(gap.x, gap.y), 1e-3);  // depth: the distance the height changes over
+      sample_point_ = at;
+      return method.sample_at(&region.fields, region.local(texel_), at - corner(region), m_);
+    } else {
+      return method.sample(&region.fields, region.local(texel_), m_);
+    }
+  }
+
+  // Sample of the texel the walk came from, at the start of a leg.
+  template <typename M>
+  TexelSample sample_from(const M& method) {
+    if constexpr (Mode == WalkMode::bilinear) {
+      sample_point_ = chord_mid(from_);
+      return sample_owner(scene_, method, from_, m_, &sample_point_);
+    } else {
+      return sample_owner(scene_, method, from_, m_);
+    }
+  }
+
+  template <typename M>
+  double step_cd(const Region& region, const M& method, const TexelSample& from, const TexelSample& to, bool entered) {
+    const double step_px = Mode == WalkMode::bilinear ? step_px_ : 1.0;
+    if (observer_ == nullptr) return count_step(method.cd(from, to, step_px, nullptr), entered);
+    StepDetail detail;
+    const double cd = method.cd(from, to, step_px, &detail);
+    observe_step(cd, detail, entered, region);
+    return count_step(cd, entered);
+  }
+
+  // The bookkeeping of every step: the frame's C/D range, the step count, whether C/D stayed 1.
+  double count_step(double cd, bool entered) {
+    all_unit_ = all_unit_ && cd == 1.0;
+    result_.cd_min = std::min(result_.cd_min, cd);
+    result_.cd_max = std::max(result_.cd_max, cd);
+    if (entered) ++result_.steps;
+    return cd;
+  }
+
+  void observe_step(double cd, const StepDetail& detail, bool entered, const Region& region) {
+    StepRecord record;
+    record.detail = detail;
+    record.entry = position();
+    record.texel = texel_;
+    record.came_from = from_;
+    record.entered = entered;
+    record.cd = cd;
+    record.region = &region;
+    observer_->on_step(record);
+  }
+
+  // Walks texel by texel while the texels belong to `index`. M is the method's concrete type for the
+  // listed methods (calls inline), or Method itself (virtual calls) for any other.
+  template <typename M>
+  void walk_region(std::size_t index, const M& method, bool first_leg) {
+    const Region& region = scene_.regions()[index];
+    TexelSample previous = sample_from(method);
+    // Inlined, so that the samples stay in registers: an out-of-line call per step cost the depth method a
+    // fifth of its typical frame.
+    step_through(index, first_leg, [&](bool entered) PH_ALWAYS_INLINE {
+      const TexelSample here = sample_here(region, method);
+      const double cd = step_cd(region, method, previous, here, entered);
+      previous = here;
+      return cd;
+    });
+  }
+
+  // The same with each texel's C/D from a direction table.
+  void walk_region_lut(std::size_t index, const DirectionLut& lut, bool first_leg) {
+    const Region& region = scene_.regions()[index];
+    step_through(index, first_leg, [&](bool entered) PH_ALWAYS_INLINE { return lut_cd(region, lut, entered); });
+  }
+
+  // C/D of the current texel from a direction table, with the bookkeeping of step_cd.
+  double lut_cd(const Region& region, const DirectionLut& lut, bool entered) {
+    const double cd = lut.cd(lut_k_, region.local(texel_));
+    if (observer_ != nullptr) observe_step(cd, empty_step_detail(), entered, region);
+    return count_step(cd, entered);
+  }
+
+  // The texel-stepping loop: spends the budget texel by texel while the texels belong to region `index`,
+  // each at the C/D that cd_here(entered) gives for the texel the walk is in (called once per texel, in
+  // order, so it may keep the previous texel's sample).
+  template <typename CdHere>
+  void step_through(std::size_t index, bool first_leg, CdHere&& cd_here) {
+    const Region& region = scene_.regions()[index];
+    double cd = cd_here(!first_leg);
+    const bool topmost = index + 1 == scene_.regions().size();
+    for (;;) {
+      const double t_next = std::min(tmx_, tmy_);
+      const double cost = cd * (t_next - t_);
+      if (cost >= budget_) {
+        t_ += budget_ / cd;
+        budget_ = 0.0;
+        return;
+      }
+      budget_ -= cost;
+      t_ = t_next;
+      if (++steps_ > kMaxStepsPerFrame) {
+        budget_ = 0.0;  // unreachable for a valid scene (a ray crosses each region once); never spin
+        return;
+      }
+      from_ = texel_;
+      if (tmx_ <= tmy_) {
+        texel_.x += sx_;
+        tmx_ += tdx_;
+      } else {
+        texel_.y += sy_;
+        tmy_ += tdy_;
+      }
+      if (!region.rect.contains(texel_) || (!topmost && scene_.owner(texel_) != index)) {
+        restart_at(position());
+        return;  // another region or the flat outside takes over
+      }
+      cd = cd_here(true);
+    }
+  }
+
+  // The display-travel interval [t0, t1) in which the ray is within a box's range on one axis. Which
+  // side of the range the ray starts on is read from the current texel, not the position, so that
+  // rounding on a boundary can never re-enter a region the walk has just left.
+  static bool slab(double p, std::int32_t lo, std::int32_t hi, int step, double td, std::int32_t cell, double& t0,
+                   double& t1) {
+    t0 = -kInf;
+    t1 = kInf;
+    if (step == 0) return cell >= lo && cell < hi;
+    if (step > 0) {
+      if (cell >= hi) return false;
+      t1 = (hi - p) * td;
+      if (cell < lo) t0 = (lo - p) * td;
+    } else {
+      if (cell < lo) return false;
+      t1 = (p - lo) * td;
+      if (cell >= hi) t0 = (p - hi) * td;
+    }
+    return true;
+  }
+
+  Entry next_entry(Vec2 p, double limit) const {
+    Entry best;
+    const auto& regions = scene_.regions();
+    for (std::size_t i = 0; i < regions.size(); ++i) {
+      const Rect& r = regions[i].rect;
+      double x0, x1, y0, y1;
+      if (!slab(p.x, r.x, r.x + r.w, sx_, tdx_, texel_.x, x0, x1)) continue;
+      if (!slab(p.y, r.y, r.y + r.h, sy_, tdy_, texel_.y, y0, y1)) continue;
+      const double t_in = std::max({x0, y0, 0.0});
+      const double t_out = std::min(x1, y1);
+      if (t_in < t_out && t_in <= limit && t_in < best.t) best = {t_in, i, x0 >= y0};
+    }
+    return best;
+  }
+
+  // On the flat outside C/D is 1: jump straight to the next region the ray enters, or to the end.
+  void cross_flat() {
+    const Vec2 p = position();
+    const Entry entry = next_entry(p, budget_);
+    if (entry.t > 0.0) {
+      result_.cd_min = std::min(result_.cd_min, 1.0);
+      result_.cd_max = std::max(result_.cd_max, 1.0);
+    }
+    if (entry.t > budget_ || entry.t == kInf) {
+      t_ += budget_;
+      budget_ = 0.0;
+      // An axis the motion does not move along keeps its texel row or column.
+      const Vec2 end = position();
+      if (sx_ != 0) texel_.x = cell_behind(end.x, sx_);
+      if (sy_ != 0) texel_.y = cell_behind(end.y, sy_);
+      from_ = texel_;
+      return;
+    }
+    budget_ -= entry.t;
+    t_ += entry.t;
+    const Vec2 at = position();
+    const Rect& r = scene_.regions()[entry.region].rect;
+    Texel in{cell_ahead(at.x, sx_), cell_ahead(at.y, sy_)};
+    if (sx_ == 0) in.x = texel_.x;
+    if (sy_ == 0) in.y = texel_.y;
+    in.x = std::clamp(in.x, r.x, r.x + r.w - 1);
+    in.y = std::clamp(in.y, r.y, r.y + r.h - 1);
+    from_ = entry.via_x ? Texel{in.x - sx_, in.y} : Texel{in.x, in.y - sy_};
+    texel_ = in;
+    restart_at(at);
+  }
+
+  CursorState end_state() const {
+    Vec2 p = position();
+    p.x = std::clamp(p.x, static_cast<double>(texel_.x), static_cast<double>(texel_.x) + 1.0);
+    p.y = std::clamp(p.y, static_cast<double>(texel_.y), static_cast<double>(texel_.y) + 1.0);
+    return {p, texel_, from_, {}};
+  }
+
+  const Scene& scene_;
+  const Vec2 m_;
+  StepObserver* const observer_;
+  FrameResult& result_;
+  const int sx_, sy_;
+  const double tdx_, tdy_;  // display travel per texel along x and y
+  Texel texel_, from_;
+  Vec2 origin_;                     // start of the current straight leg
+  double t_ = 0.0;                  // display travel since origin_
+  double tmx_ = kInf, tmy_ = kInf;  // display travel from origin_ to the next x / y texel boundary
+  double budget_ = 0.0;             // motor travel left in the frame
+  bool all_unit_ = true;
+  std::uint64_t steps_ = 0;
+  int lut_k_ = 0;         // lut: the frame's quantised direction
+  double step_px_ = 1.0;  // bilinear: distance between the last two sample points
+  Vec2 sample_point_;     // bilinear: where the last sample was taken (screen px)
+};
+
+}  // namespace
+
+// True when the segment from the cursor by `motor` cannot touch any region: its bounding box misses
+// every region's closed box (a few compares per region), and it stays well inside the world.
+bool crosses_only_flat(const Scene& scene, const CursorState& cursor, Vec2 motor) {
+  constexpr double kFar = kWorldLimitPx / 2;
+  const Vec2 p = cursor.position;
+  const Vec2 end = p + motor;
+  if (!(std::abs(end.x) < kFar && std::abs(end.y) < kFar && std::abs(p.x) < kFar && std::abs(p.y) < kFar)) return false;
+  const double x0 = std::min(p.x, end.x), x1 = std::max(p.x, end.x);
+  const double y0 = std::min(p.y, end.y), y1 = std::max(p.y, end.y);
+  for (const Region& region : scene.regions()) {
+    const Rect& r = region.rect;
+    if (x1 >= r.x && x0 <= static_cast<double>(r.x) + r.w && y1 >= r.y && y0 <= static_cast<double>(r.y) + r.h) {
+      return false;
+    }
+  }
+  return true;
+}
+
+double clamp_to_world(double v) { return std::isfinite(v) ? std::clamp(v, -kWorldLimitPx, kWorldLimitPx) : 0.0; }
+
+CursorState cursor_at(Vec2 position) {
+  position = {clamp_to_world(position.x), clamp_to_world(position.y)};
+  const Texel t = texel_at(position);
+  return {position, t, t, {}};
+}
+
+namespace {
+
+// Runs the effects of the region under the cursor on the frame's motor displacement; returns the
+// factor by which they changed its length (1 when none acted).
+double apply_effects(const Scene& scene, CursorState& cursor, Vec2& motor, TimeUs time) {
+  const std::optional<std::size_t> owner = scene.owner(cursor.texel);
+  if (!owner) return 1.0;
+  const Region& region = scene.regions()[*owner];
+  if (region.effects.empty()) return 1.0;
+  const double before = fast_length(motor.x, motor.y);
+  // Scene allows at most kMaxEffectsPerRegion effects; the bound is kept here too.
+  const std::size_t count = std::min(region.effects.size(), kMaxEffectsPerRegion);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Effect& effect = *region.effects[i];
+    EffectState& state = cursor.effects[i];
+    if (state.owner != &effect) state = EffectState{true, 0.0, kNoTime, &effect};
+    const double given = fast_length(motor.x, motor.y);
+    const Vec2 out = effect.apply({motor, time, cursor.position, region.local(cursor.texel)}, state);
+    // The promise of every effect, kept here too: finite, and within its bounds of the motor it was given.
+    const double length = fast_length(out.x, out.y);
+    if (is_finite(out) && length <= given * effect.max_gain() * (1.0 + 1e-12) &&
+        length >= given * effect.min_gain() * (1.0 - 1e-12)) {
+      motor = out;
+    }
+  }
+  const double after = fast_length(motor.x, motor.y);
+  return before > 0.0 ? after / before : 1.0;
+}
+
+// A frame that meets no region and no effect: C/D 1 all the way, no walk.
+// Written component by component, and the texel stored whole: reading back a texel just stored as two halves
+// costs a failed store-to-load forwarding each time. So does GCC's packing of the motor's two doubles (two
+// registers) into one through the stack to add them as a pair, hence no SLP vectorisation here (gcc 12: about
+// a third of a flat frame's time).
+#if defined(__GNUC__) && !defined(__clang__)
+[[gnu::optimize("no-tree-slp-vectorize")]]
+#endif
+FrameResult
+flat_frame(CursorState& cursor, Vec2 motor) {
+  const double ex = cursor.position.x + motor.x, ey = cursor.position.y + motor.y;
+  Texel t = cursor.texel;
+  if (motor.x != 0.0) t.x = cell_behind_predictable(ex, motor.x);
+  if (motor.y != 0.0) t.y = cell_behind_predictable(ey, motor.y);
+  cursor.texel = t;
+  cursor.came_from = t;
+  cursor.position.x = ex;
+  cursor.position.y = ey;
+  FrameResult result;
+  result.display.x = motor.x;
+  result.display.y = motor.y;
+  return result;
+}
+
+template <WalkMode Mode>
+CursorState walk_texels(const Scene& scene, CursorState& cursor, Vec2 m, double d, StepObserver* observer,
+                        FrameResult& result, bool& all_unit) {
+  Walker<Mode> walker(scene, cursor, m, observer, result);
+  const CursorState end = walker.run(d);
+  all_unit = walker.all_unit();
+  return end;
+}
+
+[[gnu::noinline]] CursorState walk_variant(const Scene& scene, CursorState& cursor, Vec2 m, double d,
+                                           StepObserver* observer, FrameResult& result, bool& all_unit) {
+  const EngineOptions& options = scene.options();
+  switch (options.traversal) {
+    case Traversal::exact:
+      return options.sampling == Sampling::bilinear
+                 ? walk_texels<WalkMode::bilinear>(scene, cursor, m, d, observer, result, all_unit)
+                 : walk_texels<WalkMode::nearest>(scene, cursor, m, d, observer, result, all_unit);
+    case Traversal::direction_lut:
+      return walk_texels<WalkMode::lut>(scene, cursor, m, d, observer, result, all_unit);
+    case Traversal::unit_steps:
+      return walk_unit_steps(scene, cursor, m, d, options.sampling, observer, result, all_unit);
+    case Traversal::frame_midpoint:
+      return walk_frame_midpoint(scene, cursor, m, d, options.sampling, observer, result, all_unit);
+  }
+  return walk_texels<WalkMode::nearest>(scene, cursor, m, d, observer, result, all_unit);
+}
+
+// The traversal proper: walks `motor` (finite, not zero) through the texels from the cursor.
+FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserver* observer) {
+  FrameResult result;
+  double d = fast_length(motor.x, motor.y);
+  // Divide rather than multiply by 1/d: for a denormal d, 1/d overflows and the walk would never advance.
+  const Vec2 m{motor.x / d, motor.y / d};
+  if (!is_finite(m)) return result;
+  if (d > kMaxMotorPx) {
+    d = kMaxMotorPx;
+    motor = m * d;
+  }
+  result.cd_min = kInf;
+  result.cd_max = -kInf;
+  const Vec2 start = cursor.position;
+  bool all_unit = true;
+  CursorState end;
+  if (scene.options().is_default()) [[likely]] {
+    Walker<WalkMode::nearest> walker(scene, cursor, m, observer, result);
+    end = walker.run(d);
+    all_unit = walker.all_unit();
+  } else {
+    end = walk_variant(scene, cursor, m, d, observer, result, all_unit);  // one branch per frame, out of line
+  }
+  if (all_unit) {
+    // C/D was 1 everywhere: the display moves by the motor displacement itself, with no rounding.
+    end.position = start + motor;
+  }
+  if (std::abs(end.position.x) > kWorldLimitPx || std::abs(end.position.y) > kWorldLimitPx ||
+      !is_finite(end.position)) {
+    end = cursor_at(end.position);
+  }
+  if (result.cd_min > result.cd_max) result.cd_min = result.cd_max = 1.0;
+  result.display = all_unit && end.position == start + motor ? motor : end.position - start;
+  // Field by field, leaving the effects' state: copying it whole reads back its flag just stored as one byte
+  // (a failed store-to-load forwarding every frame).
+  cursor.position = end.position;
+  cursor.texel = end.texel;
+  cursor.came_from = end.came_from;
+  return result;
+}
+
+// Everything else, out of line: the walk's set-up (a large stack frame, saved registers) would otherwise be
+// paid by the flat frames too.
+[[gnu::noinline]] FrameResult advance_through_regions(const Scene& scene, CursorState& cursor, Vec2 motor, TimeUs time,
+                                                      StepObserver* observer) {
+  const double gain = scene.has_effects() ? apply_effects(scene, cursor, motor, time) : 1.0;
+  if (motor.x == 0.0 && motor.y == 0.0) return {};
+  // advance() has found that this frame meets a region; the effects may have moved it off every region.
+  FrameResult result = scene.has_effects() && crosses_only_flat(scene, cursor, motor)
+                           ? flat_frame(cursor, motor)
+                           : walk(scene, cursor, motor, observer);
+  if (gain != 1.0) {
+    // The hand's motor travel was the frame's; the effects let only `gain` of it reach the walk.
+    result.cd_min /= gain;
+    result.cd_max /= gain;
+  }
+  return result;
+}
+
+}  // namespace
+
+FrameResult advance(const Scene& scene, CursorState& cursor, Vec2 motor, TimeUs time, StepObserver* observer) {
+  if (!is_finite(motor) || (motor.x == 0.0 && motor.y == 0.0)) return {};
+  if (!scene.has_effects() && crosses_only_flat(scene, cursor, motor)) return flat_frame(cursor, motor);
+  return advance_through_regions(scene, cursor, motor, time, observer);
+}
+
+}  // namespace ph

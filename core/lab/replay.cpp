@@ -1,0 +1,29 @@
+#include "core/lab/replay.hpp"
+
+namespace ph {
+
+void run_stream(EventSource& source, Pipeline& pipeline, EventSink& sink, std::vector<FrameReport>* reports) {
+  FrameProcessor processor(pipeline, sink);
+  FrameReport report;
+  bool frame_done = false;
+  while (const std::optional<InputEvent> event = source.next()) {
+    processor.push(*event, reports != nullptr ? &report : nullptr, &frame_done);
+    if (frame_done && reports != nullptr) reports->push_back(report);
+  }
+  processor.finish();
+}
+
+Recording replay(const Recording& input, const Scene& scene, const PipelineConfig& config,
+                 std::vector<FrameReport>* reports) {
+  Recording output;
+  output.device = config.mode == OutputMode::absolute ? output_device(input.device, config) : input.device;
+  output.events.reserve(input.events.size());
+  // The scene outlives this call: share it without owning it.
+  Pipeline pipeline(std::shared_ptr<const Scene>(std::shared_ptr<const Scene>(), &scene), config);
+  RecordingSource source(input.events);
+  RecordingSink sink(output.events);
+  run_stream(source, pipeline, sink, reports);
+  return output;
+}
+
+}  // namespace ph
