@@ -505,6 +505,7 @@ class AbsoluteFollower {
     if (early_px != late_px) ++widened_;
     if (at != early_px) {
       ++off_pixel_;
+      max_off_px_ = std::max({max_off_px_, std::abs(at.x - early_px.x), std::abs(at.y - early_px.y)});
       if (!daemon_at) daemon_at = daemon_cursor(control_);
       max_gap_ = std::max(max_gap_, ph::length(*daemon_at - model_.cursor().position));
       model_.move_cursor_to(*daemon_at);
@@ -518,10 +519,10 @@ class AbsoluteFollower {
 
   std::string summary() const {
     return fmt::format(
-        "{} motion frames: {} came out at another pixel than the model's (by 1 px; the model then moved to the "
-        "daemon's, {:.3f} px away at most), {} where the two clock readings gave different pixels, {} where the "
-        "daemon's model was asked whether a position was to come",
-        frames_, off_pixel_, max_gap_, widened_, asked_);
+        "{} motion frames: {} came out at another pixel than the model's (by {} px at most; the model then moved "
+        "to the daemon's, {:.3f} px away at most), {} where the two clock readings gave different pixels, {} where "
+        "the daemon's model was asked whether a position was to come",
+        frames_, off_pixel_, max_off_px_, max_gap_, widened_, asked_);
   }
 
  private:
@@ -568,7 +569,7 @@ class AbsoluteFollower {
   ph::control::Client& control_;
   Clock::time_point sent_at_, read_at_;
   bool timed_ = false;
-  int frames_ = 0, off_pixel_ = 0, widened_ = 0, asked_ = 0;
+  int frames_ = 0, off_pixel_ = 0, max_off_px_ = 0, widened_ = 0, asked_ = 0;
   double max_gap_ = 0.0;
 };
 
@@ -872,7 +873,15 @@ void flat_part(Report& report, const Options& options, Latency& latency) {
         helper->answer_with(point);
         std::vector<double> delays_ms;
         for (int k = 0; k < 5; ++k) {
-          std::this_thread::sleep_for(std::chrono::milliseconds(130 + 70 * k));  // other phases of the 1 s timer
+          // Other phases of the 1 s timer; the settle query of the frame before has come by then. The daemon
+          // asks at most every 50 ms: right after a query, a frame would wait for the settle query.
+          std::this_thread::sleep_for(std::chrono::milliseconds(300 + 70 * k));
+          wait_until(
+              [&] {
+                const std::optional<Clock::time_point> last = helper->last_query();
+                return !last || Clock::now() - *last >= 60ms;
+              },
+              1s);
           std::vector<ph::InputEvent> events{abs_event(ev::kAbsX, 100 + 10 * k), abs_event(ev::kAbsY, 200 + k)};
           if (k == 0) events.insert(events.end(), {key(BTN_TOUCH, 1), key(BTN_TOOL_FINGER, 1)});
           const auto sent = Clock::now();

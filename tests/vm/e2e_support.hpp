@@ -638,6 +638,12 @@ class FakeHelper {
         std::count_if(queries_.begin(), queries_.end(), [&](Clock::time_point t) { return t >= from && t <= to; }));
   }
 
+  // When the last query arrived (nullopt: none yet).
+  std::optional<Clock::time_point> last_query() const {
+    const std::lock_guard lock(mutex_);
+    return queries_.empty() ? std::nullopt : std::optional<Clock::time_point>(queries_.back());
+  }
+
   int answers() const { return answers_; }
   // Lines other than `query` and `ok` (an error from the daemon), for the report.
   std::vector<std::string> unexpected() const {
