@@ -971,12 +971,17 @@ void flat_part(Report& report, const Options& options, Latency& latency) {
   });
 
   session.run("[12] resync: motion after a pause of more than 300 ms queries the helper", [&](Check& check) {
-    std::vector<double> delays_ms;
+    std::vector<double> delays_ms, held_ms;
     int during_burst = 0;
     for (int k = 0; k < 3; ++k) {
       std::this_thread::sleep_for(std::chrono::milliseconds(400 + 150 * k));
       const auto sent = Clock::now();
       expect_through(check, *mouse, *out, model, make_frame({rel(ev::kRelX, k % 2 == 0 ? 5 : -5)}), "after a pause");
+      // The helper does not answer: the frame waited the daemon's 30 ms for it.
+      held_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - sent).count());
+      check.expect(held_ms.back() >= 29,
+                   fmt::format("pause {}: the frame came out after {:.1f} ms, not held for the helper's answer", k,
+                               held_ms.back()));
       const std::optional<Clock::time_point> query = helper->query_after(sent, 2s);
       if (!check.expect(query.has_value(), fmt::format("pause {}: no query within 2 s of the motion", k))) continue;
       delays_ms.push_back(std::chrono::duration<double, std::milli>(*query - sent).count());
@@ -995,15 +1000,42 @@ void flat_part(Report& report, const Options& options, Latency& latency) {
     check.expect(daemon_cursor(*control) == model.cursor().position, "the model moved without an answer");
     const std::vector<std::string> odd = helper->unexpected();
     check.expect(odd.empty(), "the helper's connection got: " + (odd.empty() ? "" : odd.front()));
-    std::string delays;
+    std::string delays, held;
     for (double d : delays_ms) delays += fmt::format("{}{:.0f}", delays.empty() ? "" : ", ", d);
+    for (double d : held_ms) held += fmt::format("{}{:.1f}", held.empty() ? "" : ", ", d);
     check.note(
-        fmt::format("queries {} ms after the first frame after pauses of 400, 550, 700 ms; at most {} during "
-                    "the bursts that followed",
-                    delays, during_burst));
-    helper.reset();
-    touchpad.reset();
+        fmt::format("queries {} ms after the first frame after pauses of 400, 550, 700 ms; unanswered, that "
+                    "frame came out {} ms after it was sent; at most {} queries during the bursts that followed",
+                    delays, held, during_burst));
   });
+
+  session.run("[12] resync: after a pause the first frame waits for the helper's answer and starts from there",
+              [&](Check& check) {
+                // An application warped the cursor during the pause: the helper reports it, and the frame
+                // moves the cursor from there rather than from where the model was.
+                const ph::Vec2 warped{700.5, 400.5};
+                helper->answer_with(warped);
+                std::this_thread::sleep_for(400ms);
+                const ph::Vec2 was = model.cursor().position;
+                model.move_cursor_to(warped);
+                const auto sent = Clock::now();
+                expect_through(check, *mouse, *out, model, make_frame({rel(ev::kRelX, 5), rel(ev::kRelY, 3)}),
+                               "after the warp");
+                const double latency_ms = std::chrono::duration<double, std::milli>(Clock::now() - sent).count();
+                helper->answer_with(std::nullopt);
+                const ph::Vec2 at = daemon_cursor(*control);
+                check.expect(
+                    at == model.cursor().position,
+                    fmt::format("expected the model at ({}, {}) (the helper's point and the frame), got ({}, "
+                                "{}) (the model was at ({}, {}))",
+                                model.cursor().position.x, model.cursor().position.y, at.x, at.y, was.x, was.y));
+                check.note(
+                    fmt::format("the model was at ({}, {}), the helper said ({}, {}); after [REL_X 5, REL_Y 3] "
+                                "({:.1f} ms through the daemon) it is at ({}, {})",
+                                was.x, was.y, warped.x, warped.y, latency_ms, at.x, at.y));
+                helper.reset();
+                touchpad.reset();
+              });
 
   session.run("[7] SIGHUP with a valid changed config: reloads, the region takes effect", [&](Check& check) {
     // Put the cursor at (900, 540), left of the hole's centre, while the scene is still flat.
