@@ -431,7 +431,9 @@ std::int32_t pixel_of(double coordinate) { return static_cast<std::int32_t>(std:
 //   (`cursor` on the control socket), so that timing errors never accumulate;
 // - the kernel drops an ABS value equal to the axis' current one, so a frame may come out with one axis,
 //   or not at all: when the model's pixel is within 2 px of the current one on both axes and the frame
-//   has nothing else, the daemon's model is asked whether anything is to come before reading.
+//   has nothing else, or when the guest stalled over 2 ms between the guess and the send's end (the
+//   frame may then be slow enough to move no pixel), the daemon's model is asked whether anything is to
+//   come before reading.
 class AbsoluteFollower {
  public:
   AbsoluteFollower(ph::Pipeline& model, ph::control::Client& control) : model_(model), control_(control) {}
@@ -445,14 +447,22 @@ class AbsoluteFollower {
     const Axes before = current_axes(out);
     // Whether something is sure to come out, from the model fed the time now (the send is next).
     ph::Pipeline guess = model_;
-    guess.process(stamped(in, monotonic_us()));
+    const ph::TimeUs t_guess = monotonic_us();
+    guess.process(stamped(in, t_guess));
     const bool others = delivers_something(without_motion(in));
-    const bool certain = others || std::abs(guess_value_x(guess) - before.x) >= 3 * ph::kAbsUnitsPerPixel ||
-                         std::abs(guess_value_y(guess) - before.y) >= 3 * ph::kAbsUnitsPerPixel;
+    bool certain = others || std::abs(guess_value_x(guess) - before.x) >= 3 * ph::kAbsUnitsPerPixel ||
+                   std::abs(guess_value_y(guess) - before.y) >= 3 * ph::kAbsUnitsPerPixel;
     const ph::TimeUs t_before = monotonic_us();
     sent_at_ = Clock::now();
     mouse.send(in);
     const ph::TimeUs t_after = monotonic_us();
+    // A guest stalled between the guess and the send's end (a busy host) makes the guess's time wrong:
+    // the frame may be slow enough not to move a pixel. Then the daemon's model decides.
+    constexpr ph::TimeUs kStallUs = 2000;
+    if (!others && t_after - t_guess > kStallUs) {
+      certain = false;
+      ++stalled_;
+    }
     std::optional<Frame> got;
     if (certain) {
       got = out.next_frame(kFrameTimeout);
@@ -521,8 +531,9 @@ class AbsoluteFollower {
     return fmt::format(
         "{} motion frames: {} came out at another pixel than the model's (by {} px at most; the model then moved "
         "to the daemon's, {:.3f} px away at most), {} where the two clock readings gave different pixels, {} where "
-        "the daemon's model was asked whether a position was to come",
-        frames_, off_pixel_, max_off_px_, max_gap_, widened_, asked_);
+        "the daemon's model was asked whether a position was to come ({} of them after the guest stalled over 2 ms "
+        "around the send)",
+        frames_, off_pixel_, max_off_px_, max_gap_, widened_, asked_, stalled_);
   }
 
  private:
@@ -569,7 +580,7 @@ class AbsoluteFollower {
   ph::control::Client& control_;
   Clock::time_point sent_at_, read_at_;
   bool timed_ = false;
-  int frames_ = 0, off_pixel_ = 0, max_off_px_ = 0, widened_ = 0, asked_ = 0;
+  int frames_ = 0, off_pixel_ = 0, max_off_px_ = 0, widened_ = 0, asked_ = 0, stalled_ = 0;
   double max_gap_ = 0.0;
 };
 
