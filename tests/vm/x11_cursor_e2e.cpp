@@ -1,0 +1,536 @@
+// Run inside the VM under tests/vm/with-xorg (a real Xorg whose libinput driver reads every input device
+// named "pseudohaptic ..."), as root: is the cursor the daemon models the cursor X shows? Creates a uinput
+// test mouse, starts the daemon (argv[1]) on it, moves the mouse like a hand and, after every frame,
+// compares where X put its pointer (XQueryPointer) with the cursor model of ph::Pipeline fed the same
+// frames offline (the daemon's own model; every frame the daemon emits is checked against it too).
+//
+//   x11_cursor_e2e DAEMON [--scene DIR] [--frames N] [--relative-frames N] [--cases abc] [-v]
+//   x11_cursor_e2e --write-scene DIR     (on the host, before: writes the scene's maps into DIR)
+//
+// Cases (one daemon each, all on one X server; the scene is the embedded default scene's three targets,
+// loaded from files, on a 1920 x 1080 desktop):
+//   absolute output: X's pixel holds the model at every frame (within 0.5 px of the pixel's centre);
+//   relative output, X's flat acceleration profile: within 1 px;
+//   relative output, X's default adaptive profile: the drift, measured and reported only.
+// The distance at a check is from the model to the centre of the pixel X reports, per axis:
+// |model - (pixel + 0.5)|. One PASS, FAIL or INFO line per case; exit status 1 when any failed.
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "config/scene_file.hpp"
+#include "config/target_files.hpp"
+#include "core/pipeline.hpp"
+#include "core/targets.hpp"
+#include "tests/vm/control_stub.hpp"
+#include "tests/vm/e2e_support.hpp"
+#include "tests/vm/hand_motion.hpp"
+#include "tests/vm/x11_support.hpp"
+
+namespace {
+
+using namespace ph::e2e;
+using ph::Frame;
+using ph::Vec2;
+namespace ev = ph::ev;
+
+constexpr const char* kMouseName = "ph-x11 mouse";
+constexpr const char* kVirtualName = "pseudohaptic ph-x11 mouse";
+constexpr ph::Rect kDesktop{0, 0, 1920, 1080};
+constexpr auto kFrameTimeout = 5s;  // a frame through the daemon, or through X (TCG is slow)
+
+struct Options {
+  std::string daemon;
+  int frames = 2000;           // motion frames of the absolute case
+  int relative_frames = 1000;  // motion frames of each relative case
+  bool verbose = false;
+  std::string cases = "abce";  // which cases run, by letter (e: the session helper)
+  long trace_from = -1;        // -v: trace 12 frames from this one
+  std::filesystem::path scratch;
+  std::filesystem::path scene_dir;  // the targets' maps; default: in scratch
+  std::string session;              // pseudohaptic-session, for its case; none: not run
+};
+
+void trace(const Options& options, const std::string& what) {
+  static const auto start = Clock::now();
+  if (!options.verbose) return;
+  std::fprintf(stderr, "[%9.3f] %s\n", std::chrono::duration<double>(Clock::now() - start).count(), what.c_str());
+}
+
+// ---- the scene: the default scene's three targets, from files ------------------------------------------------
+
+struct Target {
+  const char* name;
+  int x, y;
+};
+constexpr Target kTargets[] = {
+    {"bump-gaussian-h1-r200", 135, 290}, {"hole-polynomial-h1-r200", 710, 290}, {"bump-linear-h1-r100", 1285, 290}};
+
+std::vector<ph::TargetSpec> scene_targets() {
+  std::vector<ph::TargetSpec> specs;
+  for (const Target& t : kTargets) {
+    for (const ph::TargetSpec& spec : ph::all_targets()) {
+      if (spec.name() == t.name) specs.push_back(spec);
+    }
+  }
+  if (specs.size() != std::size(kTargets)) throw Fatal("a target of the default scene is missing");
+  return specs;
+}
+
+// The regions' scene text, naming the maps in `dir` by absolute path. Writes the maps there when they
+// are missing (slow under TCG: scripts/vm-test writes them on the host first, with --write-scene).
+std::string scene_regions(const std::filesystem::path& dir) {
+  const std::vector<ph::TargetSpec> specs = scene_targets();
+  if (!ph::target_files_present(dir, specs)) ph::write_target_files(dir, specs);
+  const std::string prefix = std::filesystem::absolute(dir).string() + "/";
+  std::string regions;
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    std::string region = ph::target_scene_text(specs[i]);
+    const std::string at_origin = "x = 0\ny = 0\n";
+    const auto pos = region.find(at_origin);
+    if (pos == std::string::npos) throw Fatal("unexpected target scene text:\n" + region);
+    region.replace(pos, at_origin.size(), fmt::format("x = {}\ny = {}\n", kTargets[i].x, kTargets[i].y));
+    for (const char* key : {"normal_map = \"", "depth_map = \""}) {
+      const auto at = region.find(key);
+      if (at == std::string::npos) throw Fatal("unexpected target scene text:\n" + region);
+      region.insert(at + std::strlen(key), prefix);
+    }
+    regions += "\n" + region;
+  }
+  return regions;
+}
+
+std::filesystem::path write_config(const std::filesystem::path& dir, const std::string& regions, ph::OutputMode mode) {
+  const std::string name = mode == ph::OutputMode::absolute ? "absolute" : "relative";
+  const std::filesystem::path path = dir / (name + ".toml");
+  std::ofstream out(path, std::ios::trunc);
+  out << "[daemon]\n"
+      << "devices = [\"name:ph-x11 mouse\"]\n"
+      << "output = \"" << name << "\"\n"
+      << "desktop = [0, 0, 1920, 1080]\n"
+      << "pointer_speed = 1.0\n"
+      << regions;
+  if (!out) throw Fatal("cannot write " + path.string());
+  return path;
+}
+
+// ---- figures -------------------------------------------------------------------------------------------------
+
+// Distances from the model to the centre of the pixel X shows, over the checks of a case.
+class Distances {
+ public:
+  void add(long frame, Vec2 model, XServer::Pointer pixel) {
+    const double dx = std::abs(model.x - (pixel.x + 0.5)), dy = std::abs(model.y - (pixel.y + 0.5));
+    const double axis = std::max(dx, dy), euclid = std::hypot(dx, dy);
+    if (axis > max_axis_) {
+      max_axis_ = axis;
+      worst_ =
+          fmt::format("frame {}: model ({:.3f}, {:.3f}), X pixel ({}, {})", frame, model.x, model.y, pixel.x, pixel.y);
+    }
+    max_euclid_ = std::max(max_euclid_, euclid);
+    sum_sq_ += euclid * euclid;
+    last_ = euclid;
+    ++checks_;
+    axes_.push_back(axis);
+    texts_.push_back(
+        fmt::format("frame {}: model ({:.3f}, {:.3f}), X pixel ({}, {})", frame, model.x, model.y, pixel.x, pixel.y));
+  }
+  // The first check whose per-axis distance exceeds `bound`, in words.
+  std::string first_over(double bound) const {
+    for (std::size_t i = 0; i < axes_.size(); ++i) {
+      if (axes_[i] > bound) return texts_[i];
+    }
+    return "none";
+  }
+  // Checks whose per-axis distance exceeds `bound`.
+  long over(double bound) const {
+    return std::count_if(axes_.begin(), axes_.end(), [&](double a) { return a > bound; });
+  }
+
+  double max_axis() const { return max_axis_; }
+  double max_euclid() const { return max_euclid_; }
+  double rms() const { return checks_ > 0 ? std::sqrt(sum_sq_ / static_cast<double>(checks_)) : 0.0; }
+  double last() const { return last_; }
+  long checks() const { return checks_; }
+  const std::string& worst() const { return worst_; }
+
+ private:
+  double max_axis_ = 0, max_euclid_ = 0, sum_sq_ = 0, last_ = 0;
+  long checks_ = 0;
+  std::vector<double> axes_;
+  std::vector<std::string> texts_;
+  std::string worst_;
+};
+
+// ---- one case ------------------------------------------------------------------------------------------------
+
+struct CaseSpec {
+  std::string label;
+  ph::OutputMode mode;
+  std::string x_profile;  // relative output: the profile X's libinput driver gets ("flat", "adaptive")
+  int frames;
+  std::optional<double> bound;  // per-axis distance every check must keep; none: measured only
+};
+
+struct CaseResult {
+  Distances distances;
+  long motion_frames = 0, daemon_frames = 0, daemon_mismatches = 0, lost_syncs = 0;
+  double model_path = 0, seconds = 0, late_ms = 0;
+  long late_frames = 0;
+  std::vector<std::string> problems;
+};
+
+// What the kernel passes on of a frame the daemon writes: an ABS value equal to the axis' last one, a
+// REL value of 0 and an empty frame are dropped. `abs` holds the last ABS_X, ABS_Y.
+Frame as_delivered(const Frame& frame, std::int32_t abs[2]) {
+  Frame out;
+  bool any = false;
+  for (const ph::InputEvent& e : frame.events) {
+    if (e.type == ev::kAbs && (e.code == ev::kAbsX || e.code == ev::kAbsY)) {
+      std::int32_t& last = abs[e.code == ev::kAbsX ? 0 : 1];
+      if (e.value == last) continue;
+      last = e.value;
+    }
+    if (e.type == ev::kRel && e.value == 0) continue;
+    if (e.type != ev::kSyn) any = true;
+    out.events.push_back(e);
+  }
+  if (!any) out.events.clear();
+  return out;
+}
+
+std::int32_t abs_value(int fd, std::uint16_t code) {
+  input_absinfo info{};
+  if (::ioctl(fd, EVIOCGABS(code), &info) < 0) return 0;
+  return info.value;
+}
+
+// The daemon takes the mouse just after it creates the virtual device: sends wheel notches until one
+// comes out, then reads up to a horizontal one, so that nothing of them is left to read.
+bool wait_taken(TestMouse& mouse, EventReader& out, Clock::duration timeout) {
+  const auto deadline = Clock::now() + timeout;
+  bool through = false;
+  while (!through && Clock::now() < deadline) {
+    mouse.send(make_frame({rel(ev::kRelWheel, 1)}));
+    through = out.next_frame(200ms).has_value();
+  }
+  if (!through) return false;
+  const Frame marker = make_frame({rel(ev::kRelHWheel, 1)});
+  mouse.send(marker);
+  while (const std::optional<Frame> got = out.next_frame(kFrameTimeout)) {
+    if (same_events(*got, marker)) return true;
+  }
+  return false;
+}
+
+CaseResult run_case(const Options& options, XServer& x, TestMouse& mouse, TestMouse* untaken,
+                    const UeventMonitor& uevents, const std::filesystem::path& config, const CaseSpec& spec) {
+  CaseResult result;
+  const auto start = Clock::now();
+  NotifySocket notify((options.scratch / "notify.sock").string());
+  std::vector<std::string> argv{options.daemon, "-c", config.string()};
+  if (options.verbose) argv.emplace_back("-v");
+  ChildProcess daemon(argv, {"NOTIFY_SOCKET=" + notify.path(), "PATH=/usr/sbin:/usr/bin:/sbin:/bin", "LANG=C.UTF-8"},
+                      (options.scratch / "daemon.log").string());
+  auto fatal = [&](const std::string& what) { throw Fatal(what + "; the daemon's output:\n" + daemon.log()); };
+  if (!notify.expect("READY=1", 120s)) fatal("no READY=1 within 120 s");
+  const std::string node = wait_for_device(kVirtualName, 10s, uevents);
+  if (node.empty()) fatal("no virtual device '" + std::string(kVirtualName) + "'");
+  EventReader out(node);
+  if (!wait_taken(mouse, out, 10s)) fatal("the daemon did not take the test mouse");
+  const std::optional<int> device = x.wait_for_pointer(kVirtualName, 30s);
+  if (!device) fatal("X did not add the virtual device within 30 s");
+  trace(options, fmt::format("{}: X device {}", spec.label, *device));
+
+  ph::PipelineConfig pipeline_config;
+  pipeline_config.mode = spec.mode;
+  pipeline_config.desktop = kDesktop;
+  pipeline_config.pointer_gain = 1.0;
+  const auto scene = std::make_shared<const ph::Scene>(ph::load_scene(ph::parse_scene_file(config)));
+  ph::Pipeline model(scene, pipeline_config);
+  if (spec.mode == ph::OutputMode::relative) {
+    x.set_accel_profile(*device, spec.x_profile);
+    if (x.accel_profile(*device) != spec.x_profile) fatal("X kept the profile " + x.accel_profile(*device));
+    // Relative output moves X's pointer from where it is: start it where the model starts.
+    const Vec2 at = model.cursor().position;
+    // A warp, then the first motion of a new relative device put X's pointer in the screen's far corner
+    // when an absolute device had moved it last (X.Org 21.1.7); one relative XTEST motion first avoids it.
+    x.xtest_move_by(1, 1);
+    x.warp(static_cast<int>(at.x), static_cast<int>(at.y));
+    trace(options, fmt::format("{}: warped X's pointer to ({}, {})", spec.label, x.pointer().x, x.pointer().y));
+  }
+  x.drain();
+  long motions = x.motions(*device);
+  std::int32_t abs[2] = {abs_value(out.fd(), ev::kAbsX), abs_value(out.fd(), ev::kAbsY)};
+
+  HandMotion hand({150, 150, 1620, 780}, 12345);
+  const auto first = Clock::now();
+  auto origin = first;  // frame i is due at origin + i * 8 ms; moved on when a frame is late
+  long frame = 0;
+  Vec2 previous = model.cursor().position;
+  for (; result.motion_frames < spec.frames; ++frame) {
+    const Counts counts = hand.next(model.cursor().position);
+    const auto due = origin + std::chrono::microseconds(frame * kFramePeriodUs);
+    const auto now = Clock::now();
+    if (now < due) {
+      std::this_thread::sleep_until(due);
+    } else if (now - due > 1ms) {
+      // Late (TCG): keep the 8 ms to the next frames rather than catching up with a burst, which
+      // would look like a faster hand to the acceleration profiles.
+      ++result.late_frames;
+      result.late_ms += std::chrono::duration<double, std::milli>(now - due).count();
+      origin += now - due;
+    }
+    if (!counts.any()) continue;  // a pause: time passes, nothing is sent
+    ++result.motion_frames;
+    std::vector<ph::InputEvent> events;
+    if (counts.dx != 0) events.push_back(rel(ev::kRelX, counts.dx));
+    if (counts.dy != 0) events.push_back(rel(ev::kRelY, counts.dy));
+    const Frame in = make_frame(std::move(events));
+    const Frame expected = as_delivered(model.process(in), abs);
+    result.model_path += length(model.cursor().position - previous);
+    previous = model.cursor().position;
+    mouse.send(in);
+    if (!expected.events.empty()) {
+      ++result.daemon_frames;
+      const std::optional<Frame> got = out.next_frame(kFrameTimeout);
+      if (!got)
+        fatal(fmt::format("frame {}: nothing came out of the daemon within {} s", frame, kFrameTimeout.count()));
+      if (!same_events(*got, expected) && result.daemon_mismatches++ < 3) {
+        result.problems.push_back(fmt::format("frame {}: the daemon emitted [{}], the offline pipeline [{}]", frame,
+                                              describe(*got), describe(expected)));
+      }
+      if (!x.wait_motions(*device, ++motions, kFrameTimeout)) {
+        if (result.lost_syncs++ < 3) result.problems.push_back(fmt::format("frame {}: X reported no motion", frame));
+        x.drain();
+        motions = x.motions(*device);
+      }
+    }
+    const XServer::Pointer pointer = x.pointer();
+    result.distances.add(frame, model.cursor().position, pointer);
+    if (result.motion_frames <= 3 ||
+        (options.trace_from >= 0 && frame >= options.trace_from && frame < options.trace_from + 12)) {
+      trace(options, fmt::format("{}: frame {} [{}] -> [{}]: model ({:.3f}, {:.3f}), X ({}, {})", spec.label, frame,
+                                 describe(in), describe(expected), model.cursor().position.x, model.cursor().position.y,
+                                 pointer.x, pointer.y));
+    }
+  }
+  result.seconds = std::chrono::duration<double>(Clock::now() - first).count();
+  if (untaken != nullptr) {
+    const std::optional<int> other = x.wait_for_pointer(untaken->name(), 1s);
+    if (other) {
+      for (int i = 0; i < 3; ++i) {
+        x.drain();
+        const long seen = x.motions(*other);
+        const XServer::Pointer p0 = x.pointer();
+        untaken->send(make_frame({rel(ev::kRelX, 5), rel(ev::kRelY, 5)}));
+        const bool synced = x.wait_motions(*other, seen + 1, kFrameTimeout);
+        const XServer::Pointer p1 = x.pointer();
+        std::printf("    untaken pointer +5,+5: X from (%d, %d) to (%d, %d)%s; model (%.2f, %.2f)\n", p0.x, p0.y, p1.x,
+                    p1.y, synced ? "" : " (no raw event)", model.cursor().position.x, model.cursor().position.y);
+      }
+    } else {
+      std::printf("    X has no untaken pointer\n");
+    }
+  }
+
+  daemon.signal(SIGTERM);
+  const std::optional<int> status = daemon.wait_exit(10s);
+  if (!status || !WIFEXITED(*status) || WEXITSTATUS(*status) != 0) {
+    result.problems.push_back("the daemon did not exit 0 on SIGTERM: " +
+                              (status ? describe_wait_status(*status) : std::string("still running")));
+  }
+  if (!x.wait_pointer_gone(kVirtualName, 30s)) result.problems.push_back("X kept the virtual device");
+  trace(options,
+        fmt::format("{}: {:.1f} s in all", spec.label, std::chrono::duration<double>(Clock::now() - start).count()));
+  return result;
+}
+
+// One line per case: PASS / FAIL against the bound, INFO where the case only measures.
+bool report(const CaseSpec& spec, const CaseResult& r) {
+  const Distances& d = r.distances;
+  const long over = spec.bound ? d.over(*spec.bound) : 0;
+  const bool ok = over == 0 && r.problems.empty();
+  const char* verdict = !ok ? "FAIL" : spec.bound ? "PASS" : "INFO";
+  std::printf(
+      "%s %s: %ld motion frames in %.1f s (%ld frames late, by %.0f ms in all), model path %.0f px; distance "
+      "from the model to the centre of X's pixel over %ld checks: max %.3f px per axis (%.3f px), RMS %.3f px, "
+      "last %.3f px%s\n",
+      verdict, spec.label.c_str(), r.motion_frames, r.seconds, r.late_frames, r.late_ms, r.model_path, d.checks(),
+      d.max_axis(), d.max_euclid(), d.rms(), d.last(),
+      spec.bound ? fmt::format("; {} checks beyond {} px", over, *spec.bound).c_str() : "");
+  if (spec.bound && over > 0) std::printf("    first beyond: %s\n", d.first_over(*spec.bound).c_str());
+  std::printf("    worst: %s; daemon frames %ld, of them unlike the offline pipeline %ld; X syncs lost %ld\n",
+              d.worst().c_str(), r.daemon_frames, r.daemon_mismatches, r.lost_syncs);
+  for (const std::string& p : r.problems) std::printf("    %s\n", p.c_str());
+  std::fflush(stdout);
+  return ok;
+}
+
+// ---- the session helper ------------------------------------------------------------------------------------
+
+// pseudohaptic-session on this X server, talking to a stand-in for the daemon's control socket: what it
+// says at start, its answer to a query, its layout after RandR changes, its reconnection, its exit.
+bool session_case(const Options& options, XServer& x) {
+  const std::string label = "pseudohaptic-session (x11 backend) against a stand-in control socket";
+  const auto start = Clock::now();
+  std::vector<std::string> problems;
+  ControlStub stub((options.scratch / "control").string());
+  x.warp(700, 300);
+  const char* display = std::getenv("DISPLAY");
+  ChildProcess helper({options.session, "--control", stub.path(), "-v"},
+                      {std::string("DISPLAY=") + (display != nullptr ? display : ""), "PATH=/usr/bin:/bin"},
+                      (options.scratch / "session.log").string());
+  // Reads lines until `want` (answering each with ok); a line before it is noted, none at all a problem.
+  auto expect = [&](const std::string& want, const std::string& when) {
+    std::vector<std::string> before;
+    while (const std::optional<std::string> line = stub.next_line(15s)) {
+      stub.send("ok");
+      if (*line == want) {
+        if (!before.empty()) trace(options, fmt::format("{}: before '{}': {}", when, want, fmt::join(before, " | ")));
+        return;
+      }
+      before.push_back(*line);
+    }
+    problems.push_back(
+        fmt::format("{}: expected '{}', got [{}] and then nothing for 15 s", when, want, fmt::join(before, " | ")));
+  };
+  auto xrandr = [&](const std::string& args) {
+    const int status = std::system(("xrandr " + args).c_str());
+    if (status != 0) problems.push_back(fmt::format("xrandr {}: status {}", args, status));
+  };
+  try {
+    if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
+    expect("helper x11", "at start");
+    expect("layout 0 0 1920 1080", "at start");
+    expect("position 700 300", "at start");
+    x.warp(123, 456);
+    stub.send("query");
+    expect("position 123 456", "after a query");
+    xrandr("--output DUMMY0 --mode 1280x720");
+    expect("layout 0 0 1280 720", "after a smaller mode");
+    xrandr("--output DUMMY0 --mode 1920x1080");
+    expect("layout 0 0 1920 1080", "after the mode back");
+    xrandr("--addmode DUMMY1 1280x720");  // the dummy driver's other outputs are disconnected, without modes
+    xrandr("--output DUMMY1 --mode 1280x720 --right-of DUMMY0");
+    expect("layout 0 0 3200 1080", "after a second output to the right");
+    xrandr("--output DUMMY1 --off");
+    expect("layout 0 0 1920 1080", "after the second output is off");
+    stub.stop();  // as a daemon restart: the socket goes away and comes back
+    std::this_thread::sleep_for(700ms);
+    stub.restart();
+    if (!stub.accept(20s)) throw Fatal("the helper did not reconnect within 20 s");
+    x.warp(300, 200);
+    expect("helper x11", "after reconnecting");
+    expect("layout 0 0 1920 1080", "after reconnecting");
+    expect("position 300 200", "after reconnecting");
+    helper.signal(SIGTERM);
+    const std::optional<int> status = helper.wait_exit(10s);
+    if (!status || !WIFEXITED(*status) || WEXITSTATUS(*status) != 0) {
+      problems.push_back("SIGTERM: " + (status ? describe_wait_status(*status) : std::string("still running")));
+    }
+  } catch (const Fatal& e) {
+    problems.push_back(e.what());
+  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (problems.empty()) {
+    std::printf("PASS %s (%.1f s)\n", label.c_str(), seconds);
+  } else {
+    std::printf("FAIL %s (%.1f s):\n", label.c_str(), seconds);
+    for (const std::string& p : problems) std::printf("    %s\n", p.c_str());
+    std::printf("    the helper's log:\n%s", helper.log().c_str());
+  }
+  std::fflush(stdout);
+  return problems.empty();
+}
+
+int usage(const char* why) {
+  std::fprintf(stderr,
+               "x11_cursor_e2e: %s\nusage: x11_cursor_e2e DAEMON [--scene DIR] [--frames N] [--relative-frames N] "
+               "[--cases abc] [-v]\n"
+               "       x11_cursor_e2e --write-scene DIR\n",
+               why);
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--frames" && i + 1 < argc) {
+      options.frames = std::atoi(argv[++i]);
+    } else if (arg == "--relative-frames" && i + 1 < argc) {
+      options.relative_frames = std::atoi(argv[++i]);
+    } else if (arg == "--scene" && i + 1 < argc) {
+      options.scene_dir = argv[++i];
+    } else if (arg == "--write-scene" && i + 1 < argc) {
+      ph::write_target_files(argv[i + 1], scene_targets());
+      return 0;
+    } else if (arg == "--trace-from" && i + 1 < argc) {
+      options.trace_from = std::atol(argv[++i]);
+    } else if (arg == "--session" && i + 1 < argc) {
+      options.session = std::filesystem::absolute(argv[++i]).string();
+    } else if (arg == "--cases" && i + 1 < argc) {
+      options.cases = argv[++i];
+    } else if (arg == "-v") {
+      options.verbose = true;
+    } else if (options.daemon.empty() && !arg.empty() && arg[0] != '-') {
+      options.daemon = std::filesystem::absolute(arg).string();
+    } else {
+      return usage(("unexpected argument " + arg).c_str());
+    }
+  }
+  if (options.daemon.empty()) return usage("no daemon given");
+  const char* tmp = std::getenv("TMPDIR");
+  options.scratch = std::filesystem::path(tmp != nullptr ? tmp : "/tmp") / "ph-x11";
+  std::filesystem::create_directories(options.scratch);
+
+  int failed = 0;
+  try {
+    XServer x;
+    const UeventMonitor uevents;
+    trace(options, "writing the scene");
+    const std::string regions = scene_regions(options.scene_dir.empty() ? options.scratch : options.scene_dir);
+    trace(options, "scene written");
+    TestMouse mouse(kMouseName);
+    TestMouse untaken("ph-x11 untaken");
+    const std::vector<CaseSpec> cases{
+        {"absolute output", ph::OutputMode::absolute, "", options.frames, 0.5},
+        {"relative output, X's flat profile", ph::OutputMode::relative, "flat", options.relative_frames, 1.0},
+        {"relative output, X's adaptive profile (drift, measured only)", ph::OutputMode::relative, "adaptive",
+         options.relative_frames, std::nullopt},
+    };
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+      const CaseSpec& spec = cases[i];
+      if (options.cases.find(static_cast<char>('a' + i)) == std::string::npos) continue;
+      const std::filesystem::path config = write_config(options.scratch, regions, spec.mode);
+      try {
+        if (!report(spec, run_case(options, x, mouse, &untaken, uevents, config, spec))) ++failed;
+      } catch (const Fatal& e) {
+        std::printf("FAIL %s: %s\n", spec.label.c_str(), e.what());
+        std::fflush(stdout);
+        ++failed;
+      }
+    }
+    if (!options.session.empty() && options.cases.find('e') != std::string::npos && !session_case(options, x)) {
+      ++failed;
+    }
+  } catch (const std::exception& e) {
+    std::printf("FAIL x11_cursor_e2e: %s\n", e.what());
+    return 1;
+  }
+  std::printf("x11_cursor_e2e: %d failed\n", failed);
+  return failed > 0 ? 1 : 0;
+}
