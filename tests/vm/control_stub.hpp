@@ -80,3 +80,57 @@ class ControlStub {
 };
 
 }  // namespace ph::e2e
+
+namespace ph::e2e {
+
+// A plain client of the daemon's control socket (not a helper): one request, one reply line.
+class ControlClient {
+ public:
+  // Connects to `path`, retrying until `timeout` (the daemon creates the socket as it starts).
+  ControlClient(const std::string& path, Clock::duration timeout) {
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    if (path.size() >= sizeof addr.sun_path) throw Fatal("control socket path too long: " + path);
+    std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
+    const bool connected = wait_until(
+        [&] {
+          fd_ = Fd(::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0));
+          return fd_ && ::connect(fd_.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof addr) == 0;
+        },
+        timeout, nullptr, 100ms);
+    if (!connected) throw Fatal("cannot connect to the control socket " + path + ": " + errno_text(errno));
+  }
+
+  // Sends `request` and returns the reply line; Fatal when none comes within `timeout`.
+  std::string request(const std::string& request, Clock::duration timeout = 5s) {
+    const std::string text = request + "\n";
+    if (::send(fd_.get(), text.data(), text.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(text.size())) {
+      throw Fatal("cannot write to the control socket: " + errno_text(errno));
+    }
+    const auto deadline = Clock::now() + timeout;
+    for (;;) {
+      if (std::optional<std::string> line = lines_.next()) return *line;
+      pollfd p{fd_.get(), POLLIN, 0};
+      char buffer[2048];
+      if (::poll(&p, 1, ms_until(deadline)) <= 0) throw Fatal("no reply to '" + request + "' from the control socket");
+      const ssize_t n = ::recv(fd_.get(), buffer, sizeof buffer, 0);
+      if (n <= 0) throw Fatal("the control socket closed after '" + request + "'");
+      lines_.feed(std::string_view(buffer, static_cast<std::size_t>(n)));
+    }
+  }
+
+  // The daemon's cursor model (`cursor` -> `ok X Y`).
+  Vec2 cursor() {
+    const std::string reply = request("cursor");
+    Vec2 at;
+    if (std::sscanf(reply.c_str(), "ok %lf %lf", &at.x, &at.y) != 2)
+      throw Fatal("unexpected reply to cursor: " + reply);
+    return at;
+  }
+
+ private:
+  Fd fd_;
+  session::LineSplitter lines_;
+};
+
+}  // namespace ph::e2e

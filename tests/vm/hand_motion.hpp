@@ -80,4 +80,29 @@ class HandMotion {
   std::vector<Counts> pending_;  // the rest of the stroke and its pause, last frame first
 };
 
+// Out-and-back strokes in random directions, `strokes` of them: each is followed, after a pause, by its
+// mirror image, so that the hand comes back to where it started. The cursor comes back too whatever an
+// acceleration profile made of the strokes, so a long stream stays clear of the desktop's edges.
+// Independent of the cursor: the same frames for every run. Deterministic for a seed.
+inline std::vector<Counts> out_and_back(int strokes, std::uint32_t seed) {
+  std::mt19937 random(seed);
+  std::vector<Counts> frames;
+  for (int i = 0; i < strokes; ++i) {
+    const double angle = std::uniform_real_distribution<double>(0.0, 2.0 * M_PI)(random);
+    const double distance = std::uniform_real_distribution<double>(80.0, 450.0)(random);
+    const double seconds =
+        (0.15 + 0.12 * std::log2(distance / 20.0 + 1.0)) * std::uniform_real_distribution<double>(0.6, 1.8)(random);
+    const int count = std::max(4, static_cast<int>(std::lround(seconds * 1e6 / kFramePeriodUs)));
+    const double bend = std::uniform_real_distribution<double>(-0.12, 0.12)(random);
+    const std::vector<Counts> out =
+        stroke_counts({distance * std::cos(angle), distance * std::sin(angle)}, count, bend);
+    for (int back = 0; back < 2; ++back) {
+      for (const Counts& c : out) frames.push_back(back == 0 ? c : Counts{-c.dx, -c.dy});
+      frames.insert(frames.end(), static_cast<std::size_t>(std::uniform_int_distribution<int>(2, 12)(random)),
+                    Counts{});
+    }
+  }
+  return frames;
+}
+
 }  // namespace ph::e2e

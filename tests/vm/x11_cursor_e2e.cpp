@@ -235,24 +235,65 @@ bool wait_taken(TestMouse& mouse, EventReader& out, Clock::duration timeout) {
   return false;
 }
 
+// The daemon (on `config`, with a control socket when `control` is given) as a child, once it has taken
+// the test mouse and X has added its virtual device. stop() ends it as the service manager would.
+class RunningDaemon {
+ public:
+  RunningDaemon(const Options& options, XServer& x, TestMouse& mouse, const UeventMonitor& uevents,
+                const std::filesystem::path& config, const std::string& control = "")
+      : notify_((options.scratch / "notify.sock").string()),
+        daemon_(arguments(options, config, control),
+                {"NOTIFY_SOCKET=" + notify_.path(), "PATH=/usr/sbin:/usr/bin:/sbin:/bin", "LANG=C.UTF-8"},
+                (options.scratch / "daemon.log").string()) {
+    if (!notify_.expect("READY=1", 120s)) fatal("no READY=1 within 120 s");
+    const std::string node = wait_for_device(kVirtualName, 10s, uevents);
+    if (node.empty()) fatal("no virtual device '" + std::string(kVirtualName) + "'");
+    out_.emplace(node);
+    if (!wait_taken(mouse, *out_, 10s)) fatal("the daemon did not take the test mouse");
+    const std::optional<int> device = x.wait_for_pointer(kVirtualName, 30s);
+    if (!device) fatal("X did not add the virtual device within 30 s");
+    device_ = *device;
+  }
+
+  [[noreturn]] void fatal(const std::string& what) { throw Fatal(what + "; the daemon's output:\n" + daemon_.log()); }
+  EventReader& out() { return *out_; }
+  int x_device() const { return device_; }  // the virtual device's XInput id
+
+  // SIGTERM: the daemon exits 0 and X lets go of its device. Adds what went wrong to `problems`.
+  void stop(XServer& x, std::vector<std::string>& problems) {
+    daemon_.signal(SIGTERM);
+    const std::optional<int> status = daemon_.wait_exit(10s);
+    if (!status || !WIFEXITED(*status) || WEXITSTATUS(*status) != 0) {
+      problems.push_back("the daemon did not exit 0 on SIGTERM: " +
+                         (status ? describe_wait_status(*status) : std::string("still running")));
+    }
+    if (!x.wait_pointer_gone(kVirtualName, 30s)) problems.push_back("X kept the virtual device");
+  }
+
+ private:
+  static std::vector<std::string> arguments(const Options& options, const std::filesystem::path& config,
+                                            const std::string& control) {
+    std::vector<std::string> argv{options.daemon, "-c", config.string()};
+    if (!control.empty()) argv.insert(argv.end(), {"--control", control});
+    if (options.verbose) argv.emplace_back("-v");
+    return argv;
+  }
+
+  NotifySocket notify_;
+  ChildProcess daemon_;
+  std::optional<EventReader> out_;
+  int device_ = 0;
+};
+
 CaseResult run_case(const Options& options, XServer& x, TestMouse& mouse, TestMouse* untaken,
                     const UeventMonitor& uevents, const std::filesystem::path& config, const CaseSpec& spec) {
   CaseResult result;
   const auto start = Clock::now();
-  NotifySocket notify((options.scratch / "notify.sock").string());
-  std::vector<std::string> argv{options.daemon, "-c", config.string()};
-  if (options.verbose) argv.emplace_back("-v");
-  ChildProcess daemon(argv, {"NOTIFY_SOCKET=" + notify.path(), "PATH=/usr/sbin:/usr/bin:/sbin:/bin", "LANG=C.UTF-8"},
-                      (options.scratch / "daemon.log").string());
-  auto fatal = [&](const std::string& what) { throw Fatal(what + "; the daemon's output:\n" + daemon.log()); };
-  if (!notify.expect("READY=1", 120s)) fatal("no READY=1 within 120 s");
-  const std::string node = wait_for_device(kVirtualName, 10s, uevents);
-  if (node.empty()) fatal("no virtual device '" + std::string(kVirtualName) + "'");
-  EventReader out(node);
-  if (!wait_taken(mouse, out, 10s)) fatal("the daemon did not take the test mouse");
-  const std::optional<int> device = x.wait_for_pointer(kVirtualName, 30s);
-  if (!device) fatal("X did not add the virtual device within 30 s");
-  trace(options, fmt::format("{}: X device {}", spec.label, *device));
+  RunningDaemon daemon(options, x, mouse, uevents, config);
+  auto fatal = [&](const std::string& what) { daemon.fatal(what); };
+  EventReader& out = daemon.out();
+  const int device = daemon.x_device();
+  trace(options, fmt::format("{}: X device {}", spec.label, device));
 
   ph::PipelineConfig pipeline_config;
   pipeline_config.mode = spec.mode;
@@ -261,8 +302,8 @@ CaseResult run_case(const Options& options, XServer& x, TestMouse& mouse, TestMo
   const auto scene = std::make_shared<const ph::Scene>(ph::load_scene(ph::parse_scene_file(config)));
   ph::Pipeline model(scene, pipeline_config);
   if (spec.mode == ph::OutputMode::relative) {
-    x.set_accel_profile(*device, spec.x_profile);
-    if (x.accel_profile(*device) != spec.x_profile) fatal("X kept the profile " + x.accel_profile(*device));
+    x.set_accel_profile(device, spec.x_profile);
+    if (x.accel_profile(device) != spec.x_profile) fatal("X kept the profile " + x.accel_profile(device));
     // Relative output moves X's pointer from where it is: start it where the model starts.
     const Vec2 at = model.cursor().position;
     // A warp, then the first motion of a new relative device put X's pointer in the screen's far corner
@@ -272,7 +313,7 @@ CaseResult run_case(const Options& options, XServer& x, TestMouse& mouse, TestMo
     trace(options, fmt::format("{}: warped X's pointer to ({}, {})", spec.label, x.pointer().x, x.pointer().y));
   }
   x.drain();
-  long motions = x.motions(*device);
+  long motions = x.motions(device);
   std::int32_t abs[2] = {abs_value(out.fd(), ev::kAbsX), abs_value(out.fd(), ev::kAbsY)};
 
   HandMotion hand({150, 150, 1620, 780}, 12345);
@@ -312,10 +353,10 @@ CaseResult run_case(const Options& options, XServer& x, TestMouse& mouse, TestMo
         result.problems.push_back(fmt::format("frame {}: the daemon emitted [{}], the offline pipeline [{}]", frame,
                                               describe(*got), describe(expected)));
       }
-      if (!x.wait_motions(*device, ++motions, kFrameTimeout)) {
+      if (!x.wait_motions(device, ++motions, kFrameTimeout)) {
         if (result.lost_syncs++ < 3) result.problems.push_back(fmt::format("frame {}: X reported no motion", frame));
         x.drain();
-        motions = x.motions(*device);
+        motions = x.motions(device);
       }
     }
     const XServer::Pointer pointer = x.pointer();
@@ -348,13 +389,7 @@ CaseResult run_case(const Options& options, XServer& x, TestMouse& mouse, TestMo
     }
   }
 
-  daemon.signal(SIGTERM);
-  const std::optional<int> status = daemon.wait_exit(10s);
-  if (!status || !WIFEXITED(*status) || WEXITSTATUS(*status) != 0) {
-    result.problems.push_back("the daemon did not exit 0 on SIGTERM: " +
-                              (status ? describe_wait_status(*status) : std::string("still running")));
-  }
-  if (!x.wait_pointer_gone(kVirtualName, 30s)) result.problems.push_back("X kept the virtual device");
+  daemon.stop(x, result.problems);
   trace(options,
         fmt::format("{}: {:.1f} s in all", spec.label, std::chrono::duration<double>(Clock::now() - start).count()));
   return result;
