@@ -93,9 +93,9 @@ void advance_frames(benchmark::State& state, const ph::Scene& scene) {
     steps += result.steps;
     ++frame;
     if (std::abs(cursor.position.x - centre.x) > 500.0 || std::abs(cursor.position.y - centre.y) > 300.0) {
-      const ph::EffectState kept = cursor.effect;
+      const ph::EffectStates kept = cursor.effects;
       cursor = ph::cursor_at(centre);
-      cursor.effect = kept;
+      cursor.effects = kept;
     }
   }
   const double frames = static_cast<double>(std::max<std::size_t>(frame, 1));

@@ -1,4 +1,4 @@
-// Cost of ph::advance, the exact per-texel traversal (ALGORITHMS.md section 5), for the curvature and the
+// Cost of ph::advance, the exact per-texel traversal (docs/METHODS.md, "The traversal"), for the curvature and the
 // depth method on the paper's targets: typical frames, fast flicks, a pointer outside every region and a
 // flat region. docs/PERFORMANCE.md explains the figures and how to reproduce them.
 //
@@ -97,7 +97,7 @@ std::vector<const ph::Scene*> all_target_scenes(MethodKind kind) {
   return scenes;
 }
 
-// The 24 target scenes with engine options (issue 6's variants); direction tables are built here, once.
+// The 24 target scenes with engine options (the traversal variants); direction tables are built here, once.
 std::vector<const ph::Scene*> all_target_scenes(MethodKind kind, const ph::EngineOptions& options) {
   static std::map<std::pair<std::string, MethodKind>, std::vector<ph::Scene>> cache;
   auto key = std::make_pair(ph::label_of(options), kind);

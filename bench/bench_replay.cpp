@@ -1,8 +1,8 @@
-// Replay throughput (issue: the engine must not be the bottleneck): frames per second through the
+// Replay throughput (the engine must not be the bottleneck): frames per second through the
 // pipeline alone, on flat scenes (no region; a region of C/D 1 everywhere), over the default scene (where
 // the recorded hand touches a texture in a small part of the frames) and with the cursor model kept inside
 // one of its targets (every frame that moves walks the texture), and with evemu parsing and writing included.
-// Input: the shared real recordings beside the project when present, else a generated random stream.
+// Input: the two real recordings of tests/data/recordings end to end (a random walk if they cannot be read).
 // Counters: `textured` is the fraction of frames whose C/D range differs from 1 (the texture changed the
 // motion), `in_region` the fraction that end with the cursor inside a region.
 #include <benchmark/benchmark.h>
@@ -27,7 +27,7 @@ const ph::Recording& stream() {
   static const ph::Recording recording = [] {
     ph::Recording r;
     for (const char* name : {"saitek-cyborg-rat5.evemu", "ps2-generic-mouse.evemu"}) {
-      std::ifstream in(std::filesystem::path(PH_SHARED_RECORDINGS_DIR) / name);
+      std::ifstream in(std::filesystem::path(PH_RECORDINGS_DIR) / name);
       if (!in) continue;
       const ph::Recording one = ph::read_evemu(in, name);
       if (r.events.empty()) r.device = one.device;

@@ -85,6 +85,11 @@ std::string format_device_match(const DeviceMatch& match) {
   return fmt::format("id:{:04x}:{:04x}", match.vendor.value_or(0), match.product.value_or(0));
 }
 
+AccelSettings acceleration_of(const DaemonSettings& settings) {
+  const AccelProfile fallback = settings.output == OutputMode::absolute ? AccelProfile::adaptive : AccelProfile::flat;
+  return {settings.acceleration.value_or(fallback), settings.speed, settings.mouse_dpi};
+}
+
 bool device_matches(const DaemonSettings& settings, std::string_view name, std::uint16_t vendor,
                     std::uint16_t product) {
   if (settings.devices.empty()) return true;

@@ -24,13 +24,22 @@ struct DeviceMatch {
 
 struct DaemonSettings {
   std::vector<DeviceMatch> devices;  // empty = any pointer
-  OutputMode output = OutputMode::relative;
-  std::optional<Rect> desktop;  // nullopt = auto (the size of the screen)
-  double pointer_speed = 1.0;   // screen px per device count at C/D 1
-  EngineOptions engine;         // traversal and sampling (docs/SPEED_VS_ACCURACY.md); applied by load_scene
+  // Absolute by default: the desktop then puts the cursor where the model is, and applies no
+  // acceleration of its own (docs/SERVICE.md, "Absolute output").
+  OutputMode output = OutputMode::absolute;
+  std::optional<Rect> desktop;               // nullopt = auto (the size of the screen)
+  std::optional<AccelProfile> acceleration;  // nullopt: adaptive with absolute output, flat with relative
+  double speed = 0.0;                        // [-1, 1], as the desktop's pointer speed slider
+  double mouse_dpi = 1000.0;                 // the mice's resolution, for the adaptive profile
+  double pointer_speed = 1.0;                // screen px per device count at C/D 1
+  EngineOptions engine;  // traversal and sampling (docs/SPEED_VS_ACCURACY.md); applied by load_scene
 };
 
 inline constexpr double kMaxPointerSpeed = 100.0;
+
+// The pointer acceleration the daemon applies: the relative output's default is flat at speed 0, the
+// identity, because the desktop accelerates relative motion itself.
+AccelSettings acceleration_of(const DaemonSettings& settings);
 
 // Parses one matcher; on a mistake returns nullopt and sets `error` to what is wrong and what is allowed.
 std::optional<DeviceMatch> parse_device_match(std::string_view text, std::string& error);

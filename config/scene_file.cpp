@@ -369,8 +369,10 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
 
 DaemonSettings parse_daemon(const Reporter& rep, const toml::table& t) {
   const std::string where = "daemon.";
-  reject_unknown_keys(
-      rep, t, {"devices", "output", "desktop", "pointer_speed", "traversal", "sampling", "lut_directions"}, where);
+  reject_unknown_keys(rep, t,
+                      {"devices", "output", "desktop", "acceleration", "speed", "mouse_dpi", "pointer_speed",
+                       "traversal", "sampling", "lut_directions"},
+                      where);
   DaemonSettings d;
   d.engine.traversal = get_choice(rep, t, "traversal", where, d.engine.traversal, parse_traversal,
                                   "exact, unit_steps, frame_midpoint, direction_lut");
@@ -403,7 +405,7 @@ DaemonSettings parse_daemon(const Reporter& rep, const toml::table& t) {
     }
   }
 
-  const std::string output = get_string(rep, t, "output", where).value_or("relative");
+  const std::string output = get_string(rep, t, "output", where).value_or("absolute");
   if (output == "relative") {
     d.output = OutputMode::relative;
   } else if (output == "absolute") {
@@ -437,6 +439,26 @@ DaemonSettings parse_daemon(const Reporter& rep, const toml::table& t) {
       rep.fail(node, "daemon.desktop", allowed);
     }
   }
+
+  if (const auto profile = get_string(rep, t, "acceleration", where)) {
+    if (*profile == "adaptive") {
+      d.acceleration = AccelProfile::adaptive;
+    } else if (*profile == "flat") {
+      d.acceleration = AccelProfile::flat;
+    } else {
+      rep.fail(t.get("acceleration"), "daemon.acceleration", "must be \"adaptive\" or \"flat\"");
+    }
+  }
+  d.speed = get_number(rep, t, "speed", where, d.speed);
+  check_key(
+      rep, t, "speed", where, [&] { return std::isfinite(d.speed) && d.speed >= -1.0 && d.speed <= 1.0; },
+      "must be a number from -1 to 1 (the desktop's pointer speed setting; 0 is the default)");
+  d.mouse_dpi = get_number(rep, t, "mouse_dpi", where, d.mouse_dpi);
+  check_key(
+      rep, t, "mouse_dpi", where,
+      [&] { return std::isfinite(d.mouse_dpi) && d.mouse_dpi >= kMinMouseDpi && d.mouse_dpi <= kMaxMouseDpi; },
+      fmt::format("must be a number from {} to {} (the mouse's resolution in dots per inch)", kMinMouseDpi,
+                  kMaxMouseDpi));
 
   d.pointer_speed = get_number(rep, t, "pointer_speed", where, d.pointer_speed);
   check_key(

@@ -67,8 +67,8 @@ struct SceneLoadReport {
 // and the region for an image that cannot be used.
 Scene load_scene(const SceneSpec& spec, SceneLoadReport* report = nullptr);
 
-// One line per region and map with invalid texels (ALGORITHMS.md section 1: counted, repaired and reported at
-// load), "FILE:LINE: region 'NAME': " and invalid_texel_notes' text; none for a clean scene.
+// One line per region and map with invalid texels (counted, repaired and reported at load: docs/METHODS.md,
+// "Screen, regions and fields"), "FILE:LINE: region 'NAME': " and invalid_texel_notes' text; none for a clean scene.
 std::vector<std::string> invalid_texel_warnings(const SceneSpec& spec, const SceneLoadReport& report);
 
 }  // namespace ph

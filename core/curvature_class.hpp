@@ -1,4 +1,4 @@
-// Curvature classes of a surface (ALGORITHMS.md section 7; the second paper, Section 2.3): planar, parabolic,
+// Curvature classes of a surface (docs/INTERROGATION.md, "Classes"; the second paper, Section 2.3): planar, parabolic,
 // elliptic, hyperbolic, from the principal curvatures of each texel.
 #pragma once
 

@@ -1,5 +1,5 @@
-// Least-squares derivative filters (a 2D Savitzky-Golay filter) and the curvature formulas of ALGORITHMS.md
-// section 7.
+// Least-squares derivative filters (a 2D Savitzky-Golay filter) and the curvature formulas of docs/INTERROGATION.md,
+// "Curvature" and "Derivative filter".
 //
 // On a square window of offsets t in [-r, r]^2 the monomials 1, x, y, x^2 - m, y^2 - m, xy (m = mean of t^2) are
 // orthogonal, so each coefficient of the least-squares quadric is one correlation that separates into a kernel

@@ -1,4 +1,4 @@
-// Curvature of a height field per texel (ALGORITHMS.md section 7; docs/INTERROGATION.md): Gaussian curvature K,
+// Curvature of a height field per texel (docs/INTERROGATION.md, "Curvature"): Gaussian curvature K,
 // mean curvature H and principal curvatures k1 >= k2, in 1/px, from a depth field or from a gradient field.
 //
 // Sign convention: height points toward the viewer and H follows the formula of section 7, so a bump (a cap,

@@ -1,4 +1,4 @@
-// Decoding of normal and depth images into fields (ALGORITHMS.md section 1), and the one-time
+// Decoding of normal and depth images into fields (docs/METHODS.md, "Screen, regions and fields"), and the one-time
 // resampling to a region's on-screen size. Pure functions: the pixels come from config/image_io.
 #pragma once
 

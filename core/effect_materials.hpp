@@ -1,4 +1,4 @@
-// Curvature classes rendered as materials (ALGORITHMS.md section 7; the second paper, Section 2.3), as a frame
+// Curvature classes rendered as materials (the second paper, Section 2.3; docs/INTERROGATION.md), as a frame
 // effect (core/effect.hpp): each texel's Gaussian-curvature class selects a material, and the material sets the
 // C/D ratio of the frames that start on it. Planar: none; parabolic: damping (C/D grows with hand speed);
 // elliptic: static friction (the cursor sticks, breaks away, slips); hyperbolic: stick-slip (static and dynamic

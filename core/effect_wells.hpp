@@ -1,4 +1,4 @@
-// Gravity wells (second paper, Section 2.3; ALGORITHMS.md section 7; docs/INTERROGATION.md "Gravity
+// Gravity wells (second paper, Section 2.3; docs/INTERROGATION.md, "Gravity
 // wells"): isophotes or contour lines attract the cursor. Within a radius of influence R of the nearest
 // pattern texel, motion toward it is faster and motion away slower, by a display gain
 //

@@ -1,6 +1,6 @@
 // How the engine turns a frame's motor displacement into cursor motion: the exact per-texel integral of
-// ALGORITHMS.md section 5 (the default) or one of the cheaper schemes of issue 6, and how the methods
-// read the fields. docs/METHODS.md ("Traversal variants") describes each and its error bound.
+// docs/METHODS.md, "The traversal" (the default), or one of the cheaper schemes measured against it, and how
+// the methods read the fields. docs/METHODS.md ("Traversal variants") describes each and its error bound.
 #pragma once
 
 #include <optional>
@@ -11,7 +11,7 @@
 namespace ph {
 
 enum class Traversal {
-  exact,           // Amanatides-Woo walk, one C/D per texel segment (ALGORITHMS.md section 5)
+  exact,           // Amanatides-Woo walk, one C/D per texel segment (docs/METHODS.md, "The traversal")
   unit_steps,      // steps of 1 px of display along the motion, as the paper words it
   frame_midpoint,  // one C/D per frame, from the frame's midpoint
   direction_lut,   // exact texel walk, C/D from a per-texel table of quantised directions

@@ -3,7 +3,7 @@
 // Normals are not stored as normals: every method that reads orientation only needs the slope of the
 // surface along a direction, so a texel keeps the height gradient g = (dh/dx, dh/dy) in screen pixels
 // per pixel (y down) as two floats: 8 bytes per texel. A unit normal n with n_z > 0 is
-// n = (-g_x, -g_y, 1) / |(-g_x, -g_y, 1)|, so nothing is lost (ALGORITHMS.md section 1-2).
+// n = (-g_x, -g_y, 1) / |(-g_x, -g_y, 1)|, so nothing is lost (docs/METHODS.md, "Screen, regions and fields").
 #pragma once
 
 #include <cstddef>

@@ -12,7 +12,7 @@ namespace {
 // ---------------------------------------------------------------------------------------------------------------
 // Surfaces.
 
-constexpr double kGaussianSigma = 1.0 / 3.0;  // as core/targets.cpp (ALGORITHMS.md section 8)
+constexpr double kGaussianSigma = 1.0 / 3.0;  // as core/targets.cpp (docs/METHODS.md, "The 24 targets")
 
 // The distances u in (u0, u1) where the line p0 + u m meets the circle of radius r about c, and the closest point.
 void circle_breakpoints(Vec2 c, double r, Vec2 p0, Vec2 m, double u0, double u1, std::vector<double>& out) {

@@ -1,13 +1,13 @@
-// The exact continuous answer the traversal approximates (issue 6): the C/D ratio of an analytic surface at any
+// The exact continuous answer the traversal approximates: the C/D ratio of an analytic surface at any
 // point from exact double-precision gradients and heights, and where the cursor ends after a frame from an
 // adaptive Gauss-Kronrod integral of that C/D along the motion. Nothing here looks at texels, so it measures the
-// traversal, the storage and the sampling of the engine from outside.
+// traversal, the storage and the sampling of the engine from outside (docs/SPEED_VS_ACCURACY.md, "Ground truth").
 //
-// The continuous C/D (our analogue of the engine's step, ALGORITHMS.md sections 3-5). The engine gives the segment
+// The continuous C/D (our analogue of the engine's step, docs/METHODS.md). The engine gives the segment
 // inside texel p2 the C/D of the pair (p1, p2), p1 the texel it came from, their centres 1 px apart. The continuous
 // analogue at a point p moving along the unit direction m takes the pair (p - m, p): the point itself and the point
 // one px behind it along the motion, both at exact positions, with exact values:
-//   curvature: a = -t / sqrt(1 + t^2), theta = atan(t), t = g . m (ALGORITHMS.md section 2), then curvature_cd of
+//   curvature: a = -t / sqrt(1 + t^2), theta = atan(t), t = g . m (docs/METHODS.md), then curvature_cd of
 //              core/method_curvature.hpp with (a, theta) at p - m as the first sample and at p as the second;
 //   depth:     depth_cd of core/method_depth.hpp with h(p - m), h(p) and a step of 1 px.
 // The "to" sample is the point itself because the engine's "to" texel is the one the cursor is in; the pair lies

@@ -1,5 +1,5 @@
 // One small interface for every way of turning a texel step into a C/D ratio. The traversal knows
-// nothing else about a method, so new methods plug in without touching it (STYLE.md, libinput filters).
+// nothing else about a method, so new methods plug in without touching it (docs/DESIGN.md, "One file per method").
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,5 @@
-// Curvature-based C/D ratio of Argelaguet et al. 2012, Eq. 1-3 (ALGORITHMS.md sections 2-3).
+// Curvature-based C/D ratio of Argelaguet et al. 2012, Eq. 1-3 (docs/METHODS.md, "Projection into the
+// plane of motion" and "Curvature-based C/D").
 #pragma once
 
 #include <algorithm>
@@ -24,7 +25,8 @@ struct CurvatureParams {
 // Empty when valid; otherwise what is wrong, naming the parameter.
 std::string validate(const CurvatureParams& params);
 
-// n''_x of ALGORITHMS.md section 2 for a unit normal and a unit direction: s / sqrt(s^2 + n_z^2).
+// n''_x (docs/METHODS.md, "Projection into the plane of motion") for a unit normal and a unit direction:
+// s / sqrt(s^2 + n_z^2).
 double projected_normal_x(Normal n, Vec2 direction);
 
 // Slope angle along a direction, positive uphill: atan(g . m).

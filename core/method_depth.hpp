@@ -1,4 +1,5 @@
-// Depth-based C/D ratio of Lécuyer et al. 2004, as the curvature paper describes it (ALGORITHMS.md section 4).
+// Depth-based C/D ratio of Lécuyer et al. 2004, as the curvature paper describes it (docs/METHODS.md,
+// "Depth-based C/D").
 #pragma once
 
 #include <algorithm>

@@ -1,5 +1,6 @@
-// Isophote and contour masks of a region (second paper, Sections 2.1-2.2; ALGORITHMS.md section 7), the
-// patterns that gravity wells attract to, and their nearest-pattern fields (core/distance_transform.hpp).
+// Isophote and contour masks of a region (second paper, Sections 2.1-2.2; docs/METHODS.md, "Isophotes,
+// contours and their distance fields"), the patterns that gravity wells attract to, and their nearest-pattern fields
+// (core/distance_transform.hpp).
 //
 // Conventions: screen frame, x right, y down, z toward the viewer; a texel's unit normal is
 // n = (-h_x, -h_y, 1) / |(-h_x, -h_y, 1)| from the stored gradient (field.hpp), and the light vector l

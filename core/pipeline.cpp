@@ -82,7 +82,7 @@ DeviceDescription output_device(const DeviceDescription& source, const PipelineC
   out.enable(ev::kRel, ev::kRelX);
   out.enable(ev::kRel, ev::kRelY);
   if (config.mode == OutputMode::absolute) {
-    // Never REL_X/REL_Y together with ABS_X/ABS_Y on one device (ALGORITHMS.md section 6).
+    // Never REL_X/REL_Y together with ABS_X/ABS_Y on one device (docs/METHODS.md, "Cursor and output").
     out.codes[ev::kRel].reset(ev::kRelX);
     out.codes[ev::kRel].reset(ev::kRelY);
     if (out.codes[ev::kRel].none()) out.codes[ev::kSyn].reset(ev::kRel);
@@ -90,19 +90,35 @@ DeviceDescription output_device(const DeviceDescription& source, const PipelineC
     out.enable(ev::kAbs, ev::kAbsX);
     out.enable(ev::kAbs, ev::kAbsY);
     const Rect d = config.desktop;
-    out.absinfo[ev::kAbsX] = {d.x, d.x + d.w - 1, 0, 0, 0};
-    out.absinfo[ev::kAbsY] = {d.y, d.y + d.h - 1, 0, 0, 0};
+    constexpr std::int32_t k = kAbsUnitsPerPixel;
+    out.absinfo[ev::kAbsX] = {d.x * k, (d.x + d.w) * k - 1, 0, 0, 0};
+    out.absinfo[ev::kAbsY] = {d.y * k, (d.y + d.h) * k - 1, 0, 0, 0};
   }
   return out;
 }
 
 Pipeline::Pipeline(std::shared_ptr<const Scene> scene, const PipelineConfig& config)
-    : scene_(scene ? std::move(scene) : std::make_shared<const Scene>()), config_(config) {
+    : scene_(scene ? std::move(scene) : std::make_shared<const Scene>()),
+      config_(config),
+      acceleration_(config.acceleration) {
   const Rect d = config_.desktop;
   cursor_ = cursor_at(config_.start.value_or(Vec2{d.x + d.w / 2.0, d.y + d.h / 2.0}));
   clamp_to_desktop();
   abs_x_ = static_cast<std::int32_t>(std::floor(cursor_.position.x));
   abs_y_ = static_cast<std::int32_t>(std::floor(cursor_.position.y));
+}
+
+void Pipeline::move_cursor_to(Vec2 position) {
+  if (!is_finite(position)) return;
+  cursor_ = cursor_at(position);
+  carry_ = {};
+  clamp_to_desktop();
+}
+
+void Pipeline::set_desktop(Rect desktop) {
+  if (desktop.w <= 0 || desktop.h <= 0) return;
+  config_.desktop = desktop;
+  clamp_to_desktop();
 }
 
 void Pipeline::clamp_to_desktop() {
@@ -113,9 +129,9 @@ void Pipeline::clamp_to_desktop() {
   const double x = std::clamp(cursor_.position.x, static_cast<double>(d.x), std::nextafter(d.x + d.w, d.x));
   const double y = std::clamp(cursor_.position.y, static_cast<double>(d.y), std::nextafter(d.y + d.h, d.y));
   if (x != cursor_.position.x || y != cursor_.position.y) {
-    const EffectState effect = cursor_.effect;  // pushing against the edge is still the same hand
+    const EffectStates effects = cursor_.effects;  // pushing against the edge is still the same hand
     cursor_ = cursor_at({x, y});
-    cursor_.effect = effect;
+    cursor_.effects = effects;
   }
 }
 
@@ -125,7 +141,8 @@ Frame Pipeline::process(const Frame& in, FrameReport* report) {
   if (report != nullptr) *report = {frame_time(in), saturate(dx), saturate(dy), 0, 0, {}, 1.0, 1.0, false};
   FrameResult moved;
   if (dx != 0 || dy != 0) {
-    const Vec2 motor{static_cast<double>(dx) * config_.pointer_gain, static_cast<double>(dy) * config_.pointer_gain};
+    const Vec2 counts{static_cast<double>(dx), static_cast<double>(dy)};
+    const Vec2 motor = acceleration_.apply(counts, frame_time(in)) * config_.pointer_gain;
     moved = advance(*scene_, cursor_, motor, frame_time(in));
     clamp_to_desktop();
   }
@@ -162,7 +179,7 @@ Frame Pipeline::emit_absolute(const Frame& in, std::int64_t dx, std::int64_t dy,
     report->out_dy = y - abs_y_;
   }
   if (dx == 0 && dy == 0) return in;
-  Frame out = rewrite_motion(in, dx, dy, x, y, ev::kAbs, ev::kAbsX, ev::kAbsY);
+  Frame out = rewrite_motion(in, dx, dy, abs_value_of_pixel(x), abs_value_of_pixel(y), ev::kAbs, ev::kAbsX, ev::kAbsY);
   abs_x_ = x;
   abs_y_ = y;
   return out;

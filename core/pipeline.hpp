@@ -1,12 +1,13 @@
 // Everything between an event source and an event sink, shared by the daemon and the replay tool:
 // frames are assembled up to SYN_REPORT, their motion goes through the engine, and the frame is
-// re-emitted with every other event unchanged, in order (ALGORITHMS.md section 6).
+// re-emitted with every other event unchanged, in order (docs/METHODS.md, "Cursor and output").
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <optional>
 
+#include "core/acceleration.hpp"
 #include "core/device.hpp"
 #include "core/event.hpp"
 #include "core/scene.hpp"
@@ -14,7 +15,7 @@
 
 namespace ph {
 
-// Where frames come from and go to: a live device or a recording (STYLE.md: one source, one sink).
+// Where frames come from and go to: a live device or a recording (docs/DESIGN.md, "One source, one sink").
 class EventSource {
  public:
   virtual ~EventSource() = default;
@@ -29,8 +30,16 @@ class EventSink {
 
 enum class OutputMode { relative, absolute };
 
+// Absolute output: ABS_X/ABS_Y count half pixels of the desktop, and a position is emitted as the centre
+// of the pixel the cursor model is in. Desktops scale the axis range onto the desktop's bounding box
+// (libinput: (v - min) * width / (max - min + 1)) and X rounds the result down after losing up to
+// 1/65536 of it; a pixel centre lands on its pixel under both (docs/SERVICE.md, "Absolute output").
+inline constexpr std::int32_t kAbsUnitsPerPixel = 2;
+inline std::int32_t abs_value_of_pixel(std::int32_t pixel) { return pixel * kAbsUnitsPerPixel + 1; }
+
 struct PipelineConfig {
-  double pointer_gain = 1.0;  // screen px per device count at C/D 1 (the base pointer speed)
+  double pointer_gain = 1.0;   // screen px per device count at C/D 1 (the base pointer speed)
+  AccelSettings acceleration;  // before the C/D; the default (flat, speed 0, 1000 dpi) is the identity
   OutputMode mode = OutputMode::relative;
   Rect desktop{0, 0, 1920, 1080};
   std::optional<Vec2> start;  // cursor model's start; default: the desktop's centre
@@ -57,6 +66,13 @@ class Pipeline {
   // A new scene (config reload); the cursor model stays where it is.
   void set_scene(std::shared_ptr<const Scene> scene) { scene_ = std::move(scene); }
 
+  // The desktop's real cursor is elsewhere (a warp, another pointer, the session helper's first word):
+  // the model moves there, clamped to the desktop, and any effect in progress starts over.
+  void move_cursor_to(Vec2 position);
+  // A new desktop layout (the session helper); the model is clamped into it. Absolute output needs
+  // new virtual devices for the new ranges: output_device() with config() describes them.
+  void set_desktop(Rect desktop);
+
   // Rescales one complete frame (ending in SYN_REPORT). Frames without motion come back unchanged.
   Frame process(const Frame& in, FrameReport* report = nullptr);
 
@@ -76,6 +92,7 @@ class Pipeline {
   std::shared_ptr<const Scene> scene_;
   PipelineConfig config_;
   CursorState cursor_;
+  PointerAcceleration acceleration_;
   Vec2 carry_;                          // fractional remainder of relative output, per axis
   std::int32_t abs_x_ = 0, abs_y_ = 0;  // last emitted absolute position
 };

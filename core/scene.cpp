@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "core/direction_lut.hpp"
 
@@ -21,6 +22,9 @@ void check_region(const Region& region) {
   if (!region.method) throw std::invalid_argument(who + "no method");
   for (const EffectPtr& effect : region.effects) {
     if (!effect) throw std::invalid_argument(who + "an empty effect");
+  }
+  if (region.effects.size() > kMaxEffectsPerRegion) {
+    throw std::invalid_argument(who + "more than " + std::to_string(kMaxEffectsPerRegion) + " effects");
   }
   const FieldNeeds needs = region.method->needs();
   if (needs.gradient && !matches(region.fields.gradient, region.rect)) {

@@ -1,5 +1,5 @@
 // A scene: regions on the screen, each with its fields and its method. Later regions lie on top of
-// earlier ones; outside every region the surface is flat (ALGORITHMS.md section 1).
+// earlier ones; outside every region the surface is flat (docs/METHODS.md, "Screen, regions and fields").
 #pragma once
 
 #include <cstddef>
@@ -23,7 +23,8 @@ struct Region {
   Rect rect;  // on screen; the fields are exactly rect.w x rect.h texels
   RegionFields fields;
   MethodPtr method;
-  std::vector<EffectPtr> effects;  // applied in order to each frame that starts in the region
+  std::vector<EffectPtr> effects;  // applied in order to each frame that starts in the region (at most
+                                   // kMaxEffectsPerRegion), each to what the one before handed on
 
   // Texel of the region's fields under a screen texel the region contains.
   Texel local(Texel screen) const { return {screen.x - rect.x, screen.y - rect.y}; }
@@ -32,8 +33,8 @@ struct Region {
 class Scene {
  public:
   Scene() = default;
-  // Throws std::invalid_argument if a region is empty, has no method, or its fields do not match its
-  // size or lack what its method needs.
+  // Throws std::invalid_argument if a region is empty, has no method, has an empty effect or more than
+  // kMaxEffectsPerRegion, or its fields do not match its size or lack what its method needs.
   explicit Scene(std::vector<Region> regions);
 
   const std::vector<Region>& regions() const { return regions_; }

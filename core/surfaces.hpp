@@ -1,4 +1,4 @@
-// The analytic test surfaces of the second paper (ALGORITHMS.md section 7; docs/INTERROGATION.md) as height fields
+// The analytic test surfaces of the second paper (docs/INTERROGATION.md, "The test surfaces") as height fields
 // over a square subdomain, with exact heights, gradients, second derivatives and curvatures.
 //
 // Conventions as in core/targets: a surface is size x size px, y down, texel centres at i + 0.5; heights in

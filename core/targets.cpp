@@ -1,4 +1,4 @@
-// The 24 targets of the curvature paper, Fig. 3 (ALGORITHMS.md section 8), as exact analytic surfaces.
+// The 24 targets of the curvature paper, Fig. 3 (docs/METHODS.md, "The 24 targets"), as exact analytic surfaces.
 //
 // A target is radially symmetric about (size/2, size/2): h(r) = sign * height * relief_px * f(u), u = r / radius,
 // for r <= radius and 0 outside. Its gradient is h'(r) * (dx, dy) / r with h'(r) = sign * height * relief_px *
@@ -8,7 +8,7 @@
 //  - linear: a kink at the apex (gradient undefined at r == 0; we use 0) and at the rim (slope jumps to 0);
 //  - polynomial: a kink at the rim (f'(1) = -4, the outside is flat);
 //  - Gaussian: a step at the rim, because f(1) = exp(-4.5) ~ 0.011 is not 0 (1.1 px for height 1 and
-//    relief 100 px), and a kink there too. We keep the profile as ALGORITHMS.md states it rather than
+//    relief 100 px), and a kink there too. We keep the profile as docs/METHODS.md states it rather than
 //    shifting it to reach 0, so the targets stay those of the paper's stated formula.
 #include "core/targets.hpp"
 

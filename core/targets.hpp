@@ -1,4 +1,4 @@
-// The 24 targets of the curvature paper (Fig. 3; ALGORITHMS.md section 8) as exact analytic surfaces.
+// The 24 targets of the curvature paper (Fig. 3; docs/METHODS.md, "The 24 targets") as exact analytic surfaces.
 #pragma once
 
 #include <string>

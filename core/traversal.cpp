@@ -426,14 +426,18 @@ double apply_effects(const Scene& scene, CursorState& cursor, Vec2& motor, TimeU
   const Region& region = scene.regions()[*owner];
   if (region.effects.empty()) return 1.0;
   const double before = fast_length(motor.x, motor.y);
-  for (const EffectPtr& effect : region.effects) {
-    if (cursor.effect.owner != effect.get()) cursor.effect = EffectState{true, 0.0, kNoTime, effect.get()};
-    const EffectInput in{motor, time, cursor.position, region.local(cursor.texel)};
-    const Vec2 out = effect->apply(in, cursor.effect);
-    // The promise of every effect, kept here too: finite, and never more than its bounds allow.
+  // Scene allows at most kMaxEffectsPerRegion effects; the bound is kept here too.
+  const std::size_t count = std::min(region.effects.size(), kMaxEffectsPerRegion);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Effect& effect = *region.effects[i];
+    EffectState& state = cursor.effects[i];
+    if (state.owner != &effect) state = EffectState{true, 0.0, kNoTime, &effect};
+    const double given = fast_length(motor.x, motor.y);
+    const Vec2 out = effect.apply({motor, time, cursor.position, region.local(cursor.texel)}, state);
+    // The promise of every effect, kept here too: finite, and within its bounds of the motor it was given.
     const double length = fast_length(out.x, out.y);
-    if (is_finite(out) && length <= before * effect->max_gain() * (1.0 + 1e-12) &&
-        length >= before * effect->min_gain() * (1.0 - 1e-12)) {
+    if (is_finite(out) && length <= given * effect.max_gain() * (1.0 + 1e-12) &&
+        length >= given * effect.min_gain() * (1.0 - 1e-12)) {
       motor = out;
     }
   }

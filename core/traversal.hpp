@@ -1,4 +1,4 @@
-// The exact per-texel traversal of ALGORITHMS.md section 5: the cursor walks the texel grid along the
+// The exact per-texel traversal of docs/METHODS.md, "The traversal": the cursor walks the texel grid along the
 // motion direction (Amanatides-Woo), each texel segment costs C/D x length of motor travel, and the
 // cursor stops where the frame's motor travel runs out. The flat outside is crossed in one jump.
 #pragma once
@@ -18,8 +18,8 @@ namespace ph {
 struct CursorState {
   Vec2 position;
   Texel texel;
-  Texel came_from;     // == texel when there is no history (start, or after a flat stretch)
-  EffectState effect;  // what the frame effects of the region under the cursor remember
+  Texel came_from;       // == texel when there is no history (start, or after a flat stretch)
+  EffectStates effects;  // what the frame effects of the region under the cursor remember, one each
 };
 
 // A cursor with no history at a position (clamped to the world; a non-finite coordinate becomes 0).

@@ -40,7 +40,7 @@ Configuration load_configuration(const ConfigChoice& choice) {
     const SceneSpec spec = parse_scene_file(*file);
     SceneLoadReport report;
     c.scene = std::make_shared<const Scene>(load_scene(spec, &report));
-    // ALGORITHMS.md section 1: invalid texels are counted and reported at load (and repaired).
+    // Invalid texels are counted, repaired and reported at load (docs/METHODS.md, "Screen, regions and fields").
     for (std::string& warning : invalid_texel_warnings(spec, report)) c.warnings.push_back(std::move(warning));
     c.settings = spec.daemon;
     c.source = file->string();
@@ -53,12 +53,17 @@ Configuration load_configuration(const ConfigChoice& choice) {
   if (!warning.empty()) c.warnings.push_back(warning);
   c.pipeline.mode = c.settings.output;
   c.pipeline.pointer_gain = c.settings.pointer_speed;
+  c.pipeline.acceleration = acceleration_of(c.settings);
   return c;
 }
 
 bool only_scene_differs(const Configuration& a, const Configuration& b) {
   return a.pipeline.desktop == b.pipeline.desktop && a.pipeline.mode == b.pipeline.mode &&
-         a.pipeline.pointer_gain == b.pipeline.pointer_gain && same_matchers(a.settings.devices, b.settings.devices);
+         a.pipeline.pointer_gain == b.pipeline.pointer_gain &&
+         a.pipeline.acceleration.profile == b.pipeline.acceleration.profile &&
+         a.pipeline.acceleration.speed == b.pipeline.acceleration.speed &&
+         a.pipeline.acceleration.dpi == b.pipeline.acceleration.dpi &&
+         same_matchers(a.settings.devices, b.settings.devices);
 }
 
 }  // namespace ph

@@ -6,6 +6,7 @@
 #include <sys/timerfd.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <csignal>
@@ -24,6 +25,17 @@ constexpr long kRetryIntervalNs = 50'000'000;
 constexpr int kOpenTries = 100;
 // Virtual devices of pseudohapticd, this one or another: never taken.
 constexpr std::string_view kOwnDevicePrefix = "pseudohaptic ";
+// Resync with the session helper (docs/SERVICE.md, "Resync"): its clock, a pause of the mice after which
+// the next motion asks where the cursor is, how often it asks anyway (application warps), how soon
+// after another pointer stops, how often at most while one moves, and how long a pixel the daemon
+// emitted still explains a report.
+constexpr long kResyncTickNs = 100'000'000;
+constexpr std::chrono::milliseconds kPauseBeforeQuery{300};
+constexpr std::chrono::milliseconds kQueryEvery{1000};
+constexpr std::chrono::milliseconds kSettleAfterOtherPointer{100};
+constexpr std::chrono::milliseconds kQueryAtMostEvery{50};
+constexpr std::chrono::milliseconds kEmittedMemory{2000};
+constexpr std::size_t kEmittedAlwaysKept = 8;
 
 [[noreturn]] void fail_system(std::string_view what) {
   throw StartupError(fmt::format("{}: {}", what, std::strerror(errno)));
@@ -67,7 +79,7 @@ void block_daemon_signals() {
   ::sigprocmask(SIG_BLOCK, &set, nullptr);  // fails only for an invalid `how`
 }
 
-Daemon::Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& notifier)
+Daemon::Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& notifier, const std::string& control_path)
     : choice_(std::move(choice)), log_(log), notifier_(notifier), config_(load_configuration(choice_)) {
   log_notes(config_);
   // Without /dev/uinput there is nothing to emit through: say so now rather than at the first mouse.
@@ -78,17 +90,23 @@ Daemon::Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& no
   epoll_ = UniqueFd(::epoll_create1(EPOLL_CLOEXEC));
   retry_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
   watchdog_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
-  if (!signals_ || !epoll_ || !retry_timer_ || !watchdog_timer_) fail_system("cannot set up the event loop");
-  for (int fd : {signals_.get(), udev_.fd(), retry_timer_.get(), watchdog_timer_.get()}) watch(epoll_.get(), fd);
+  resync_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
+  if (!signals_ || !epoll_ || !retry_timer_ || !watchdog_timer_ || !resync_timer_)
+    fail_system("cannot set up the event loop");
+  for (int fd : {signals_.get(), udev_.fd(), retry_timer_.get(), watchdog_timer_.get(), resync_timer_.get()})
+    watch(epoll_.get(), fd);
   if (const auto interval = ServiceNotifier::watchdog_interval()) {
     set_timer(watchdog_timer_.get(), static_cast<long>(interval->count()) * 1000);
     log_.debug("watchdog ping every {} ms", interval->count() / 1000);
   }
 
   start_pipeline();
-  log_.info("scene: {} ({} regions); desktop {}x{}+{}+{}; {} output", config_.source, config_.scene->regions().size(),
-            config_.pipeline.desktop.w, config_.pipeline.desktop.h, config_.pipeline.desktop.x,
-            config_.pipeline.desktop.y, config_.pipeline.mode == OutputMode::relative ? "relative" : "absolute");
+  const PipelineConfig& p = config_.pipeline;
+  log_.info("scene: {} ({} regions); desktop {}x{}+{}+{}; {} output; {} acceleration, speed {}", config_.source,
+            config_.scene->regions().size(), p.desktop.w, p.desktop.h, p.desktop.x, p.desktop.y,
+            p.mode == OutputMode::relative ? "relative" : "absolute", accel_profile_name(p.acceleration.profile),
+            p.acceleration.speed);
+  if (!control_path.empty()) start_control(control_path);
   if (udev_.uses_kernel_events()) log_.info("no udev daemon running; listening to kernel uevents for hotplug");
   take_present_mice();
   if (mice_.empty()) log_.notice("no mouse to take yet; waiting for one to be plugged in");
@@ -97,6 +115,15 @@ Daemon::Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& no
 Daemon::~Daemon() = default;
 
 void Daemon::start_pipeline() { pipeline_ = std::make_unique<Pipeline>(config_.scene, config_.pipeline); }
+
+void Daemon::start_control(const std::string& path) {
+  try {
+    control_ = std::make_unique<ControlServer>(path, epoll_.get(), sessions_, log_);
+    log_.info("control socket: {}", path);
+  } catch (const std::exception& e) {
+    log_.warning("{}; running without a control socket (no session helper, no `pseudohaptic status`)", e.what());
+  }
+}
 
 void Daemon::take_present_mice() {
   for (const std::string& node : udev_.event_nodes()) consider(node);
@@ -123,6 +150,13 @@ int Daemon::run() {
       } else if (fd == watchdog_timer_.get()) {
         drain_timer(fd);
         notifier_.watchdog();
+      } else if (fd == resync_timer_.get()) {
+        drain_timer(fd);
+        on_resync_tick();
+      } else if (control_ && control_->owns(fd)) {
+        control_->on_readable(fd, *this);
+      } else if (std::any_of(untaken_.begin(), untaken_.end(), [fd](const auto& u) { return u.second->fd() == fd; })) {
+        on_untaken_readable(fd);
       } else {
         on_mouse_readable(fd);
       }
@@ -159,6 +193,7 @@ void Daemon::consider(const std::string& node) {
   if (!device->is_pointer()) {
     log_.debug("{} {}: not a pointer (needs REL_X, REL_Y and a button); not taken", node, quoted_name(*device));
     passed_over_.insert(node);
+    if (device->moves_the_cursor()) watch_untaken(node, std::move(device));
     return;
   }
   const DeviceDescription description = device->description();
@@ -166,6 +201,7 @@ void Daemon::consider(const std::string& node) {
     log_.info("{} {} ({:04x}:{:04x}): not in [daemon] devices; not taken", node, quoted_name(*device),
               description.vendor, description.product);
     passed_over_.insert(node);
+    watch_untaken(node, std::move(device));
     return;
   }
   auto& mouse = *mice_.emplace(node, std::make_unique<Mouse>()).first->second;
@@ -217,6 +253,10 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
 }
 
 void Daemon::let_go(const std::string& node, std::string_view why) {
+  if (const auto u = untaken_.find(node); u != untaken_.end()) {
+    ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, u->second->fd(), nullptr);
+    untaken_.erase(u);
+  }
   const auto it = mice_.find(node);
   if (it == mice_.end()) {
     unopened_.erase(node);
@@ -233,6 +273,7 @@ void Daemon::let_go(const std::string& node, std::string_view why) {
 
 void Daemon::let_go_of_all(std::string_view why) {
   while (!mice_.empty()) let_go(mice_.begin()->first, why);
+  while (!untaken_.empty()) let_go(untaken_.begin()->first, why);
   unopened_.clear();
   passed_over_.clear();
 }
@@ -241,10 +282,17 @@ void Daemon::on_mouse_readable(int fd) {
   for (auto& [node, mouse] : mice_) {
     if (mouse->frames == nullptr || mouse->device->fd() != fd) continue;
     const std::string name = node;  // let_go erases the map entry
+    const SteadyTime now = std::chrono::steady_clock::now();
+    // Motion after a pause: whatever happened meanwhile (a warp, another pointer), ask where the cursor is.
+    if (now - last_motion_ > kPauseBeforeQuery && control_) {
+      control_->query_helper();
+      last_query_ = now;
+    }
+    last_motion_ = now;
     try {
-      if (mouse->device->read_available([&](const InputEvent& e) { mouse->frames->push(e); }) == ReadStatus::gone) {
-        let_go(name, "unplugged");
-      }
+      const ReadStatus status = mouse->device->read_available([&](const InputEvent& e) { mouse->frames->push(e); });
+      remember_emitted();
+      if (status == ReadStatus::gone) let_go(name, "unplugged");
     } catch (const DeviceError& e) {
       log_.warning("{}", e.what());
       let_go(name, "read error");
@@ -311,12 +359,125 @@ void Daemon::update_retry_timer() {
   retry_armed_ = needed;
 }
 
+void Daemon::watch_untaken(const std::string& node, std::unique_ptr<EvdevDevice> device) {
+  watch(epoll_.get(), device->fd());
+  log_.debug("{} {}: watched without a grab; its motion makes the daemon ask where the cursor is", node,
+             quoted_name(*device));
+  untaken_[node] = std::move(device);
+}
+
+void Daemon::on_untaken_readable(int fd) {
+  for (auto& [node, device] : untaken_) {
+    if (device->fd() != fd) continue;
+    bool moved = false;
+    const ReadStatus status = device->read_available([&](const InputEvent& e) {
+      moved = moved || ((e.type == ev::kRel && (e.code == ev::kRelX || e.code == ev::kRelY)) ||
+                        (e.type == ev::kAbs && (e.code == ev::kAbsX || e.code == ev::kAbsY)));
+    });
+    if (status == ReadStatus::gone) {
+      const std::string gone = node;
+      let_go(gone, "unplugged");
+      return;
+    }
+    if (!moved || !control_) return;
+    const SteadyTime now = std::chrono::steady_clock::now();
+    last_untaken_motion_ = now;
+    settle_query_due_ = true;
+    if (now - last_query_ >= kQueryAtMostEvery) {
+      control_->query_helper();
+      last_query_ = now;
+    }
+    return;
+  }
+}
+
+void Daemon::on_resync_tick() {
+  if (!control_ || !control_->has_helper()) return;
+  const SteadyTime now = std::chrono::steady_clock::now();
+  const bool settled = settle_query_due_ && now - last_untaken_motion_ >= kSettleAfterOtherPointer;
+  if (settled || now - last_query_ >= kQueryEvery) {
+    control_->query_helper();
+    last_query_ = now;
+    if (settled) settle_query_due_ = false;
+  }
+}
+
+void Daemon::remember_emitted() {
+  const SteadyTime now = std::chrono::steady_clock::now();
+  const Texel pixel = pipeline_->cursor().texel;
+  if (emitted_.empty() || emitted_.back().second != pixel) emitted_.emplace_back(now, pixel);
+  while (emitted_.size() > kEmittedAlwaysKept && now - emitted_.front().first > kEmittedMemory) emitted_.pop_front();
+}
+
+bool Daemon::emitted_recently(Texel pixel) const {
+  return std::any_of(emitted_.begin(), emitted_.end(), [pixel](const auto& e) { return e.second == pixel; });
+}
+
+control::Status Daemon::status() const {
+  control::Status s;
+  s.absolute = config_.pipeline.mode == OutputMode::absolute;
+  for (const auto& [node, mouse] : mice_) s.mice += mouse->frames != nullptr;
+  s.regions = static_cast<int>(config_.scene->regions().size());
+  s.desktop = pipeline_->config().desktop;
+  s.cursor = pipeline_->cursor().position;
+  s.scene = choice_.default_scene || !choice_.file ? config_.source : choice_.file->string();
+  if (config_.source == "the embedded default scene") s.scene = "default";
+  return s;
+}
+
+Vec2 Daemon::cursor() const { return pipeline_->cursor().position; }
+
+void Daemon::position(Vec2 position, bool from_helper) {
+  const Texel pixel = texel_at(position);
+  // The helper reports pixels; one the daemon put the cursor on lately is its own motion still on its way
+  // through the desktop, not a move by someone else.
+  if (from_helper && (pixel == pipeline_->cursor().texel || emitted_recently(pixel))) return;
+  const Vec2 was = pipeline_->cursor().position;
+  pipeline_->move_cursor_to(position);
+  emitted_.clear();
+  remember_emitted();
+  log_.debug("resync: the cursor is at ({:.1f}, {:.1f}) ({}); the model was at ({:.1f}, {:.1f})", position.x,
+             position.y, from_helper ? "session helper" : "set by a client", was.x, was.y);
+}
+
+void Daemon::layout(Rect desktop) {
+  if (config_.settings.desktop) {
+    if (desktop != config_.pipeline.desktop)
+      log_.notice("the session helper says the desktop is {}x{}+{}+{}; keeping the scene file's desktop", desktop.w,
+                  desktop.h, desktop.x, desktop.y);
+    return;
+  }
+  helper_desktop_ = desktop;
+  if (desktop == config_.pipeline.desktop) return;
+  log_.info("desktop {}x{}+{}+{} (from the session helper)", desktop.w, desktop.h, desktop.x, desktop.y);
+  config_.pipeline.desktop = desktop;
+  if (config_.pipeline.mode == OutputMode::relative) {
+    pipeline_->set_desktop(desktop);
+  } else {
+    restart_devices("the desktop changed");  // absolute ranges are fixed when a device is made
+  }
+}
+
+void Daemon::helper_changed(bool present) {
+  set_timer(resync_timer_.get(), present ? kResyncTickNs : 0);
+  notifier_.status(status_line());
+}
+
+void Daemon::restart_devices(std::string_view why) {
+  const Vec2 cursor = pipeline_->cursor().position;
+  let_go_of_all(why);
+  config_.pipeline.start = cursor;
+  start_pipeline();
+  take_present_mice();
+}
+
 void Daemon::reload() {
   notifier_.reloading();
   log_.info("SIGHUP received; reloading {}", choice_.file ? choice_.file->string() : config_.source);
   Configuration next;
   try {
     next = load_configuration(choice_);
+    if (helper_desktop_ && !next.settings.desktop) next.pipeline.desktop = *helper_desktop_;
   } catch (const std::exception& e) {
     log_.warning("reload failed: {}; keeping the previous scene", e.what());
     notifier_.ready(status_line());
@@ -329,12 +490,8 @@ void Daemon::reload() {
   } else {
     // New [daemon] settings: new virtual devices, and the mice chosen again; the cursor stays put.
     log_.info("the [daemon] settings changed; taking the mice again");
-    const Vec2 cursor = pipeline_->cursor().position;
-    let_go_of_all("settings changed");
     config_ = std::move(next);
-    config_.pipeline.start = cursor;
-    start_pipeline();
-    take_present_mice();
+    restart_devices("settings changed");
   }
   log_.info("reloaded: {} ({} regions)", config_.source, config_.scene->regions().size());
   notifier_.ready(status_line());
@@ -348,7 +505,10 @@ std::string Daemon::status_line() const {
     names += (taken++ == 0 ? "" : ", ") + mouse->device->name();
   }
   const std::string mice = taken == 0 ? std::string("waiting for a mouse") : fmt::format("{} mice: {}", taken, names);
-  return fmt::format("{}; scene: {} ({} regions)", mice, config_.source, config_.scene->regions().size());
+  const bool helper = control_ && control_->has_helper();
+  return fmt::format("{}; scene: {} ({} regions); {} output{}", mice, config_.source, config_.scene->regions().size(),
+                     config_.pipeline.mode == OutputMode::absolute ? "absolute" : "relative",
+                     helper ? "; session helper connected" : "");
 }
 
 void Daemon::log_notes(const Configuration& configuration) const {

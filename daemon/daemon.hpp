@@ -1,15 +1,19 @@
 // pseudohapticd's event loop: one epoll over the grabbed mice, the udev monitor, a signalfd and two
 // timers. Every mouse it takes gets its own virtual device and frame assembler; all share one pipeline,
-// so one cursor model, however many mice move it (ALGORITHMS.md section 6).
+// so one cursor model, however many mice move it (docs/METHODS.md, "Cursor and output").
 #pragma once
 
+#include <chrono>
+#include <deque>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 
 #include "core/pipeline.hpp"
 #include "daemon/configuration.hpp"
+#include "daemon/control_server.hpp"
 #include "daemon/evdev_device.hpp"
 #include "daemon/log.hpp"
 #include "daemon/service_notifier.hpp"
@@ -28,11 +32,12 @@ class StartupError : public std::runtime_error {
 // thing in main: a SIGHUP during a long start-up must not kill the daemon.
 void block_daemon_signals();
 
-class Daemon {
+class Daemon final : private ControlHandler {
  public:
   // Loads the configuration and takes the mice present now. Expects block_daemon_signals() to have run.
-  // Throws StartupError, ConfigError or UdevError with a message for the user.
-  Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& notifier);
+  // Throws StartupError, ConfigError or UdevError with a message for the user. `control_path`: where
+  // the control socket listens ("" for none); a socket that cannot be made is logged, not fatal.
+  Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& notifier, const std::string& control_path);
   ~Daemon();
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
@@ -51,7 +56,23 @@ class Daemon {
     bool told_waiting = false;
   };
 
+  using SteadyTime = std::chrono::steady_clock::time_point;
+
+  // ControlHandler: the control socket's requests.
+  control::Status status() const override;
+  Vec2 cursor() const override;
+  void position(Vec2 position, bool from_helper) override;
+  void layout(Rect desktop) override;
+  void helper_changed(bool present) override;
+
+  void start_control(const std::string& path);
   void start_pipeline();
+  void restart_devices(std::string_view why);
+  void watch_untaken(const std::string& node, std::unique_ptr<EvdevDevice> device);
+  void on_untaken_readable(int fd);
+  void on_resync_tick();
+  void remember_emitted();
+  bool emitted_recently(Texel pixel) const;
   void take_present_mice();
   void consider(const std::string& node);
   void try_take(const std::string& node, Mouse& mouse);
@@ -70,9 +91,20 @@ class Daemon {
   const Logger& log_;
   const ServiceNotifier& notifier_;
   Configuration config_;
+  std::optional<Rect> helper_desktop_;  // the session helper's layout, over `desktop = "auto"`
   std::unique_ptr<Pipeline> pipeline_;
   UdevWatch udev_;
-  UniqueFd epoll_, signals_, retry_timer_, watchdog_timer_;
+  UniqueFd epoll_, signals_, retry_timer_, watchdog_timer_, resync_timer_;
+  LogindSessions sessions_;
+  std::unique_ptr<ControlServer> control_;
+  // Resync: pointers the daemon does not take, watched without a grab; the pixels it emitted lately (a
+  // helper's report of one of those is the daemon's own motion, not a warp); when its mice last moved.
+  std::map<std::string, std::unique_ptr<EvdevDevice>> untaken_;  // by node
+  std::deque<std::pair<SteadyTime, Texel>> emitted_;
+  SteadyTime last_motion_{};
+  SteadyTime last_query_{};
+  SteadyTime last_untaken_motion_{};
+  bool settle_query_due_ = false;
   std::map<std::string, std::unique_ptr<Mouse>> mice_;  // by node
   std::map<std::string, int> unopened_;                 // node -> tries left (not yet accessible)
   std::set<std::string> passed_over_;                   // not a pointer, not matched, ours, busy

@@ -51,6 +51,16 @@ std::string EvdevDevice::name() const {
   return n != nullptr ? n : "";
 }
 
+bool EvdevDevice::moves_the_cursor() const {
+  const libevdev* d = dev_.get();
+  if (libevdev_has_event_code(d, EV_REL, REL_X) && libevdev_has_event_code(d, EV_REL, REL_Y)) return true;
+  if (!libevdev_has_event_code(d, EV_ABS, ABS_X) || !libevdev_has_event_code(d, EV_ABS, ABS_Y)) return false;
+  for (const unsigned code : {BTN_TOUCH, BTN_TOOL_FINGER, BTN_TOOL_PEN, BTN_LEFT}) {
+    if (libevdev_has_event_code(d, EV_KEY, code)) return true;
+  }
+  return false;
+}
+
 bool EvdevDevice::is_pointer() const {
   if (!libevdev_has_event_code(dev_.get(), EV_REL, REL_X) || !libevdev_has_event_code(dev_.get(), EV_REL, REL_Y)) {
     return false;

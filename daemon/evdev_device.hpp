@@ -40,6 +40,9 @@ class EvdevDevice {
 
   // A pointer the daemon can drive: REL_X, REL_Y and at least one mouse button.
   bool is_pointer() const;
+  // Anything that moves the desktop's cursor: a pointer, or a touchpad, tablet or touchscreen (ABS_X and
+  // ABS_Y with a touch, tool or mouse button). The daemon watches those it does not take, to resync.
+  bool moves_the_cursor() const;
   DeviceDescription description() const;
 
   // Asks the kernel now (EVIOCGKEY) whether any key or button is down: the daemon grabs only when none

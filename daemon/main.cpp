@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   std::string config;
   bool default_scene = false;
   bool verbose = false;
+  std::string control = ph::default_control_path();
   app.add_option("-c,--config", config,
                  fmt::format("Scene file (TOML; check it with `pseudohaptic check-config FILE`). Default: {} if it "
                              "exists, else the embedded default scene",
@@ -30,6 +31,10 @@ int main(int argc, char** argv) {
   app.add_flag("--default-scene", default_scene,
                "Use the embedded default scene (three targets of the curvature paper) and no file")
       ->excludes(app.get_option("--config"));
+  app.add_option("--control", control,
+                 "Control socket for the session helper, `pseudohaptic status` and `pseudohaptic cursor`; \"\" for "
+                 "none. Default: $RUNTIME_DIRECTORY/control under systemd, else /run/pseudohaptic/control")
+      ->capture_default_str();
   app.add_flag("-v,--verbose", verbose, "Also log debug messages (every device seen, every hotplug)");
   app.set_version_flag("--version", "pseudohapticd 0.1.0");
   try {
@@ -45,7 +50,7 @@ int main(int argc, char** argv) {
   choice.default_scene = default_scene;
   choice.default_file = std::string(ph::kDefaultSceneFile);
   try {
-    ph::Daemon daemon(choice, log, notifier);
+    ph::Daemon daemon(choice, log, notifier, control);
     return daemon.run();
   } catch (const std::exception& e) {
     log.error("{}", e.what());

@@ -1,4 +1,4 @@
-// A file descriptor that closes itself (STYLE.md: RAII for every C handle).
+// A file descriptor that closes itself (docs/DESIGN.md, "RAII for every C handle").
 #pragma once
 
 #include <unistd.h>

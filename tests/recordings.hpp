@@ -1,10 +1,10 @@
-// Small recordings the tests generate (the project commits none): a mouse description and scripted
-// streams of frames.
+// Recordings for the tests: a mouse description and scripted streams of frames the tests generate, and the
+// paths of the real recordings kept in tests/data/recordings.
 #pragma once
 
-#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "core/device.hpp"
@@ -66,18 +66,21 @@ inline Recording scripted_stroke(int frames, std::int32_t dx, std::int32_t dy, T
   return r;
 }
 
-// The real recordings CI provides beside the project (MIT licence), when present.
-inline std::vector<std::filesystem::path> shared_recordings() {
-  std::vector<std::filesystem::path> found;
-  for (const char* dir : {PH_SHARED_RECORDINGS_DIR}) {
+// The two real mouse recordings kept in the repository (tests/data/recordings/README.md: where they come
+// from, their MIT licence). Every clone has them, so a test that reads them asserts that they are there
+// (missing_file) and fails, rather than skips, when they are not.
+inline std::vector<std::filesystem::path> recorded_mice() {
+  const std::filesystem::path dir = PH_RECORDINGS_DIR;
+  return {dir / "ps2-generic-mouse.evemu", dir / "saitek-cyborg-rat5.evemu"};
+}
+
+// "" when every path is a regular file; otherwise a message naming the first one missing.
+inline std::string missing_file(const std::vector<std::filesystem::path>& paths) {
+  for (const std::filesystem::path& path : paths) {
     std::error_code ec;
-    if (!std::filesystem::is_directory(dir, ec)) continue;
-    for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
-      if (entry.path().extension() == ".evemu") found.push_back(entry.path());
-    }
+    if (!std::filesystem::is_regular_file(path, ec)) return path.string() + " is missing (tests/data/recordings)";
   }
-  std::sort(found.begin(), found.end());
-  return found;
+  return {};
 }
 
 }  // namespace ph::testing

@@ -52,7 +52,7 @@ DepthField quantised_depth(const SurfaceSpec& spec, int bits) {
   return decode_depth(raw, {0.5, 2 * spec.relief_px()}, report);
 }
 
-// K = 0 for planar and parabolic, else the sign of K: what the tests of issue 5 ask the class map to match.
+// K = 0 for planar and parabolic, else the sign of K: what the class map must match.
 int sign_group(std::uint8_t c) {
   return c == static_cast<std::uint8_t>(CurvatureClass::elliptic)     ? 1
          : c == static_cast<std::uint8_t>(CurvatureClass::hyperbolic) ? -1
@@ -134,9 +134,9 @@ TEST(Curvature, FilterIsExactOnQuadrics) {
   }
 }
 
-// Issue 5: class maps from 16-bit normal and depth maps agree with the sign of the exact K on at least 99% of
+// Class maps from 16-bit normal and depth maps agree with the sign of the exact K on at least 99% of
 // interior texels of every surface; K and H within the stated tolerance. The 8-bit figures are measured and
-// printed, and held to the lower bounds docs/INTERROGATION.md states (measured minus a margin).
+// printed, and held to the lower bounds docs/INTERROGATION.md ("Measured agreement") states (measured minus a margin).
 TEST(Curvature, ClassesAndCurvaturesOfQuantisedSurfaces) {
   std::printf("%-14s %-6s %4s %8s %8s %9s %9s\n", "surface", "source", "bits", "sign", "class", "K err", "H err");
   double worst_sign8[2] = {1.0, 1.0};

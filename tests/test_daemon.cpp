@@ -132,9 +132,15 @@ TEST(DaemonConfiguration, ReloadKeepsThePipelineWhenOnlyTheSceneChanged) {
   Configuration faster = base;
   faster.pipeline.pointer_gain = 2.0;
   EXPECT_FALSE(only_scene_differs(base, faster));
-  Configuration absolute = base;
-  absolute.pipeline.mode = OutputMode::absolute;
-  EXPECT_FALSE(only_scene_differs(base, absolute));
+  Configuration relative = base;
+  relative.pipeline.mode = OutputMode::relative;  // absolute is the default
+  EXPECT_FALSE(only_scene_differs(base, relative));
+  Configuration flat = base;
+  flat.pipeline.acceleration.profile = AccelProfile::flat;
+  EXPECT_FALSE(only_scene_differs(base, flat));
+  Configuration quicker = base;
+  quicker.pipeline.acceleration.speed = 0.5;
+  EXPECT_FALSE(only_scene_differs(base, quicker));
   Configuration wider = base;
   wider.pipeline.desktop.w = 3840;
   EXPECT_FALSE(only_scene_differs(base, wider));
@@ -144,7 +150,7 @@ TEST(DaemonConfiguration, ReloadKeepsThePipelineWhenOnlyTheSceneChanged) {
   EXPECT_FALSE(only_scene_differs(base, pickier));
 }
 
-// ALGORITHMS.md section 1: invalid texels are counted and reported at load. The daemon logs every
+// Invalid texels are reported at load (docs/METHODS.md, "Screen, regions and fields"): the daemon logs every
 // Configuration warning (Daemon::log_notes), one per region and map that had any, naming both.
 TEST(DaemonConfiguration, InvalidTexelsAreWarnedPerRegionAndMap) {
   const ScratchDir dir("daemon-config");

@@ -113,9 +113,14 @@ TEST(DeviceMatches, BadMatchers) {
 TEST(DaemonTable, DefaultsWithoutTheTable) {
   const SceneSpec spec = parse_scene_text("", kOrigin);
   EXPECT_TRUE(spec.daemon.devices.empty());
-  EXPECT_EQ(spec.daemon.output, OutputMode::relative);
+  EXPECT_EQ(spec.daemon.output, OutputMode::absolute);
   EXPECT_FALSE(spec.daemon.desktop.has_value());
   EXPECT_DOUBLE_EQ(spec.daemon.pointer_speed, 1.0);
+  // Absolute output by default, with the desktop's default acceleration done by the daemon.
+  const AccelSettings accel = acceleration_of(spec.daemon);
+  EXPECT_EQ(accel.profile, AccelProfile::adaptive);
+  EXPECT_EQ(accel.speed, 0.0);
+  EXPECT_EQ(accel.dpi, 1000.0);
   EXPECT_EQ(kDefaultSceneFile, "/etc/pseudohaptic/scene.toml");
 }
 
@@ -123,7 +128,7 @@ TEST(DaemonTable, DefaultsWithAnEmptyTable) {
   const SceneSpec spec =
       parse_scene_text("[daemon]\n[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n", kOrigin);
   EXPECT_TRUE(spec.daemon.devices.empty());
-  EXPECT_EQ(spec.daemon.output, OutputMode::relative);
+  EXPECT_EQ(spec.daemon.output, OutputMode::absolute);
   EXPECT_FALSE(spec.daemon.desktop.has_value());
   EXPECT_DOUBLE_EQ(spec.daemon.pointer_speed, 1.0);
   EXPECT_EQ(spec.regions.size(), 1u);
@@ -134,6 +139,9 @@ TEST(DaemonTable, EveryKey) {
 devices = ["name:Logitech*", "usb:046d:c077", "id:1532:00a5"]
 output = "absolute"
 desktop = [-1920, 0, 3840, 1080]
+acceleration = "flat"
+speed = -0.5
+mouse_dpi = 1600
 pointer_speed = 2.5
 )",
                                           kOrigin);
@@ -152,6 +160,18 @@ pointer_speed = 2.5
   EXPECT_EQ(d.desktop->w, 3840);
   EXPECT_EQ(d.desktop->h, 1080);
   EXPECT_DOUBLE_EQ(d.pointer_speed, 2.5);
+  EXPECT_EQ(d.acceleration, AccelProfile::flat);
+  EXPECT_EQ(acceleration_of(d).speed, -0.5);
+  EXPECT_EQ(acceleration_of(d).dpi, 1600.0);
+}
+
+TEST(DaemonTable, RelativeOutputLeavesAccelerationToTheDesktop) {
+  const DaemonSettings relative = parse_scene_text("[daemon]\noutput = \"relative\"\n", kOrigin).daemon;
+  EXPECT_EQ(acceleration_of(relative).profile, AccelProfile::flat);
+  EXPECT_EQ(acceleration_of(relative).speed, 0.0);
+  const DaemonSettings chosen =
+      parse_scene_text("[daemon]\noutput = \"relative\"\nacceleration = \"adaptive\"\n", kOrigin).daemon;
+  EXPECT_EQ(acceleration_of(chosen).profile, AccelProfile::adaptive);
 }
 
 TEST(DaemonTable, ExplicitDefaultsAndInlineTable) {
@@ -167,9 +187,16 @@ TEST(DaemonTable, ExplicitDefaultsAndInlineTable) {
 TEST(DaemonTableErrors, TableItself) {
   expect_error("daemon = 3\n", 1, "daemon", {"must be a table"});
   expect_error("[[daemon]]\noutput = \"relative\"\n", 1, "daemon", {"must be a table"});
-  expect_error("[daemon]\noutput = \"relative\"\nspeed = 2\n", 3, "daemon.speed",
-               {"unknown key", "devices", "output", "desktop", "pointer_speed"});
+  expect_error("[daemon]\noutput = \"relative\"\nsped = 2\n", 3, "daemon.sped",
+               {"unknown key", "devices", "output", "desktop", "acceleration", "speed", "pointer_speed"});
   expect_error("[deamon]\noutput = \"relative\"\n", 1, "deamon", {"unknown key", "daemon", "region"});
+}
+
+TEST(DaemonTableErrors, Acceleration) {
+  expect_error("[daemon]\nacceleration = \"linear\"\n", 2, "daemon.acceleration", {"\"adaptive\"", "\"flat\""});
+  expect_error("[daemon]\nspeed = 1.5\n", 2, "daemon.speed", {"from -1 to 1"});
+  expect_error("[daemon]\nspeed = nan\n", 2, "daemon.speed", {"from -1 to 1"});
+  expect_error("[daemon]\nmouse_dpi = 10\n", 2, "daemon.mouse_dpi", {"from 100 to 100000"});
 }
 
 TEST(DaemonTableErrors, Devices) {

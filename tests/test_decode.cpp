@@ -1,4 +1,5 @@
-// Decoding of normal and depth images and resampling to a region's size (ALGORITHMS.md section 1).
+// Decoding of normal and depth images and resampling to a region's size, as docs/METHODS.md specifies in
+// "Screen, regions and fields".
 #include "core/decode.hpp"
 #include "tests/thrown_message.hpp"
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/effect_materials.hpp"
+#include "core/effect_wells.hpp"
 #include "core/method_flat.hpp"
 #include "core/pipeline.hpp"
 #include "core/scene.hpp"
@@ -147,10 +148,10 @@ TEST(MaterialsFriction, SticksCreepsBreaksAwaySlipsAndReSticksAfterARest) {
   TimeUs t = 1'000'000;
   // Stuck: 1 px frames creep at 1 / stuck_cd, for breakaway_px of motor travel.
   for (int i = 0; i < 9; ++i) EXPECT_DOUBLE_EQ(step(r.scene, cursor, 1.0, t += kFrameUs), 1.0 / f.stuck_cd) << i;
-  EXPECT_TRUE(cursor.effect.stuck);
+  EXPECT_TRUE(cursor.effects[0].stuck);
   // The frame that crosses the breakaway distance: 1 px stuck, then 2 px slipping at slip_cd.
   EXPECT_DOUBLE_EQ(step(r.scene, cursor, 3.0, t += kFrameUs), 1.0 / f.stuck_cd + 2.0 / f.slip_cd);
-  EXPECT_FALSE(cursor.effect.stuck);
+  EXPECT_FALSE(cursor.effects[0].stuck);
   // Continuous motion keeps it slipping, with the exact motor displacement (slip_cd 1).
   const auto just_under_rest = static_cast<TimeUs>(f.rest_ms * 1000) - 1;
   for (int i = 0; i < 200; ++i) {
@@ -160,7 +161,54 @@ TEST(MaterialsFriction, SticksCreepsBreaksAwaySlipsAndReSticksAfterARest) {
   // A rest of rest_ms (event times): stuck again.
   t += static_cast<TimeUs>(f.rest_ms * 1000);
   EXPECT_DOUBLE_EQ(step(r.scene, cursor, 1.0, t), 1.0 / f.stuck_cd);
-  EXPECT_TRUE(cursor.effect.stuck);
+  EXPECT_TRUE(cursor.effects[0].stuck);
+}
+
+// Wells layered on friction, in the scene file's order (materials, then wells). Each effect keeps its own
+// state, so friction runs the script of SticksCreepsBreaksAwaySlipsAndReSticksAfterARest exactly as alone,
+// and the wells pull what friction hands on exactly as they would alone.
+TEST(MaterialsWithWells, FrictionSticksBreaksAwayAndReSticksAsAloneAndTheWellsPullAsAlone) {
+  constexpr std::int32_t kSide = 200;
+  RegionFields fields;
+  fields.depth = DepthField(kSide, kSide);
+  for (std::int32_t y = 0; y < kSide; ++y) {
+    for (std::int32_t x = 0; x < kSide; ++x) fields.depth->at(x, y) = static_cast<float>(x) + 0.5f;  // h = x
+  }
+  WellsParams w;
+  w.pattern = WellPattern::contours;
+  w.contours.levels = {100.0};  // the line x = 100: within the radius, +x is toward it
+  w.radius_px = 100.0;
+  const EffectPtr wells = make_wells_effect(fields, kSide, kSide, w);
+  Region region = effect_region({0, 0, kSide, kSide}, uniform_effect(kSide, CurvatureClass::elliptic));
+  region.effects.push_back(wells);
+  const Scene scene({region});
+  const FrictionParams f;
+  CursorState cursor = cursor_at({20.5, 100.5});
+  int pulled = 0;
+  // One frame of `px` along x where friction alone displays `friction_px`: the display is the wells' pull of that.
+  auto frame = [&](double px, TimeUs t, double friction_px) {
+    const Vec2 from_friction{std::copysign(friction_px, px), 0.0};
+    EffectState stateless;
+    const Vec2 want = wells->apply({from_friction, t, cursor.position, cursor.texel}, stateless);
+    pulled += !(want == from_friction);
+    const Vec2 got = advance(scene, cursor, {px, 0.0}, t).display;
+    EXPECT_NEAR(got.x, want.x, 1e-12 * std::abs(want.x)) << px << " at " << t;
+    EXPECT_NEAR(got.y, want.y, 1e-12 * std::abs(want.x)) << px << " at " << t;
+  };
+  TimeUs t = 1'000'000;
+  for (int i = 0; i < 9; ++i) frame(1.0, t += kFrameUs, 1.0 / f.stuck_cd);
+  EXPECT_TRUE(cursor.effects[0].stuck);
+  frame(3.0, t += kFrameUs, 1.0 / f.stuck_cd + 2.0 / f.slip_cd);
+  EXPECT_FALSE(cursor.effects[0].stuck) << "broke away";
+  const auto just_under_rest = static_cast<TimeUs>(f.rest_ms * 1000) - 1;
+  for (int i = 0; i < 200; ++i) frame(i % 2 == 0 ? 0.25 : -0.25, t += just_under_rest, 0.25 / f.slip_cd);
+  EXPECT_FALSE(cursor.effects[0].stuck);
+  t += static_cast<TimeUs>(f.rest_ms * 1000);
+  frame(1.0, t, 1.0 / f.stuck_cd);
+  EXPECT_TRUE(cursor.effects[0].stuck) << "stuck again after a rest";
+  EXPECT_EQ(cursor.effects[0].owner, scene.regions()[0].effects[0].get());
+  EXPECT_EQ(cursor.effects[1].owner, wells.get());
+  EXPECT_EQ(pulled, 211) << "the wells pulled every frame; the cursor ended at x = " << cursor.position.x;
 }
 
 TEST(MaterialsFriction, BreakawayDoesNotDependOnTheFrameSize) {
@@ -342,7 +390,7 @@ TEST(Materials, ASustainedPushAlwaysLeavesTheRegionInBoundedTravel) {
       if (timing == 3 && u(0, 1) < 0.1) t -= static_cast<TimeUs>(u(0.0, 1e6));
       const TimeUs time = timing == 2 ? kNoTime : t;
       // The effect keeps its promise itself (advance() would quietly ignore it otherwise).
-      EffectState probe = cursor.effect;
+      EffectState probe = cursor.effects[0];
       if (probe.owner != effect.get()) probe = EffectState{true, 0.0, kNoTime, effect.get()};
       const Vec2 out = effect->apply({m, time, cursor.position, scene.regions()[0].local(cursor.texel)}, probe);
       ASSERT_TRUE(is_finite(out));
@@ -353,7 +401,7 @@ TEST(Materials, ASustainedPushAlwaysLeavesTheRegionInBoundedTravel) {
       const FrameResult result = advance(scene, cursor, m, time);
       motor += size;
       ASSERT_TRUE(is_finite(cursor.position));
-      ASSERT_TRUE(std::isfinite(cursor.effect.travel_px) && cursor.effect.travel_px >= 0.0);
+      ASSERT_TRUE(std::isfinite(cursor.effects[0].travel_px) && cursor.effects[0].travel_px >= 0.0);
       ASSERT_NEAR(length(result.display), size * gain, 1e-9 * size) << "the effect acted as probed";
       ASSERT_GE(result.cd_min, cd_low * (1 - 1e-9)) << scene_index;
       ASSERT_LE(result.cd_max, cd_high * (1 + 1e-9)) << scene_index;
@@ -391,15 +439,15 @@ TEST(Materials, ThePipelineUsesTheEventTimesOfRealFrames) {
   int stuck_out = 0;
   for (int i = 0; i < 12; ++i) stuck_out += frame(t += kFrameUs, 1);  // 12 counts: 10 stuck, 2 slipping
   EXPECT_NEAR(stuck_out, f.breakaway_px / f.stuck_cd + 2.0, 1.0);
-  EXPECT_FALSE(pipeline.cursor().effect.stuck);
+  EXPECT_FALSE(pipeline.cursor().effects[0].stuck);
   int slip_out = 0;
   for (int i = 0; i < 20; ++i) slip_out += frame(t += kFrameUs, 1);
   EXPECT_EQ(slip_out, 20);
-  EXPECT_EQ(pipeline.cursor().effect.last_motion, t);
+  EXPECT_EQ(pipeline.cursor().effects[0].last_motion, t);
   // A pause of rest_ms between two events: stuck again.
   t += static_cast<TimeUs>(f.rest_ms * 1000);
   frame(t, 1);
-  EXPECT_TRUE(pipeline.cursor().effect.stuck);
+  EXPECT_TRUE(pipeline.cursor().effects[0].stuck);
   int after_rest = 0;
   for (int i = 0; i < 5; ++i) after_rest += frame(t += kFrameUs, 1);
   EXPECT_LE(after_rest, 2);

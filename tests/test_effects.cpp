@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <stdexcept>
+#include <vector>
 
 #include "core/effect.hpp"
 #include "core/method_flat.hpp"
@@ -55,7 +57,7 @@ TEST(Effects, AFrameStartingInTheRegionIsRescaled) {
   EXPECT_DOUBLE_EQ(cursor.position.x, 155.5);
   EXPECT_DOUBLE_EQ(result.cd_min, 2.0);  // the hand moved twice as far as the cursor
   EXPECT_DOUBLE_EQ(result.cd_max, 2.0);
-  EXPECT_EQ(cursor.effect.last_motion, 1000);
+  EXPECT_EQ(cursor.effects[0].last_motion, 1000);
 }
 
 TEST(Effects, AFrameStartingOutsideIsNotRescaledEvenIfItEntersTheRegion) {
@@ -63,7 +65,7 @@ TEST(Effects, AFrameStartingOutsideIsNotRescaledEvenIfItEntersTheRegion) {
   CursorState cursor = cursor_at({90.5, 150.5});
   const FrameResult result = advance(scene, cursor, {20.0, 0.0}, TimeUs{0});
   EXPECT_EQ(result.display.x, 20.0);
-  EXPECT_EQ(cursor.effect.travel_px, 0.0);
+  EXPECT_EQ(cursor.effects[0].travel_px, 0.0);
   // The next frame starts inside: now it is.
   EXPECT_DOUBLE_EQ(advance(scene, cursor, {20.0, 0.0}, TimeUs{8000}).display.x, 10.0);
 }
@@ -74,23 +76,45 @@ TEST(Effects, StateStaysInTheCursorAndStartsAfreshInAnotherEffect) {
   const Scene scene({effect_region({0, 0, 100, 100}, {first}), effect_region({100, 0, 100, 100}, {second})});
   CursorState cursor = cursor_at({10.5, 50.5});
   for (int i = 0; i < 3; ++i) advance(scene, cursor, {1.0, 0.0}, TimeUs{i * 1000});
-  EXPECT_EQ(cursor.effect.owner, first.get());
-  EXPECT_EQ(cursor.effect.travel_px, 3.0);
+  EXPECT_EQ(cursor.effects[0].owner, first.get());
+  EXPECT_EQ(cursor.effects[0].travel_px, 3.0);
   cursor = [&] {
     CursorState c = cursor_at({150.5, 50.5});
-    c.effect = cursor.effect;  // carried over from the first region
+    c.effects = cursor.effects;  // carried over from the first region
     return c;
   }();
   advance(scene, cursor, {1.0, 0.0}, TimeUs{5000});
-  EXPECT_EQ(cursor.effect.owner, second.get());
-  EXPECT_EQ(cursor.effect.travel_px, 1.0) << "a new effect's state starts afresh";
+  EXPECT_EQ(cursor.effects[0].owner, second.get());
+  EXPECT_EQ(cursor.effects[0].travel_px, 1.0) << "a new effect's state starts afresh";
+}
+
+TEST(Effects, LayeredEffectsEachKeepTheirOwnStateAndEachScalesWhatTheOneBeforeHandedOn) {
+  const auto first = std::make_shared<ScaleEffect>(0.5);
+  const auto second = std::make_shared<ScaleEffect>(0.5);
+  const Scene scene({effect_region({0, 0, 100, 100}, {first, second})});
+  CursorState cursor = cursor_at({10.5, 50.5});
+  for (int i = 0; i < 3; ++i) {
+    // 0.25 of the motor: below the first effect's bound of the hand's travel, within the second's of its input.
+    EXPECT_DOUBLE_EQ(advance(scene, cursor, {4.0, 0.0}, TimeUs{i * 1000}).display.x, 1.0) << i;
+  }
+  EXPECT_EQ(cursor.effects[0].owner, first.get());
+  EXPECT_EQ(cursor.effects[1].owner, second.get());
+  EXPECT_EQ(cursor.effects[0].travel_px, 3.0) << "neither effect started the other afresh";
+  EXPECT_EQ(cursor.effects[1].travel_px, 3.0);
+}
+
+TEST(Effects, ARegionWithMoreEffectsThanTheCursorHoldsStatesForIsRefused) {
+  std::vector<EffectPtr> effects(kMaxEffectsPerRegion, std::make_shared<ScaleEffect>(1.0));
+  EXPECT_NO_THROW(Scene({effect_region({0, 0, 10, 10}, effects)}));
+  effects.push_back(std::make_shared<ScaleEffect>(1.0));
+  EXPECT_THROW(Scene({effect_region({0, 0, 10, 10}, effects)}), std::invalid_argument);
 }
 
 TEST(Effects, FramesWithoutTimeSeeNoTime) {
   const Scene scene({effect_region({0, 0, 100, 100}, {std::make_shared<ScaleEffect>(0.5)})});
   CursorState cursor = cursor_at({50.5, 50.5});
   advance(scene, cursor, {1.0, 0.0});
-  EXPECT_EQ(cursor.effect.last_motion, kNoTime);
+  EXPECT_EQ(cursor.effects[0].last_motion, kNoTime);
 }
 
 TEST(Effects, WhatBreaksAnEffectsPromiseIsIgnored) {
@@ -114,8 +138,8 @@ TEST(Effects, ThePipelinePassesTheFrameTimeAndKeepsTheStateAtTheDesktopEdge) {
   Frame frame;
   frame.events = {{7000, ev::kRel, ev::kRelX, 20}, {7000, ev::kSyn, ev::kSynReport, 0}};
   const Frame out = pipeline.process(frame);
-  EXPECT_EQ(pipeline.cursor().effect.last_motion, 7000);
-  EXPECT_EQ(pipeline.cursor().effect.travel_px, 1.0) << "kept through the clamp at the desktop's edge";
+  EXPECT_EQ(pipeline.cursor().effects[0].last_motion, 7000);
+  EXPECT_EQ(pipeline.cursor().effects[0].travel_px, 1.0) << "kept through the clamp at the desktop's edge";
   ASSERT_FALSE(out.events.empty());
   EXPECT_EQ(out.events[0].value, 10);  // half the motion was emitted
 }

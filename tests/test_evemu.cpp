@@ -1,6 +1,6 @@
-// evemu recordings (recording/evemu): the two real recordings of /work/shared/recordings (read there when
-// present, never copied into the project), round trips of read and written files, an error naming the line
-// for every kind of mistake, and inputs meant to hurt: an endless line, binary garbage.
+// evemu recordings (recording/evemu): the two real recordings in tests/data/recordings, round trips of read
+// and written files, an error naming the line for every kind of mistake, and inputs meant to hurt: an endless
+// line, binary garbage.
 #include "recording/evemu.hpp"
 
 #include <gtest/gtest.h>
@@ -24,10 +24,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-#ifndef PH_SHARED_RECORDINGS_DIR
-#define PH_SHARED_RECORDINGS_DIR "/work/shared/recordings"
-#endif
-const fs::path kRecordings = PH_SHARED_RECORDINGS_DIR;
+const fs::path kRecordings = PH_RECORDINGS_DIR;  // tests/data/recordings
 
 Recording read_text(const std::string& text) {
   std::istringstream in(text);
@@ -107,7 +104,7 @@ class RealRecordingTest : public testing::TestWithParam<RealRecording> {
  protected:
   void SetUp() override {
     path_ = kRecordings / GetParam().file;
-    if (!fs::exists(path_)) GTEST_SKIP() << path_ << " is not there";
+    ASSERT_TRUE(fs::is_regular_file(path_)) << path_ << " is missing (tests/data/recordings)";
   }
   Recording read() const {
     std::ifstream in(path_, std::ios::binary);
@@ -140,14 +137,14 @@ TEST_P(RealRecordingTest, ReadsDescriptionAndEvents) {
 
 TEST_P(RealRecordingTest, RoundTrips) { expect_round_trip(read()); }
 
-INSTANTIATE_TEST_SUITE_P(Shared, RealRecordingTest, testing::ValuesIn(real_recordings()),
+INSTANTIATE_TEST_SUITE_P(Recorded, RealRecordingTest, testing::ValuesIn(real_recordings()),
                          [](const testing::TestParamInfo<RealRecording>& info) {
                            return info.index == 0 ? "Ps2" : "Saitek";
                          });
 
 TEST(Evemu, SaitekHasWheelScanAndSideButtons) {
   const fs::path path = kRecordings / "saitek-cyborg-rat5.evemu";
-  if (!fs::exists(path)) GTEST_SKIP() << path << " is not there";
+  ASSERT_TRUE(fs::is_regular_file(path)) << path << " is missing (tests/data/recordings)";
   std::ifstream in(path, std::ios::binary);
   const Recording recording = read_evemu(in, path.string());
   EXPECT_TRUE(recording.device.has(ev::kRel, ev::kRelWheel));

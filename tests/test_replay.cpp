@@ -200,14 +200,14 @@ TEST(Replay, AbsoluteModeEmitsPositionsOnlyWithinTheDesktop) {
   EXPECT_FALSE(output.device.has(ev::kRel, ev::kRelY));
   EXPECT_TRUE(output.device.has(ev::kRel, ev::kRelWheel));
   EXPECT_TRUE(output.device.has(ev::kAbs, ev::kAbsX));
-  EXPECT_EQ(output.device.absinfo.at(ev::kAbsX).maximum, 799);
+  EXPECT_EQ(output.device.absinfo.at(ev::kAbsX).maximum, 1599);  // half pixels
   int positions = 0;
   for (const InputEvent& e : output.events) {
     ASSERT_FALSE(is_motion(e));
     if (e.type != ev::kAbs) continue;
     ++positions;
     ASSERT_GE(e.value, 0);
-    ASSERT_LE(e.value, e.code == ev::kAbsX ? 799 : 599);
+    ASSERT_LE(e.value, e.code == ev::kAbsX ? 1599 : 1199);
   }
   EXPECT_GT(positions, 300);
   // Pushed against the left edge, the model sits on it.
@@ -216,7 +216,7 @@ TEST(Replay, AbsoluteModeEmitsPositionsOnlyWithinTheDesktop) {
   f.events = {{0, ev::kRel, ev::kRelX, -50}, {0, ev::kSyn, ev::kSynReport, 0}};
   const Frame out = pipeline.process(f);
   EXPECT_EQ(out.events.front().type, ev::kAbs);
-  EXPECT_EQ(out.events.front().value, 0);
+  EXPECT_EQ(out.events.front().value, abs_value_of_pixel(0));  // the centre of the first pixel
 }
 
 TEST(Replay, RelativeModeWritesEachAxisOnceAFrame) {
@@ -280,8 +280,8 @@ TEST(Replay, IsDeterministic) {
 }
 
 TEST(Replay, RealRecordingsOnFlatSceneAreBitIdentical) {
-  const auto files = testing::shared_recordings();
-  if (files.empty()) GTEST_SKIP() << "no shared recordings beside the project";
+  const auto files = testing::recorded_mice();
+  ASSERT_EQ(testing::missing_file(files), "");
   for (const auto& file : files) {
     const Recording input = read_recording_file(file.string());
     ASSERT_GT(input.events.size(), 100u);
@@ -293,8 +293,8 @@ TEST(Replay, RealRecordingsOnFlatSceneAreBitIdentical) {
 // Over the default scene, in both output modes, every non-motion event of the real recordings stays in its
 // frame, in order; the cursor model starts on each target in turn so that the texture changes the motion.
 TEST(Replay, RealRecordingsKeepNonMotionEventsInTheirFrame) {
-  const auto files = testing::shared_recordings();
-  if (files.empty()) GTEST_SKIP() << "no shared recordings beside the project";
+  const auto files = testing::recorded_mice();
+  ASSERT_EQ(testing::missing_file(files), "");
   const Scene scene = default_scene();
   for (const auto& file : files) {
     const Recording input = read_recording_file(file.string());

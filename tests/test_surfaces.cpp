@@ -77,7 +77,7 @@ TEST(Surfaces, DerivativesMatchFiniteDifferencesOfTheHeight) {
   }
 }
 
-// The formulas of ALGORITHMS.md section 7 against curvatures known in closed form.
+// The formulas of docs/INTERROGATION.md, "Curvature", against curvatures known in closed form.
 TEST(Surfaces, KnownCurvatures) {
   const SurfaceSpec sphere{SurfaceKind::sphere, 512};
   const double r_sphere = 3 * sphere.half_size();

@@ -354,7 +354,8 @@ TEST(Tool, TraceMapErrorsNameTheFileOnce) {
   }
 }
 
-// ALGORITHMS.md section 1: invalid texels are counted and reported at load; trace warns on stderr, per map.
+// Invalid texels are counted and reported at load (docs/METHODS.md, "Screen, regions and fields"); trace warns
+// on stderr, per map.
 TEST(Tool, TraceWarnsOfInvalidTexels) {
   ScratchDir dir;
   NormalImage holes(4, 4);  // flat, with 3 texels facing away from the viewer

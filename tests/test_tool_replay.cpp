@@ -332,15 +332,15 @@ TEST(ReplayTool, RelativeAndAbsoluteOutputModes) {
   EXPECT_FALSE(absolute.device.has(ev::kRel, ev::kRelY));
   EXPECT_TRUE(absolute.device.has(ev::kRel, ev::kRelWheel));
   EXPECT_TRUE(absolute.device.has(ev::kAbs, ev::kAbsX));
-  EXPECT_EQ(absolute.device.absinfo.at(ev::kAbsX).maximum, 799);
-  EXPECT_EQ(absolute.device.absinfo.at(ev::kAbsY).maximum, 599);
+  EXPECT_EQ(absolute.device.absinfo.at(ev::kAbsX).maximum, 1599);  // half pixels
+  EXPECT_EQ(absolute.device.absinfo.at(ev::kAbsY).maximum, 1199);
   int positions = 0;
   for (const InputEvent& e : absolute.events) {
     EXPECT_FALSE(e.type == ev::kRel && (e.code == ev::kRelX || e.code == ev::kRelY));
     if (e.type != ev::kAbs) continue;
     ++positions;
     EXPECT_GE(e.value, 0);
-    EXPECT_LE(e.value, e.code == ev::kAbsX ? 799 : 599);
+    EXPECT_LE(e.value, e.code == ev::kAbsX ? 1599 : 1199);
   }
   EXPECT_GT(positions, 300);
   EXPECT_EQ(evemu_of(relative).device, input.device);
@@ -622,8 +622,8 @@ TEST(ReplayTool, ReplacesARegularFileKeepingItsMode) {
 
 TEST(ReplayTool, IsDeterministicAcrossProcesses) {
   ScratchDir dir;
-  const auto shared = testing::shared_recordings();
-  const fs::path in = shared.empty() ? stroke_file(dir, "in.evemu", 2000, 4, 3) : shared.front();
+  const fs::path in = testing::recorded_mice().front();
+  ASSERT_EQ(testing::missing_file({in}), "");
   for (const char* run : {"a", "b"}) {
     const ToolResult r = run_tool("replay --trace " + quote(dir / (std::string(run) + ".csv")) + " " + quote(in) + " " +
                                       quote(dir / (std::string(run) + ".evemu")),

@@ -1,4 +1,4 @@
-// The exact per-texel traversal (ALGORITHMS.md section 5) against its invariants and against an
+// The exact per-texel traversal (docs/METHODS.md, "The traversal") against its invariants and against an
 // independent reference integral.
 #include <gtest/gtest.h>
 

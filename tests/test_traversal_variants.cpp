@@ -1,5 +1,5 @@
-// The traversal variants of issue 6 (core/engine_options.hpp): the invariants every variant keeps, and
-// how far each ends from the exact traversal on the paper's targets (the bounds docs/METHODS.md gives).
+// The traversal variants (core/engine_options.hpp; docs/METHODS.md, "Traversal variants"): the invariants every variant
+// keeps, and how far each ends from the exact traversal on the paper's targets (the bounds docs/METHODS.md gives).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -36,8 +36,8 @@ TEST(Uinput, AbsoluteOutputIsATabletLikePointerWithoutRelativeMotion) {
   EXPECT_TRUE(libevdev_has_event_code(dev.get(), EV_REL, REL_WHEEL));  // wheels stay relative
   ASSERT_TRUE(libevdev_has_event_code(dev.get(), EV_ABS, ABS_X));
   EXPECT_EQ(libevdev_get_abs_minimum(dev.get(), ABS_X), 0);
-  EXPECT_EQ(libevdev_get_abs_maximum(dev.get(), ABS_X), 2559);
-  EXPECT_EQ(libevdev_get_abs_maximum(dev.get(), ABS_Y), 1439);
+  EXPECT_EQ(libevdev_get_abs_maximum(dev.get(), ABS_X), 5119);  // half pixels
+  EXPECT_EQ(libevdev_get_abs_maximum(dev.get(), ABS_Y), 2879);
   EXPECT_TRUE(libevdev_has_event_code(dev.get(), EV_KEY, BTN_LEFT));
 }
 

@@ -153,7 +153,7 @@ COST_KEYS = ("ns_per_frame_median", "bytes_per_texel", "precompute_ms")
 
 
 def cost_front(group, ykey):
-    """Names of the variants no other variant of the group dominates on every cost the issue counts as speed
+    """Names of the variants no other variant of the group dominates on every cost counted as speed
     (time per frame, memory per texel, precompute time) and on ykey at once."""
     keys = [k for k in COST_KEYS if all(finite(v.get(k)) for v in group)] + [ykey]
     ok = [v for v in group if all(finite(v.get(k)) for k in keys)]

@@ -1,5 +1,5 @@
-// `pseudohaptic accuracy OUTDIR [--small]`: speed against accuracy of every variant of the engine (issue 6), from
-// one binary, as CSV for tools/charts.py.
+// `pseudohaptic accuracy OUTDIR [--small]`: speed against accuracy of every variant of the engine
+// (docs/SPEED_VS_ACCURACY.md), from one binary, as CSV for tools/charts.py.
 //
 // Variants: method (curvature, depth) x storage x engine options (core/engine_options.hpp: every traversal with
 // every sampling it accepts, direction_lut with 8 and 16 directions). Storage is how a user's map reaches the

@@ -36,6 +36,9 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
   } else {
     fmt::format_to(to, "  desktop: auto\n");
   }
+  const AccelSettings accel = acceleration_of(d);
+  fmt::format_to(to, "  acceleration: {} (speed {}, {} dpi){}\n", accel_profile_name(accel.profile), accel.speed,
+                 accel.dpi, d.acceleration ? "" : " by default for this output");
   fmt::format_to(to, "  pointer_speed: {}\n", d.pointer_speed);
   fmt::format_to(to, "  engine: {}\n", label_of(d.engine));
   fmt::format_to(to, "regions: {}\n", spec.regions.size());

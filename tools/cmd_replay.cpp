@@ -33,6 +33,8 @@ struct ReplayOptions {
   std::vector<double> start;
   std::vector<std::int32_t> desktop;
   std::string mode = "relative";
+  std::string acceleration = "flat";
+  double speed = 0.0, mouse_dpi = 1000.0;
   double gain = 1.0;
   std::size_t device = 0;
   bool device_given = false;
@@ -215,6 +217,8 @@ int run_replay(const ReplayOptions& o) {
   PipelineConfig config;
   config.pointer_gain = o.gain;
   config.mode = o.mode == "absolute" ? OutputMode::absolute : OutputMode::relative;
+  config.acceleration = {o.acceleration == "adaptive" ? AccelProfile::adaptive : AccelProfile::flat, o.speed,
+                         o.mouse_dpi};
   if (o.desktop.size() == 4) config.desktop = {o.desktop[0], o.desktop[1], o.desktop[2], o.desktop[3]};
   if (config.desktop.w <= 0 || config.desktop.h <= 0)
     throw std::invalid_argument("--desktop: width and height must be > 0");
@@ -267,6 +271,17 @@ Run add_replay_command(CLI::App& app) {
       ->expected(2);
   app.add_option("--output-mode", o->mode, "relative: REL_X/REL_Y with fractional carry; absolute: ABS_X/ABS_Y")
       ->check(CLI::IsMember({"relative", "absolute"}))
+      ->capture_default_str();
+  app.add_option("--acceleration", o->acceleration,
+                 "Pointer acceleration before the C/D, as the daemon's [daemon] acceleration (flat at speed 0 is "
+                 "none)")
+      ->check(CLI::IsMember({"flat", "adaptive"}))
+      ->capture_default_str();
+  app.add_option("--speed", o->speed, "Acceleration speed setting, -1 to 1 (as the desktop's slider)")
+      ->check(CLI::Range(-1.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--mouse-dpi", o->mouse_dpi, "The recorded mouse's resolution, for the adaptive profile")
+      ->check(CLI::Range(kMinMouseDpi, kMaxMouseDpi))
       ->capture_default_str();
   app.add_option("--desktop", o->desktop,
                  "X,Y,W,H desktop rectangle the cursor model is kept in (default 0,0,1920,1080)")

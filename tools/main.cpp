@@ -36,6 +36,9 @@ int main(int argc, char** argv) {
       ph::tools::add_accuracy_command);
   add("check-config", "Check a scene file (the daemon's config): its [daemon] table, regions and images",
       ph::tools::add_check_config_command);
+  add("status", "Ask the running daemon what it does (output, mice, scene, desktop, cursor model, session helper)",
+      ph::tools::add_status_command);
+  add("cursor", "Print the running daemon's cursor model, or move it with --set X,Y", ph::tools::add_cursor_command);
 
   // CLI11 answers a misspelt command with only "A subcommand is required": name it and list the commands.
   if (argc > 1 && argv[1][0] != '-') {

@@ -1,4 +1,4 @@
-// The daemon's virtual output device, through libevdev's uinput API (ALGORITHMS.md section 6).
+// The daemon's virtual output device, through libevdev's uinput API (docs/METHODS.md, "Cursor and output").
 #pragma once
 
 #include <libevdev/libevdev-uinput.h>

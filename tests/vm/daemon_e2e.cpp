@@ -12,8 +12,8 @@
 // Three parts, each with a fresh daemon (or none): latency of the test mouse's own node; the daemon with a
 // flat config file (held button at start, identity, latency, SIGHUP reloads, SIGTERM with a held button);
 // the daemon with the embedded default scene (grab exclusivity, the offline pipeline's output over a
-// texture, latency, hotplug, two mice, SYN_DROPPED, SIGTERM). Numbers in brackets are the items of the
-// issue's "VM end-to-end tests".
+// texture, latency, hotplug, two mice, SYN_DROPPED, SIGTERM). Numbers in brackets number the cases; tests/vm/README.md
+// lists them.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -559,9 +559,9 @@ void flat_part(Report& report, const Options& options, Latency& latency) {
         ::ioctl(out->fd(), EVIOCGABS(ABS_Y), &y);
         check.expect((abs_bits & 3UL) == 3UL, "expected ABS_X and ABS_Y on the absolute device");
         check.expect((rel_bits & 3UL) == 0UL, "expected no REL_X/REL_Y next to ABS_X/ABS_Y");
-        check.expect(x.minimum == 0 && x.maximum == 1919 && y.minimum == 0 && y.maximum == 1079,
-                     fmt::format("expected ABS ranges 0..1919 x 0..1079, got {}..{} x {}..{}", x.minimum, x.maximum,
-                                 y.minimum, y.maximum));
+        check.expect(x.minimum == 0 && x.maximum == 3839 && y.minimum == 0 && y.maximum == 2159,
+                     fmt::format("expected ABS ranges 0..3839 x 0..2159 (half pixels), got {}..{} x {}..{}", x.minimum,
+                                 x.maximum, y.minimum, y.maximum));
         ph::PipelineConfig absolute = pipeline_config();
         absolute.mode = ph::OutputMode::absolute;
         absolute.start = model.cursor().position;  // the daemon keeps its cursor across the switch
@@ -592,7 +592,7 @@ void flat_part(Report& report, const Options& options, Latency& latency) {
         }
         check.expect(moved > 0, "expected ABS_X/ABS_Y events in place of the REL motion, got none");
         check.note(
-            fmt::format("{} has ABS_X 0..1919, ABS_Y 0..1079, no REL_X/Y; {} frames equal to the offline "
+            fmt::format("{} has ABS_X 0..3839, ABS_Y 0..2159 (half pixels), no REL_X/Y; {} frames equal to the offline "
                         "absolute pipeline started at the kept cursor",
                         node, frames));
       });

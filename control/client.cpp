@@ -1,0 +1,83 @@
+#include "control/client.hpp"
+
+#include <fmt/format.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <cstring>
+
+namespace ph::control {
+
+Client::Client(const std::string& path) {
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  if (path.size() >= sizeof address.sun_path) throw ControlError(fmt::format("{}: path too long", path));
+  std::memcpy(address.sun_path, path.c_str(), path.size() + 1);
+  fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd_ < 0) throw ControlError(fmt::format("cannot create a socket: {}", std::strerror(errno)));
+  if (::connect(fd_, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) {
+    const int error = errno;
+    ::close(fd_);
+    fd_ = -1;
+    const char* advice = error == ENOENT || error == ECONNREFUSED
+                             ? " (is pseudohapticd running? `systemctl status pseudohapticd`)"
+                         : error == EACCES ? " (only root and the user of the active local session may use it)"
+                                           : "";
+    throw ControlError(fmt::format("cannot connect to {}: {}{}", path, std::strerror(error), advice));
+  }
+}
+
+Client::~Client() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool Client::send_line(std::string_view line) {
+  std::string text(line);
+  text += '\n';
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::send(fd_, text.data() + done, text.size() - done, MSG_NOSIGNAL);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+std::optional<std::string> Client::read_line(std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (true) {
+    if (auto line = lines_.next_line()) return line;
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) return std::nullopt;
+    pollfd p{fd_, POLLIN, 0};
+    const int ready = ::poll(&p, 1, static_cast<int>(left.count()));
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready <= 0) return std::nullopt;
+    std::array<char, 4096> buffer{};
+    const ssize_t n = ::recv(fd_, buffer.data(), buffer.size(), 0);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw ControlError("pseudohapticd closed the connection");
+    if (!lines_.append({buffer.data(), static_cast<std::size_t>(n)}))
+      throw ControlError("pseudohapticd sent a line longer than the protocol allows");
+  }
+}
+
+Reply Client::request(std::string_view line, std::chrono::milliseconds timeout) {
+  if (!send_line(line)) throw ControlError(fmt::format("cannot send to pseudohapticd: {}", std::strerror(errno)));
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (true) {
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const std::optional<std::string> got = read_line(std::max(left, std::chrono::milliseconds(0)));
+    if (!got) throw ControlError("pseudohapticd did not answer in time");
+    if (auto reply = parse_reply(*got)) return *reply;
+  }
+}
+
+}  // namespace ph::control

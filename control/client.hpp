@@ -1,0 +1,43 @@
+// A connection to pseudohapticd's control socket, for the tool and the session helper (docs/SERVICE.md,
+// "The control socket").
+#pragma once
+
+#include <chrono>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include "control/protocol.hpp"
+
+namespace ph::control {
+
+class ControlError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class Client {
+ public:
+  // Connects; throws ControlError saying what to do (the daemon not running, no permission).
+  explicit Client(const std::string& path);
+  ~Client();
+  Client(const Client&) = delete;
+  Client& operator=(const Client&) = delete;
+
+  // Sends one line and waits for the next line that is a reply (`ok ...` or `error ...`), skipping lines
+  // the daemon sends on its own (`query`, to a helper). Throws ControlError when the daemon closes the connection or
+  // says nothing within the timeout.
+  Reply request(std::string_view line, std::chrono::milliseconds timeout = std::chrono::seconds(2));
+  bool send_line(std::string_view line);
+  // The next line, waiting at most `timeout`; nullopt on a time-out; throws ControlError at the end.
+  std::optional<std::string> read_line(std::chrono::milliseconds timeout);
+
+  int fd() const { return fd_; }
+
+ private:
+  int fd_ = -1;
+  LineBuffer lines_;
+};
+
+}  // namespace ph::control

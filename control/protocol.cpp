@@ -1,0 +1,210 @@
+#include "control/protocol.hpp"
+
+#include <fmt/format.h>
+
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
+#include <vector>
+
+namespace ph::control {
+
+namespace {
+
+std::vector<std::string_view> words_of(std::string_view line) {
+  std::vector<std::string_view> words;
+  std::size_t at = 0;
+  while (at < line.size()) {
+    const std::size_t end = std::min(line.find(' ', at), line.size());
+    if (end > at) words.push_back(line.substr(at, end - at));
+    at = end + 1;
+  }
+  return words;
+}
+
+std::optional<double> number(std::string_view text) {
+  double v = 0.0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+std::optional<std::int32_t> integer(std::string_view text) {
+  std::int32_t v = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (error != std::errc() || end != text.data() + text.size()) return std::nullopt;
+  return v;
+}
+
+// Coordinates past this are not a desktop (the scene file's limit too).
+constexpr double kMaxCoordinate = 1 << 20;
+
+bool printable_word(std::string_view w) {
+  if (w.empty() || w.size() > 32) return false;
+  for (const char c : w) {
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.')) return false;
+  }
+  return true;
+}
+
+std::variant<Request, std::string> parse_position(const std::vector<std::string_view>& w) {
+  if (w.size() != 3) return std::string("position needs X Y (px)");
+  const auto x = number(w[1]), y = number(w[2]);
+  if (!x || !y) return std::string("position: X and Y must be finite numbers");
+  if (std::fabs(*x) > kMaxCoordinate || std::fabs(*y) > kMaxCoordinate)
+    return fmt::format("position: X and Y must be within ±{}", kMaxCoordinate);
+  return Request{PositionRequest{{*x, *y}}};
+}
+
+std::variant<Request, std::string> parse_layout(const std::vector<std::string_view>& w) {
+  if (w.size() != 5) return std::string("layout needs X Y W H (whole px)");
+  const auto x = integer(w[1]), y = integer(w[2]), width = integer(w[3]), height = integer(w[4]);
+  if (!x || !y || !width || !height) return std::string("layout: X Y W H must be whole numbers");
+  const auto limit = static_cast<std::int32_t>(kMaxCoordinate);
+  if (*width < 1 || *height < 1 || *width > limit || *height > limit || std::abs(*x) > limit || std::abs(*y) > limit)
+    return fmt::format("layout: W and H must be from 1 to {}, X and Y within ±{}", limit, limit);
+  return Request{LayoutRequest{{*x, *y, *width, *height}}};
+}
+
+}  // namespace
+
+std::variant<Request, std::string> parse_request(std::string_view line) {
+  if (line.size() > kMaxLine) return std::string("line too long");
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  const std::vector<std::string_view> w = words_of(line);
+  if (w.empty()) return std::string("empty request");
+  const std::string_view verb = w[0];
+  if (verb == "status" || verb == "cursor") {
+    if (w.size() != 1) return fmt::format("{} takes no arguments", verb);
+    if (verb == "status") return Request{StatusRequest{}};
+    return Request{CursorRequest{}};
+  }
+  if (verb == "position") return parse_position(w);
+  if (verb == "layout") return parse_layout(w);
+  if (verb == "helper") {
+    if (w.size() != 2 || !printable_word(w[1]))
+      return std::string("helper needs one backend name (letters, digits, -_.)");
+    return Request{HelperRequest{std::string(w[1])}};
+  }
+  return std::string("unknown request; expected status, cursor, position X Y, layout X Y W H or helper NAME");
+}
+
+std::string format_request(const Request& request) {
+  struct Format {
+    std::string operator()(const StatusRequest&) const { return "status"; }
+    std::string operator()(const CursorRequest&) const { return "cursor"; }
+    std::string operator()(const PositionRequest& r) const {
+      return fmt::format("position {} {}", r.position.x, r.position.y);
+    }
+    std::string operator()(const LayoutRequest& r) const {
+      return fmt::format("layout {} {} {} {}", r.desktop.x, r.desktop.y, r.desktop.w, r.desktop.h);
+    }
+    std::string operator()(const HelperRequest& r) const { return "helper " + r.backend; }
+  };
+  return std::visit(Format{}, request);
+}
+
+std::string format_ok(std::string_view words) { return words.empty() ? "ok" : fmt::format("ok {}", words); }
+
+std::string format_error(std::string_view reason) {
+  std::string clean(reason.substr(0, kMaxLine - 6));
+  for (char& c : clean) {
+    if (c == '\n' || c == '\r') c = ' ';
+  }
+  return "error " + clean;
+}
+
+std::string format_status(const Status& s) {
+  return format_ok(fmt::format("mode={} mice={} regions={} desktop={},{},{},{} cursor={},{} helper={} scene={}",
+                               s.absolute ? "absolute" : "relative", s.mice, s.regions, s.desktop.x, s.desktop.y,
+                               s.desktop.w, s.desktop.h, s.cursor.x, s.cursor.y, s.helper ? "yes" : "no",
+                               s.scene.empty() ? "default" : s.scene));
+}
+
+std::string format_cursor(Vec2 cursor) { return format_ok(fmt::format("{} {}", cursor.x, cursor.y)); }
+
+std::optional<Reply> parse_reply(std::string_view line) {
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  if (line == "ok") return Reply{true, ""};
+  if (line.starts_with("ok ")) return Reply{true, std::string(line.substr(3))};
+  if (line.starts_with("error ")) return Reply{false, std::string(line.substr(6))};
+  return std::nullopt;
+}
+
+std::optional<Vec2> parse_cursor(std::string_view words) {
+  const std::vector<std::string_view> w = words_of(words);
+  if (w.size() != 2) return std::nullopt;
+  const auto x = number(w[0]), y = number(w[1]);
+  if (!x || !y) return std::nullopt;
+  return Vec2{*x, *y};
+}
+
+std::optional<Status> parse_status(std::string_view words) {
+  Status s;
+  int seen = 0;
+  // The scene's path comes last and may hold spaces.
+  const std::size_t scene_at = words.starts_with("scene=") ? 0 : words.find(" scene=");
+  if (scene_at == std::string_view::npos) return std::nullopt;
+  s.scene = std::string(words.substr(scene_at + (scene_at == 0 ? 6 : 7)));
+  words = words.substr(0, scene_at);
+  ++seen;
+  for (const std::string_view word : words_of(words)) {
+    const std::size_t eq = word.find('=');
+    if (eq == std::string_view::npos) return std::nullopt;
+    const std::string_view key = word.substr(0, eq), value = word.substr(eq + 1);
+    std::vector<std::string_view> parts;
+    for (std::size_t at = 0; at <= value.size();) {
+      const std::size_t end = std::min(value.find(',', at), value.size());
+      parts.push_back(value.substr(at, end - at));
+      at = end + 1;
+    }
+    bool good = true;
+    if (key == "mode") {
+      good = value == "absolute" || value == "relative";
+      s.absolute = value == "absolute";
+    } else if (key == "mice" || key == "regions") {
+      const auto n = integer(value);
+      good = n.has_value();
+      (key == "mice" ? s.mice : s.regions) = n.value_or(0);
+    } else if (key == "desktop") {
+      std::int32_t v[4] = {};
+      good = parts.size() == 4;
+      for (std::size_t i = 0; good && i < 4; ++i) {
+        const auto n = integer(parts[i]);
+        good = n.has_value();
+        v[i] = n.value_or(0);
+      }
+      s.desktop = {v[0], v[1], v[2], v[3]};
+    } else if (key == "cursor") {
+      good = parts.size() == 2 && number(parts[0]) && number(parts[1]);
+      if (good) s.cursor = {*number(parts[0]), *number(parts[1])};
+    } else if (key == "helper") {
+      good = value == "yes" || value == "no";
+      s.helper = value == "yes";
+    } else {
+      continue;  // a newer daemon may say more
+    }
+    if (!good) return std::nullopt;
+    ++seen;
+  }
+  if (seen < 7) return std::nullopt;
+  return s;
+}
+
+bool LineBuffer::append(std::string_view bytes) {
+  pending_.append(bytes);
+  const std::size_t newline = pending_.rfind('\n');
+  const std::size_t tail = newline == std::string::npos ? pending_.size() : pending_.size() - newline - 1;
+  return tail <= kMaxLine;
+}
+
+std::optional<std::string> LineBuffer::next_line() {
+  const std::size_t newline = pending_.find('\n');
+  if (newline == std::string::npos) return std::nullopt;
+  std::string line = pending_.substr(0, newline);
+  pending_.erase(0, newline + 1);
+  return line;
+}
+
+}  // namespace ph::control

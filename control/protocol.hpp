@@ -1,0 +1,72 @@
+// The control socket's protocol (docs/SERVICE.md, "The control socket"): one request per line, one reply
+// line per request, words separated by spaces, numbers in the C locale. Pure: parsing and formatting
+// only; the daemon, the tool and the session helper do the I/O.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+
+#include "core/geometry.hpp"
+
+namespace ph::control {
+
+inline constexpr std::size_t kMaxLine = 1024;  // bytes, without the newline
+inline constexpr std::string_view kDefaultSocket = "/run/pseudohaptic/control";
+
+struct StatusRequest {};
+struct CursorRequest {};
+struct PositionRequest {  // the desktop's real cursor, logical px
+  Vec2 position;
+};
+struct LayoutRequest {  // the bounding box of all outputs, logical px
+  Rect desktop;
+};
+struct HelperRequest {  // this connection is the session helper, with this backend
+  std::string backend;
+};
+using Request = std::variant<StatusRequest, CursorRequest, PositionRequest, LayoutRequest, HelperRequest>;
+
+// A request, or the reason it is malformed (sent back as `error REASON`).
+std::variant<Request, std::string> parse_request(std::string_view line);
+std::string format_request(const Request& request);  // without the newline
+
+// What `status` answers.
+struct Status {
+  bool absolute = true;
+  int mice = 0;
+  int regions = 0;
+  Rect desktop;
+  Vec2 cursor;
+  bool helper = false;
+  std::string scene;  // a path, or "default"
+};
+
+std::string format_ok(std::string_view words = {});
+std::string format_error(std::string_view reason);
+std::string format_status(const Status& status);
+std::string format_cursor(Vec2 cursor);
+
+// A reply: ok with its words, or an error with its reason.
+struct Reply {
+  bool ok = false;
+  std::string text;  // the words after `ok`, or the error's reason
+};
+std::optional<Reply> parse_reply(std::string_view line);
+std::optional<Status> parse_status(std::string_view words);
+std::optional<Vec2> parse_cursor(std::string_view words);
+
+// Splits a byte stream into lines of at most kMaxLine bytes.
+class LineBuffer {
+ public:
+  // False when a line grew past kMaxLine without its newline: the peer is not speaking the protocol.
+  bool append(std::string_view bytes);
+  std::optional<std::string> next_line();
+
+ private:
+  std::string pending_;
+};
+
+}  // namespace ph::control

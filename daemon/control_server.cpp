@@ -1,0 +1,172 @@
+#include "daemon/control_server.hpp"
+
+#include <fmt/format.h>
+#include <sys/epoll.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+
+#include <array>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
+
+namespace ph {
+
+namespace {
+
+[[noreturn]] void fail(std::string_view what, const std::string& path) {
+  throw std::runtime_error(fmt::format("control socket {}: {}: {}", path, what, std::strerror(errno)));
+}
+
+}  // namespace
+
+std::string default_control_path() {
+  if (const char* runtime = std::getenv("RUNTIME_DIRECTORY"); runtime != nullptr && *runtime != '\0') {
+    std::string dir(runtime);
+    if (const std::size_t colon = dir.find(':'); colon != std::string::npos) dir.resize(colon);
+    return dir + "/control";
+  }
+  return std::string(control::kDefaultSocket);
+}
+
+ControlServer::ControlServer(std::string path, int epoll, const SessionDirectory& sessions, const Logger& log)
+    : path_(std::move(path)), epoll_(epoll), sessions_(sessions), log_(log) {
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  if (path_.size() >= sizeof address.sun_path) {
+    errno = ENAMETOOLONG;
+    fail("cannot use the path", path_);
+  }
+  std::memcpy(address.sun_path, path_.c_str(), path_.size() + 1);
+  listener_ = UniqueFd(::socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
+  if (!listener_) fail("cannot create the socket", path_);
+  struct stat st {};
+  if (::lstat(path_.c_str(), &st) == 0 && S_ISSOCK(st.st_mode)) ::unlink(path_.c_str());  // a stale one
+  if (::bind(listener_.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0)
+    fail("cannot bind", path_);
+  // Everyone may connect; who may talk is decided per connection from its credentials.
+  if (::chmod(path_.c_str(), 0666) != 0) fail("cannot set its permissions", path_);
+  if (::listen(listener_.get(), 8) != 0) fail("cannot listen", path_);
+  epoll_event event{};
+  event.events = EPOLLIN;
+  event.data.fd = listener_.get();
+  if (::epoll_ctl(epoll_, EPOLL_CTL_ADD, listener_.get(), &event) != 0) fail("cannot watch it", path_);
+}
+
+ControlServer::~ControlServer() {
+  if (listener_) ::unlink(path_.c_str());
+}
+
+void ControlServer::on_readable(int fd, ControlHandler& handler) {
+  if (fd == listener_.get()) {
+    accept_client();
+  } else {
+    read_client(fd, handler);
+  }
+}
+
+void ControlServer::accept_client() {
+  while (true) {
+    UniqueFd fd(::accept4(listener_.get(), nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC));
+    if (!fd) return;  // EAGAIN: no more waiting
+    ucred peer{};
+    socklen_t length = sizeof peer;
+    if (::getsockopt(fd.get(), SOL_SOCKET, SO_PEERCRED, &peer, &length) != 0) continue;
+    if (const auto refusal = control_refusal(peer.uid, sessions_)) {
+      log_.warning("control socket: refused pid {} ({})", peer.pid, *refusal);
+      send_line(fd.get(), control::format_error("permission denied: " + *refusal));
+      continue;
+    }
+    if (clients_.size() >= kMaxClients) {
+      send_line(fd.get(), control::format_error("too many connections"));
+      continue;
+    }
+    epoll_event event{};
+    event.events = EPOLLIN;
+    event.data.fd = fd.get();
+    if (::epoll_ctl(epoll_, EPOLL_CTL_ADD, fd.get(), &event) != 0) continue;
+    log_.debug("control socket: pid {} (uid {}) connected", peer.pid, peer.uid);
+    auto client = std::make_unique<Client>();
+    client->uid = peer.uid;
+    const int key = fd.get();
+    client->fd = std::move(fd);
+    clients_.emplace(key, std::move(client));
+  }
+}
+
+void ControlServer::read_client(int fd, ControlHandler& handler) {
+  const auto it = clients_.find(fd);
+  if (it == clients_.end()) return;
+  Client& client = *it->second;
+  std::array<char, 4096> buffer{};
+  const ssize_t n = ::recv(fd, buffer.data(), buffer.size(), 0);
+  if (n < 0 && (errno == EAGAIN || errno == EINTR)) return;
+  if (n <= 0) {
+    drop(fd, handler);
+    return;
+  }
+  if (!client.lines.append({buffer.data(), static_cast<std::size_t>(n)})) {
+    log_.warning("control socket: a line over {} bytes; closing that connection", control::kMaxLine);
+    send_line(fd, control::format_error("line too long"));
+    drop(fd, handler);
+    return;
+  }
+  while (auto line = client.lines.next_line()) {
+    if (!send_line(fd, answer(fd, *line, handler))) {
+      drop(fd, handler);
+      return;
+    }
+  }
+}
+
+std::string ControlServer::answer(int fd, const std::string& line, ControlHandler& handler) {
+  const auto parsed = control::parse_request(line);
+  if (const auto* error = std::get_if<std::string>(&parsed)) return control::format_error(*error);
+  const control::Request& request = std::get<control::Request>(parsed);
+  if (std::holds_alternative<control::StatusRequest>(request)) {
+    control::Status status = handler.status();
+    status.helper = has_helper();
+    return control::format_status(status);
+  }
+  if (std::holds_alternative<control::CursorRequest>(request)) return control::format_cursor(handler.cursor());
+  if (const auto* p = std::get_if<control::PositionRequest>(&request)) {
+    handler.position(p->position, fd == helper_fd_);
+    return control::format_ok();
+  }
+  if (const auto* l = std::get_if<control::LayoutRequest>(&request)) {
+    handler.layout(l->desktop);
+    return control::format_ok();
+  }
+  const auto& h = std::get<control::HelperRequest>(request);
+  const bool had = has_helper();
+  helper_fd_ = fd;  // the newest helper wins: a restarted session replaces the old one
+  log_.info("control socket: session helper '{}' connected (uid {})", h.backend, clients_.at(fd)->uid);
+  if (!had) handler.helper_changed(true);
+  return control::format_ok();
+}
+
+bool ControlServer::send_line(int fd, const std::string& line) {
+  const std::string text = line + '\n';
+  // Never block the event loop: a client whose socket buffer is full has stopped reading.
+  const ssize_t n = ::send(fd, text.data(), text.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+  return n == static_cast<ssize_t>(text.size());
+}
+
+void ControlServer::query_helper() {
+  if (helper_fd_ < 0) return;
+  if (!send_line(helper_fd_, "query")) log_.debug("control socket: the session helper did not take a query");
+}
+
+void ControlServer::drop(int fd, ControlHandler& handler) {
+  ::epoll_ctl(epoll_, EPOLL_CTL_DEL, fd, nullptr);
+  if (fd == helper_fd_) {
+    helper_fd_ = -1;
+    log_.info("control socket: the session helper went away");
+    handler.helper_changed(false);
+  }
+  clients_.erase(fd);
+}
+
+}  // namespace ph

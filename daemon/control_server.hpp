@@ -1,0 +1,73 @@
+// The daemon's end of the control socket (docs/SERVICE.md, "The control socket"): accepts connections
+// from root and the active local user, reads their requests line by line and answers each through a
+// ControlHandler, on the daemon's event loop. A client that floods it or stops reading is dropped: the
+// cursor never waits for a client.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+
+#include "control/protocol.hpp"
+#include "daemon/control_access.hpp"
+#include "daemon/log.hpp"
+#include "daemon/unique_fd.hpp"
+
+namespace ph {
+
+class ControlHandler {
+ public:
+  virtual ~ControlHandler() = default;
+  virtual control::Status status() const = 0;
+  virtual Vec2 cursor() const = 0;
+  // from_helper: the session helper's report (filtered against what the daemon emitted itself);
+  // otherwise a user's explicit `pseudohaptic cursor --set`.
+  virtual void position(Vec2 position, bool from_helper) = 0;
+  virtual void layout(Rect desktop) = 0;
+  virtual void helper_changed(bool present) = 0;
+};
+
+class ControlServer {
+ public:
+  // Binds and listens at `path` (the directory must exist; a stale socket there is replaced) and adds
+  // the socket to `epoll`. Throws std::runtime_error saying what failed.
+  ControlServer(std::string path, int epoll, const SessionDirectory& sessions, const Logger& log);
+  ~ControlServer();
+  ControlServer(const ControlServer&) = delete;
+  ControlServer& operator=(const ControlServer&) = delete;
+
+  bool owns(int fd) const { return fd == listener_.get() || clients_.contains(fd); }
+  void on_readable(int fd, ControlHandler& handler);
+  bool has_helper() const { return helper_fd_ >= 0; }
+  // Asks the session helper where the real cursor is; it answers with `position X Y` later.
+  void query_helper();
+  const std::string& path() const { return path_; }
+
+ private:
+  struct Client {
+    UniqueFd fd;
+    control::LineBuffer lines;
+    uid_t uid = 0;
+  };
+  static constexpr std::size_t kMaxClients = 16;
+
+  void accept_client();
+  void read_client(int fd, ControlHandler& handler);
+  std::string answer(int fd, const std::string& line, ControlHandler& handler);
+  bool send_line(int fd, const std::string& line);
+  void drop(int fd, ControlHandler& handler);
+
+  std::string path_;
+  int epoll_;
+  const SessionDirectory& sessions_;
+  const Logger& log_;
+  UniqueFd listener_;
+  std::map<int, std::unique_ptr<Client>> clients_;
+  int helper_fd_ = -1;
+};
+
+// The socket's path: `--control` if given, else $RUNTIME_DIRECTORY/control under systemd, else
+// control::kDefaultSocket.
+std::string default_control_path();
+
+}  // namespace ph

@@ -1,0 +1,106 @@
+// The control socket's protocol: every request and reply parses back to what was formatted, and what
+// is malformed is refused with a reason (docs/SERVICE.md, "The control socket").
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "control/protocol.hpp"
+
+namespace ph::control {
+namespace {
+
+Request parsed(std::string_view line) {
+  auto result = parse_request(line);
+  if (const auto* error = std::get_if<std::string>(&result)) ADD_FAILURE() << line << ": " << *error;
+  return std::get<Request>(result);
+}
+
+std::string refusal(std::string_view line) {
+  auto result = parse_request(line);
+  if (std::holds_alternative<Request>(result)) {
+    ADD_FAILURE() << "accepted: " << line;
+    return "";
+  }
+  return std::get<std::string>(result);
+}
+
+TEST(ControlProtocol, RequestsRoundTrip) {
+  EXPECT_TRUE(std::holds_alternative<StatusRequest>(parsed("status")));
+  EXPECT_TRUE(std::holds_alternative<CursorRequest>(parsed("cursor\r")));
+  const auto p = std::get<PositionRequest>(parsed("position 960.5 -3.25"));
+  EXPECT_EQ(p.position, (Vec2{960.5, -3.25}));
+  const auto l = std::get<LayoutRequest>(parsed("layout -1920 0 3840 1080"));
+  EXPECT_EQ(l.desktop, (Rect{-1920, 0, 3840, 1080}));
+  EXPECT_EQ(std::get<HelperRequest>(parsed("helper x11")).backend, "x11");
+  for (const Request& r : {Request{StatusRequest{}}, Request{CursorRequest{}}, Request{PositionRequest{{0.1, 1e-3}}},
+                           Request{LayoutRequest{{1, 2, 3, 4}}}, Request{HelperRequest{"wayland-kwin"}}}) {
+    EXPECT_EQ(format_request(parsed(format_request(r))), format_request(r));
+  }
+  // Extra spaces between words are harmless.
+  EXPECT_EQ(std::get<PositionRequest>(parsed("position  1   2")).position, (Vec2{1, 2}));
+}
+
+TEST(ControlProtocol, MalformedRequestsAreRefusedWithAReason) {
+  EXPECT_NE(refusal("").find("empty"), std::string::npos);
+  EXPECT_NE(refusal("jump 1 2").find("unknown request"), std::string::npos);
+  EXPECT_NE(refusal("status now").find("no arguments"), std::string::npos);
+  EXPECT_NE(refusal("position 1").find("X Y"), std::string::npos);
+  EXPECT_NE(refusal("position 1 nan").find("finite"), std::string::npos);
+  EXPECT_NE(refusal("position 1 inf").find("finite"), std::string::npos);
+  EXPECT_NE(refusal("position 1,5 2").find("finite"), std::string::npos);
+  EXPECT_NE(refusal("position 1e300 2").find("within"), std::string::npos);
+  EXPECT_NE(refusal("layout 0 0 0 1080").find("from 1"), std::string::npos);
+  EXPECT_NE(refusal("layout 0 0 1.5 1080").find("whole"), std::string::npos);
+  EXPECT_NE(refusal("layout 0 0 99999999999 1080").find("whole"), std::string::npos);
+  EXPECT_NE(refusal("helper").find("backend"), std::string::npos);
+  EXPECT_NE(refusal("helper x11; rm").find("backend"), std::string::npos);
+  EXPECT_NE(refusal(std::string(kMaxLine + 1, 'a')).find("too long"), std::string::npos);
+}
+
+TEST(ControlProtocol, StatusAndCursorRepliesRoundTrip) {
+  Status s;
+  s.absolute = false;
+  s.mice = 2;
+  s.regions = 3;
+  s.desktop = {-1280, 0, 3200, 1080};
+  s.cursor = {12.5, 1079.75};
+  s.helper = true;
+  s.scene = "/home/a user/my scene.toml";
+  const std::optional<Reply> reply = parse_reply(format_status(s));
+  ASSERT_TRUE(reply && reply->ok);
+  const std::optional<Status> back = parse_status(reply->text);
+  ASSERT_TRUE(back.has_value()) << reply->text;
+  EXPECT_EQ(back->absolute, false);
+  EXPECT_EQ(back->mice, 2);
+  EXPECT_EQ(back->regions, 3);
+  EXPECT_EQ(back->desktop, s.desktop);
+  EXPECT_EQ(back->cursor, s.cursor);
+  EXPECT_TRUE(back->helper);
+  EXPECT_EQ(back->scene, s.scene);
+  EXPECT_FALSE(parse_status("mode=absolute mice=1").has_value());  // incomplete
+  EXPECT_FALSE(parse_status("mode=sideways mice=1 regions=0 desktop=0,0,1,1 cursor=0,0 helper=no scene=x"));
+
+  const std::optional<Reply> cursor = parse_reply(format_cursor({0.25, 3}));
+  ASSERT_TRUE(cursor && cursor->ok);
+  EXPECT_EQ(parse_cursor(cursor->text), (Vec2{0.25, 3}));
+  const std::optional<Reply> error = parse_reply(format_error("no\nnewlines"));
+  ASSERT_TRUE(error.has_value());
+  EXPECT_FALSE(error->ok);
+  EXPECT_EQ(error->text, "no newlines");
+  EXPECT_FALSE(parse_reply("query").has_value());  // the daemon's question to a helper is not a reply
+}
+
+TEST(ControlProtocol, LinesAreSplitAndBounded) {
+  LineBuffer lines;
+  EXPECT_TRUE(lines.append("sta"));
+  EXPECT_FALSE(lines.next_line().has_value());
+  EXPECT_TRUE(lines.append("tus\ncursor\npos"));
+  EXPECT_EQ(lines.next_line(), "status");
+  EXPECT_EQ(lines.next_line(), "cursor");
+  EXPECT_FALSE(lines.next_line().has_value());
+  EXPECT_TRUE(lines.append(std::string(kMaxLine - 3, '1')));  // "pos" + that = the longest line allowed
+  EXPECT_FALSE(lines.append("1"));                            // one byte more without a newline
+}
+
+}  // namespace
+}  // namespace ph::control

@@ -1,0 +1,227 @@
+// The daemon's control socket over a real Unix socket: requests reach the handler, the helper gets its
+// queries, a refused peer gets a clear error, and a client that misbehaves is dropped.
+#include <gtest/gtest.h>
+#include <sys/epoll.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <filesystem>
+#include <mutex>
+#include <thread>
+
+#include "control/client.hpp"
+#include "daemon/control_server.hpp"
+#include "tests/scratch_dir.hpp"
+
+namespace ph {
+namespace {
+
+using namespace std::chrono_literals;
+
+class FakeSessions final : public SessionDirectory {
+ public:
+  explicit FakeSessions(uid_t active) : active_(active) {}
+  bool has_active_local_session(uid_t uid) const override { return uid == active_; }
+
+ private:
+  uid_t active_;
+};
+
+class RecordingHandler final : public ControlHandler {
+ public:
+  control::Status status() const override {
+    control::Status s;
+    s.mice = 1;
+    s.regions = 3;
+    s.desktop = {0, 0, 1920, 1080};
+    s.cursor = at_;
+    s.scene = "default";
+    return s;
+  }
+  Vec2 cursor() const override { return at_; }
+  void position(Vec2 p, bool from_helper) override {
+    std::lock_guard lock(mutex_);
+    at_ = p;
+    helper_positions_ += from_helper;
+  }
+  void layout(Rect d) override {
+    std::lock_guard lock(mutex_);
+    desktop_ = d;
+  }
+  void helper_changed(bool present) override { helper_present_ = present; }
+
+  Vec2 at() {
+    std::lock_guard lock(mutex_);
+    return at_;
+  }
+  Rect desktop() {
+    std::lock_guard lock(mutex_);
+    return desktop_;
+  }
+  int helper_positions() {
+    std::lock_guard lock(mutex_);
+    return helper_positions_;
+  }
+  std::atomic<bool> helper_present_{false};
+
+ private:
+  std::mutex mutex_;
+  Vec2 at_{960.5, 540.5};
+  Rect desktop_;
+  int helper_positions_ = 0;
+};
+
+// The server on its own event loop, as the daemon runs it.
+class ServerLoop {
+ public:
+  ServerLoop(const std::string& path, const SessionDirectory& sessions)
+      : epoll_(::epoll_create1(EPOLL_CLOEXEC)), log_(false, false, nullptr_file()) {
+    server_ = std::make_unique<ControlServer>(path, epoll_.get(), sessions, log_);
+    thread_ = std::thread([this] { loop(); });
+  }
+  ~ServerLoop() {
+    stop_ = true;
+    thread_.join();
+  }
+  void query_helper() { queries_ += 1; }
+  RecordingHandler handler;
+
+ private:
+  static std::FILE* nullptr_file() {
+    static std::FILE* sink = std::fopen("/dev/null", "w");
+    return sink;
+  }
+  void loop() {
+    epoll_event events[8];
+    while (!stop_) {
+      const int n = ::epoll_wait(epoll_.get(), events, 8, 20);
+      for (int i = 0; i < n; ++i) server_->on_readable(events[i].data.fd, handler);
+      if (queries_ > 0) {
+        server_->query_helper();
+        queries_ -= 1;
+      }
+    }
+  }
+  UniqueFd epoll_;
+  Logger log_;
+  std::unique_ptr<ControlServer> server_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::atomic<int> queries_{0};
+};
+
+TEST(ControlServer, AnswersEveryRequestAndQueriesTheHelper) {
+  const ScratchDir dir("control");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  ServerLoop server(path, sessions);
+  EXPECT_EQ(std::filesystem::status(path).permissions() & std::filesystem::perms::others_write,
+            std::filesystem::perms::others_write);  // anyone may connect; the credentials decide
+
+  control::Client tool(path);
+  control::Reply status = tool.request("status");
+  ASSERT_TRUE(status.ok) << status.text;
+  const auto parsed = control::parse_status(status.text);
+  ASSERT_TRUE(parsed.has_value());
+  EXPECT_EQ(parsed->regions, 3);
+  EXPECT_FALSE(parsed->helper);
+
+  EXPECT_TRUE(tool.request("position 100.25 200.5").ok);
+  EXPECT_EQ(server.handler.at(), (Vec2{100.25, 200.5}));
+  EXPECT_EQ(server.handler.helper_positions(), 0);  // a user's --set, not a helper's report
+  EXPECT_EQ(control::parse_cursor(tool.request("cursor").text), (Vec2{100.25, 200.5}));
+  const control::Reply bad = tool.request("position x y");
+  EXPECT_FALSE(bad.ok);
+  EXPECT_NE(bad.text.find("finite"), std::string::npos);
+  EXPECT_TRUE(tool.request("status").ok);  // a malformed line does not close the connection
+
+  {
+    control::Client helper(path);
+    ASSERT_TRUE(helper.request("helper test").ok);
+    EXPECT_TRUE(server.handler.helper_present_);
+    ASSERT_TRUE(helper.request("layout -1920 0 3840 1080").ok);
+    EXPECT_EQ(server.handler.desktop(), (Rect{-1920, 0, 3840, 1080}));
+    EXPECT_TRUE(control::parse_status(tool.request("status").text)->helper);
+    server.query_helper();
+    EXPECT_EQ(helper.read_line(2s), "query");
+    ASSERT_TRUE(helper.request("position 5 6").ok);
+    EXPECT_EQ(server.handler.helper_positions(), 1);
+  }
+  for (int i = 0; i < 100 && server.handler.helper_present_; ++i) std::this_thread::sleep_for(10ms);
+  EXPECT_FALSE(server.handler.helper_present_);  // the helper's connection closed
+}
+
+TEST(ControlServer, DropsAClientWhoseLineNeverEnds) {
+  const ScratchDir dir("control-flood");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  ServerLoop server(path, sessions);
+  control::Client flood(path);
+  const std::string endless(3 * control::kMaxLine, 'x');  // no newline
+  ASSERT_EQ(::send(flood.fd(), endless.data(), endless.size(), MSG_NOSIGNAL), static_cast<ssize_t>(endless.size()));
+  const auto line = flood.read_line(2s);
+  ASSERT_TRUE(line.has_value());
+  EXPECT_EQ(*line, "error line too long");
+  EXPECT_THROW(flood.read_line(2s), control::ControlError);  // and the daemon hung up
+  control::Client next(path);                                // others are still served
+  EXPECT_TRUE(next.request("cursor").ok);
+}
+
+// A peer that is neither root nor the active local user is told why and disconnected. As root the test
+// connects from a child that drops to nobody; as anyone else, the fake logind knows no session for it.
+TEST(ControlServer, RefusesAPeerWithoutAnActiveLocalSession) {
+  const ScratchDir dir("control-refuse");
+  const std::string path = (dir.path() / "control").string();
+  const bool root = ::getuid() == 0;
+  const FakeSessions sessions(root ? 12345 : ::getuid() + 1);
+  ServerLoop server(path, sessions);
+  auto try_connect = [&]() -> std::string {
+    control::Client client(path);
+    const auto line = client.read_line(2s);
+    return line.value_or("nothing");
+  };
+  if (!root) {
+    EXPECT_NE(try_connect().find("error permission denied"), std::string::npos);
+    return;
+  }
+  int pipe_fds[2];
+  ASSERT_EQ(::pipe(pipe_fds), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::close(pipe_fds[0]);
+    bool refused = false;
+    if (::setgid(65534) == 0 && ::setuid(65534) == 0) {
+      try {
+        refused = try_connect().starts_with("error permission denied: uid 65534");
+      } catch (const std::exception&) {
+      }
+    }
+    const char verdict = refused ? 'y' : 'n';
+    (void)!::write(pipe_fds[1], &verdict, 1);
+    ::_exit(0);
+  }
+  ::close(pipe_fds[1]);
+  char verdict = '?';
+  (void)!::read(pipe_fds[0], &verdict, 1);
+  ::close(pipe_fds[0]);
+  ::waitpid(child, nullptr, 0);
+  EXPECT_EQ(verdict, 'y');
+  // Root itself is always let in.
+  control::Client root_client(path);
+  EXPECT_TRUE(root_client.request("cursor").ok);
+}
+
+TEST(ControlAccess, RootAndTheActiveLocalUserOnly) {
+  const FakeSessions sessions(1000);
+  EXPECT_FALSE(control_refusal(0, sessions).has_value());
+  EXPECT_FALSE(control_refusal(1000, sessions).has_value());
+  const auto refused = control_refusal(1001, sessions);
+  ASSERT_TRUE(refused.has_value());
+  EXPECT_NE(refused->find("uid 1001"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ph

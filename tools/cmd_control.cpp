@@ -1,0 +1,81 @@
+// `pseudohaptic status` and `pseudohaptic cursor`: ask the running daemon through its control socket
+// (docs/SERVICE.md, "The control socket").
+#include <fmt/format.h>
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "control/client.hpp"
+#include "control/protocol.hpp"
+#include "tools/commands.hpp"
+
+namespace ph::tools {
+
+namespace {
+
+struct ControlOptions {
+  std::string socket{control::kDefaultSocket};
+  std::vector<double> set;
+};
+
+void add_socket_option(CLI::App& app, ControlOptions& o) {
+  app.add_option("--socket", o.socket, "The daemon's control socket")->capture_default_str();
+}
+
+// The reply's words, or a runtime_error with the daemon's reason.
+std::string ask(const ControlOptions& o, const control::Request& request) {
+  control::Client client(o.socket);
+  const control::Reply reply = client.request(control::format_request(request));
+  if (!reply.ok) throw std::runtime_error("pseudohapticd: " + reply.text);
+  return reply.text;
+}
+
+int run_status(const ControlOptions& o) {
+  const std::string words = ask(o, control::StatusRequest{});
+  const std::optional<control::Status> s = control::parse_status(words);
+  if (!s) throw std::runtime_error("pseudohapticd answered something this tool does not understand: " + words);
+  fmt::print("output:  {}\n", s->absolute ? "absolute" : "relative");
+  fmt::print("mice:    {} taken\n", s->mice);
+  fmt::print("scene:   {} ({} regions)\n", s->scene == "default" ? "the embedded default scene" : s->scene, s->regions);
+  fmt::print("desktop: {}x{} at {},{}\n", s->desktop.w, s->desktop.h, s->desktop.x, s->desktop.y);
+  fmt::print("cursor:  {:.2f},{:.2f} (the daemon's model)\n", s->cursor.x, s->cursor.y);
+  fmt::print("helper:  {}\n", s->helper ? "connected (the model follows the desktop's cursor)"
+                                        : "none (the first motion puts the cursor where the model is)");
+  return 0;
+}
+
+int run_cursor(const ControlOptions& o) {
+  if (o.set.size() == 2) {
+    ask(o, control::PositionRequest{{o.set[0], o.set[1]}});
+  }
+  const std::string words = ask(o, control::CursorRequest{});
+  const std::optional<Vec2> at = control::parse_cursor(words);
+  if (!at) throw std::runtime_error("pseudohapticd answered something this tool does not understand: " + words);
+  fmt::print("{},{}\n", at->x, at->y);
+  return 0;
+}
+
+}  // namespace
+
+Run add_status_command(CLI::App& app) {
+  auto o = std::make_shared<ControlOptions>();
+  app.description(
+      "Ask the running pseudohapticd what it does: output mode, mice taken, scene, desktop, its cursor model and\n"
+      "whether a session helper is connected. Only root and the user of the active local session may ask.");
+  add_socket_option(app, *o);
+  return [o] { return run_status(*o); };
+}
+
+Run add_cursor_command(CLI::App& app) {
+  auto o = std::make_shared<ControlOptions>();
+  app.description(
+      "Print the daemon's cursor model as X,Y (px), or with --set move the model there first (with absolute\n"
+      "output the desktop's cursor follows at the next motion of the mouse).");
+  add_socket_option(app, *o);
+  app.add_option("--set", o->set, "X,Y: move the cursor model here (px)")->delimiter(',')->expected(2);
+  return [o] { return run_cursor(*o); };
+}
+
+}  // namespace ph::tools
