@@ -1,17 +1,26 @@
-// Run inside the VM under tests/vm/with-xorg (a real Xorg whose libinput driver reads every input device
-// named "pseudohaptic ..."), as root: is the cursor the daemon models the cursor X shows? Creates a uinput
-// test mouse, starts the daemon (argv[1]) on it, moves the mouse like a hand and, after every frame,
-// compares where X put its pointer (XQueryPointer) with the cursor model of ph::Pipeline fed the same
-// frames offline (the daemon's own model; every frame the daemon emits is checked against it too).
+// Run inside the VM under tests/vm/with-xorg (a real Xorg whose libinput driver reads the input devices
+// named "pseudohaptic ..." and "ph-x11 untaken"), as root: is the cursor the daemon models the cursor X
+// shows? Creates uinput test mice, starts the daemon (argv[1]) on one, moves it like a hand and, after
+// every frame, compares where X put its pointer (XQueryPointer) with the cursor model: that of
+// ph::Pipeline fed the same frames offline (the daemon's own: every frame the daemon emits is checked
+// against it too, and its `cursor` over the control socket at the end), or, where something else moves
+// the cursor, the daemon's `cursor` over the control socket.
 //
-//   x11_cursor_e2e DAEMON [--scene DIR] [--frames N] [--relative-frames N] [--cases abc] [-v]
+//   x11_cursor_e2e DAEMON [--scene DIR] [--session HELPER] [--frames N] [--relative-frames N]
+//                  [--cases abcedf] [-v [--trace-from FRAME]]
 //   x11_cursor_e2e --write-scene DIR     (on the host, before: writes the scene's maps into DIR)
 //
-// Cases (one daemon each, all on one X server; the scene is the embedded default scene's three targets,
-// loaded from files, on a 1920 x 1080 desktop):
-//   absolute output: X's pixel holds the model at every frame (within 0.5 px of the pixel's centre);
-//   relative output, X's flat acceleration profile: within 1 px;
-//   relative output, X's default adaptive profile: the drift, measured and reported only.
+// Cases, one daemon each (d and g share one), all on one X server; the scene is the embedded default
+// scene's three targets, loaded from files, on a 1920 x 1080 desktop (f: no region):
+//   a  absolute output: X's pixel holds the model at every frame (within 0.5 px of the pixel's centre);
+//      then an untaken pointer moves X's pointer on without a jump;
+//   b  relative output, X's flat acceleration profile: within 1 px;
+//   c  relative output, X's default adaptive profile: the drift, measured and reported only;
+//   e  pseudohaptic-session (HELPER) against a stand-in control socket;
+//   d  with the helper connected: an application warp, then motion: the model follows within two frames;
+//   g  ... a pointer the daemon does not take moves the cursor: the model follows;
+//   f  the daemon's adaptive profile (absolute output) against X's libinput adaptive profile (relative
+//      output) on the same out-and-back strokes: the two cursors within 2 % of the path's length.
 // The distance at a check is from the model to the centre of the pixel X reports, per axis:
 // |model - (pixel + 0.5)|. One PASS, FAIL or INFO line per case; exit status 1 when any failed.
 #include <fmt/format.h>
@@ -51,11 +60,12 @@ constexpr auto kFrameTimeout = 5s;  // a frame through the daemon, or through X 
 
 struct Options {
   std::string daemon;
-  int frames = 2000;           // motion frames of the absolute case
-  int relative_frames = 1000;  // motion frames of each relative case
+  int frames = 2000;          // motion frames of the absolute case
+  int relative_frames = 600;  // motion frames of each relative case
   bool verbose = false;
-  std::string cases = "abce";  // which cases run, by letter (e: the session helper)
-  long trace_from = -1;        // -v: trace 12 frames from this one
+  std::string cases = "abcedf";  // which run, by letter (e: the helper alone; d: d and g; f)
+  long trace_from = -1;          // -v: trace 12 frames from this one
+  int acceleration_strokes = 8;  // out-and-back strokes of case f
   std::filesystem::path scratch;
   std::filesystem::path scene_dir;  // the targets' maps; default: in scratch
   std::string session;              // pseudohaptic-session, for its case; none: not run
@@ -110,13 +120,17 @@ std::string scene_regions(const std::filesystem::path& dir) {
   return regions;
 }
 
-std::filesystem::path write_config(const std::filesystem::path& dir, const std::string& regions, ph::OutputMode mode) {
-  const std::string name = mode == ph::OutputMode::absolute ? "absolute" : "relative";
+// A config file `name`.toml: the test mouse only, the desktop spelled out, `mode`, the daemon's own
+// acceleration `acceleration` at speed 0, and `regions` (scene text).
+std::filesystem::path write_config(const std::filesystem::path& dir, const std::string& name, ph::OutputMode mode,
+                                   const std::string& acceleration, const std::string& regions) {
   const std::filesystem::path path = dir / (name + ".toml");
   std::ofstream out(path, std::ios::trunc);
   out << "[daemon]\n"
       << "devices = [\"name:ph-x11 mouse\"]\n"
-      << "output = \"" << name << "\"\n"
+      << "output = \"" << (mode == ph::OutputMode::absolute ? "absolute" : "relative") << "\"\n"
+      << "acceleration = \"" << acceleration << "\"\n"
+      << "speed = 0.0\n"
       << "desktop = [0, 0, 1920, 1080]\n"
       << "pointer_speed = 1.0\n"
       << regions;
@@ -235,14 +249,15 @@ bool wait_taken(TestMouse& mouse, EventReader& out, Clock::duration timeout) {
   return false;
 }
 
-// The daemon (on `config`, with a control socket when `control` is given) as a child, once it has taken
+// The daemon (on `config`, with a control socket in the scratch folder) as a child, once it has taken
 // the test mouse and X has added its virtual device. stop() ends it as the service manager would.
 class RunningDaemon {
  public:
   RunningDaemon(const Options& options, XServer& x, TestMouse& mouse, const UeventMonitor& uevents,
-                const std::filesystem::path& config, const std::string& control = "")
+                const std::filesystem::path& config)
       : notify_((options.scratch / "notify.sock").string()),
-        daemon_(arguments(options, config, control),
+        control_((options.scratch / "daemon.control").string()),
+        daemon_(arguments(options, config, control_),
                 {"NOTIFY_SOCKET=" + notify_.path(), "PATH=/usr/sbin:/usr/bin:/sbin:/bin", "LANG=C.UTF-8"},
                 (options.scratch / "daemon.log").string()) {
     if (!notify_.expect("READY=1", 120s)) fatal("no READY=1 within 120 s");
@@ -257,7 +272,8 @@ class RunningDaemon {
 
   [[noreturn]] void fatal(const std::string& what) { throw Fatal(what + "; the daemon's output:\n" + daemon_.log()); }
   EventReader& out() { return *out_; }
-  int x_device() const { return device_; }  // the virtual device's XInput id
+  int x_device() const { return device_; }                 // the virtual device's XInput id
+  const std::string& control() const { return control_; }  // its control socket
 
   // SIGTERM: the daemon exits 0 and X lets go of its device. Adds what went wrong to `problems`.
   void stop(XServer& x, std::vector<std::string>& problems) {
@@ -273,13 +289,13 @@ class RunningDaemon {
  private:
   static std::vector<std::string> arguments(const Options& options, const std::filesystem::path& config,
                                             const std::string& control) {
-    std::vector<std::string> argv{options.daemon, "-c", config.string()};
-    if (!control.empty()) argv.insert(argv.end(), {"--control", control});
+    std::vector<std::string> argv{options.daemon, "-c", config.string(), "--control", control};
     if (options.verbose) argv.emplace_back("-v");
     return argv;
   }
 
   NotifySocket notify_;
+  std::string control_;
   ChildProcess daemon_;
   std::optional<EventReader> out_;
   int device_ = 0;
@@ -389,6 +405,14 @@ CaseResult run_case(const Options& options, XServer& x, TestMouse& mouse, TestMo
     }
   }
 
+  // The daemon's own model, through its control socket, is the offline one.
+  const Vec2 reported = ControlClient(daemon.control(), 5s).cursor();
+  if (std::abs(reported.x - model.cursor().position.x) > 1e-9 ||
+      std::abs(reported.y - model.cursor().position.y) > 1e-9) {
+    result.problems.push_back(fmt::format("the daemon's cursor model is ({}, {}), the offline one ({:.3f}, {:.3f})",
+                                          reported.x, reported.y, model.cursor().position.x,
+                                          model.cursor().position.y));
+  }
   daemon.stop(x, result.problems);
   trace(options,
         fmt::format("{}: {:.1f} s in all", spec.label, std::chrono::duration<double>(Clock::now() - start).count()));
@@ -415,6 +439,235 @@ bool report(const CaseSpec& spec, const CaseResult& r) {
   for (const std::string& p : r.problems) std::printf("    %s\n", p.c_str());
   std::fflush(stdout);
   return ok;
+}
+
+// ---- the model follows what else moves the cursor (the session helper connected) ----------------------------
+
+// Sends the hand's next frame and, once X has taken in what the daemon made of it, returns the pixel X
+// shows; nullopt for a pause frame (nothing sent). Frames the daemon turns into nothing (an absolute
+// position that did not change) are waited for only briefly.
+struct Player {
+  XServer& x;
+  TestMouse& mouse;
+  RunningDaemon& daemon;
+  long motions = 0;
+  long frame = 0;
+  Clock::time_point origin = Clock::now();
+
+  std::optional<XServer::Pointer> play(Counts counts) {
+    const auto due = origin + std::chrono::microseconds(frame++ * kFramePeriodUs);
+    if (Clock::now() < due) {
+      std::this_thread::sleep_until(due);
+    } else {
+      origin += Clock::now() - due;  // late under TCG: keep the 8 ms rather than send a burst
+    }
+    if (!counts.any()) return std::nullopt;
+    std::vector<ph::InputEvent> events;
+    if (counts.dx != 0) events.push_back(rel(ev::kRelX, counts.dx));
+    if (counts.dy != 0) events.push_back(rel(ev::kRelY, counts.dy));
+    mouse.send(make_frame(std::move(events)));
+    if (daemon.out().next_frame(300ms)) {
+      if (!x.wait_motions(daemon.x_device(), ++motions, kFrameTimeout)) {
+        x.drain();
+        motions = x.motions(daemon.x_device());
+      }
+    }
+    return x.pointer();
+  }
+  // A pause: time passes, nothing is sent.
+  void pause(Clock::duration d) {
+    std::this_thread::sleep_for(d);
+    origin = Clock::now() - std::chrono::microseconds(frame * kFramePeriodUs);
+  }
+  void start() {
+    x.drain();
+    motions = x.motions(daemon.x_device());
+    origin = Clock::now() - std::chrono::microseconds(frame * kFramePeriodUs);
+  }
+};
+
+std::string distances_text(const Distances& d) {
+  return fmt::format("{} checks, max {:.3f} px per axis ({:.3f} px), RMS {:.3f} px", d.checks(), d.max_axis(),
+                     d.max_euclid(), d.rms());
+}
+
+void print_verdict(const std::string& label, const std::vector<std::string>& problems,
+                   const std::vector<std::string>& notes, double seconds) {
+  std::printf("%s %s (%.1f s)%s\n", problems.empty() ? "PASS" : "FAIL", label.c_str(), seconds,
+              problems.empty() ? "" : ":");
+  for (const std::string& n : notes) std::printf("    %s\n", n.c_str());
+  for (const std::string& p : problems) std::printf("    %s\n", p.c_str());
+  std::fflush(stdout);
+}
+
+// [d] an application warp (xdotool mousemove) and [g] a pointer the daemon does not take move X's pointer;
+// with pseudohaptic-session connected, the daemon's model (its `cursor` over the control socket) follows,
+// and X's pixel holds the model at every later check. Returns how many of the two failed.
+int follow_cases(const Options& options, XServer& x, TestMouse& mouse, TestMouse& untaken, const UeventMonitor& uevents,
+                 const std::filesystem::path& config) {
+  const auto start = Clock::now();
+  RunningDaemon daemon(options, x, mouse, uevents, config);
+  const char* display = std::getenv("DISPLAY");
+  ChildProcess helper({options.session, "--control", daemon.control(), "-v"},
+                      {std::string("DISPLAY=") + (display != nullptr ? display : ""), "PATH=/usr/bin:/bin"},
+                      (options.scratch / "session-follow.log").string());
+  ControlClient control(daemon.control(), 10s);
+  if (!wait_until([&] { return control.request("status").find("helper=yes") != std::string::npos; }, 20s, nullptr,
+                  200ms)) {
+    daemon.fatal("the session helper did not connect within 20 s; its log:\n" + helper.log());
+  }
+  Player player{x, mouse, daemon};
+  HandMotion hand({150, 150, 1620, 780}, 777);
+  // Hand frames; from `from` on, X's pixel must hold the model (read over the socket) at every check.
+  auto move = [&](int frames, int from, Distances& held, std::vector<XServer::Pointer>* seen) {
+    for (int k = 0; k < frames;) {
+      const Vec2 model = control.cursor();
+      const std::optional<XServer::Pointer> at = player.play(hand.next(model));
+      if (!at) continue;
+      ++k;
+      if (seen != nullptr) seen->push_back(*at);
+      if (k >= from) held.add(player.frame, control.cursor(), *at);
+    }
+  };
+  player.start();
+  Distances before;
+  move(100, 1, before, nullptr);
+
+  int failed = 0;
+  {  // [d] an application warp, then motion: the model follows within two frames
+    const auto case_start = Clock::now();
+    std::vector<std::string> problems, notes;
+    player.pause(400ms);
+    const int status = std::system("xdotool mousemove 400 300");
+    if (status != 0) problems.push_back(fmt::format("xdotool mousemove: status {}", status));
+    const XServer::Pointer warped = x.pointer();
+    player.pause(400ms);
+    Distances after;
+    std::vector<XServer::Pointer> seen;
+    move(60, 2, after, &seen);
+    if (seen.size() >= 2) {
+      const XServer::Pointer p = seen[1];
+      notes.push_back(
+          fmt::format("X's pointer warped to ({}, {}), after two frames at ({}, {})", warped.x, warped.y, p.x, p.y));
+      // Two frames move the cursor by some 10s of px; going back to the old place is hundreds away.
+      if (std::hypot(p.x - 400, p.y - 300) > 120) problems.push_back("the warp was undone: " + notes.back());
+    }
+    notes.push_back("from the second frame after the warp: " + distances_text(after));
+    if (after.over(0.5) > 0) problems.push_back("first beyond 0.5 px: " + after.first_over(0.5));
+    notes.push_back("before the warp: " + distances_text(before));
+    if (before.over(0.5) > 0) problems.push_back("before the warp, first beyond 0.5 px: " + before.first_over(0.5));
+    print_verdict("[d] an application warp (xdotool mousemove), then motion: the model follows", problems, notes,
+                  std::chrono::duration<double>(Clock::now() - case_start).count());
+    failed += !problems.empty();
+  }
+  {  // [g] an untaken pointer moves X's pointer: the model follows, then the mouse moves on from there
+    const auto case_start = Clock::now();
+    std::vector<std::string> problems, notes;
+    const std::optional<int> other = x.wait_for_pointer(untaken.name(), 10s);
+    if (!other) daemon.fatal("X did not add the untaken pointer");
+    x.drain();
+    long seen = x.motions(*other);
+    const XServer::Pointer from = x.pointer();
+    for (int i = 0; i < 3; ++i) {
+      untaken.send(make_frame({rel(ev::kRelX, 10), rel(ev::kRelY, 10)}));
+      if (!x.wait_motions(*other, ++seen, kFrameTimeout)) problems.push_back("the untaken pointer: no motion");
+      std::this_thread::sleep_for(8ms);
+    }
+    const XServer::Pointer to = x.pointer();
+    const auto moved = Clock::now();
+    const auto inside = [&] {
+      const Vec2 m = control.cursor();
+      return std::abs(m.x - (to.x + 0.5)) <= 0.5 && std::abs(m.y - (to.y + 0.5)) <= 0.5;
+    };
+    const bool followed = wait_until(inside, 3s, nullptr, 20ms);
+    const Vec2 m = control.cursor();
+    notes.push_back(
+        fmt::format("the untaken pointer moved X's pointer from ({}, {}) to ({}, {}); the model {} "
+                    "({:.2f}, {:.2f}) after {:.0f} ms",
+                    from.x, from.y, to.x, to.y, followed ? "followed to" : "stayed at", m.x, m.y,
+                    std::chrono::duration<double, std::milli>(Clock::now() - moved).count()));
+    if (!followed) problems.push_back("the model did not follow within 3 s");
+    Distances after;
+    player.start();
+    move(60, 1, after, nullptr);
+    notes.push_back("the mouse then: " + distances_text(after));
+    if (after.over(0.5) > 0) problems.push_back("first beyond 0.5 px: " + after.first_over(0.5));
+    print_verdict("[g] an untaken pointer moves the cursor: the model follows", problems, notes,
+                  std::chrono::duration<double>(Clock::now() - case_start).count());
+    failed += !problems.empty();
+  }
+  helper.signal(SIGTERM);
+  helper.wait_exit(5s);
+  std::vector<std::string> problems;
+  daemon.stop(x, problems);
+  for (const std::string& p : problems) std::printf("FAIL [d, g] %s\n", p.c_str());
+  trace(options, fmt::format("[d, g]: {:.1f} s in all", std::chrono::duration<double>(Clock::now() - start).count()));
+  if (failed > 0) std::printf("---- the daemon's log is in %s, the helper's:\n%s", "daemon.log", helper.log().c_str());
+  return failed + (problems.empty() ? 0 : 1);
+}
+
+// ---- [f] the daemon's adaptive profile against libinput's own ------------------------------------------------
+
+// The pixels X shows after each motion frame of `frames`, with the daemon on `config` (X's libinput
+// profile `x_profile` for relative output; X's pointer starts where the model does).
+std::vector<Vec2> cursor_path(const Options& options, XServer& x, TestMouse& mouse, const UeventMonitor& uevents,
+                              const std::filesystem::path& config, const std::string& x_profile,
+                              const std::vector<Counts>& frames, std::vector<std::string>& problems) {
+  RunningDaemon daemon(options, x, mouse, uevents, config);
+  if (!x_profile.empty()) {
+    x.set_accel_profile(daemon.x_device(), x_profile);
+    x.xtest_move_by(1, 1);  // see run_case: a warp after an absolute device needs a relative motion first
+    x.warp(960, 540);
+  }
+  Player player{x, mouse, daemon};
+  player.start();
+  std::vector<Vec2> path;
+  for (const Counts& c : frames) {
+    if (const std::optional<XServer::Pointer> at = player.play(c)) path.push_back({at->x + 0.5, at->y + 0.5});
+  }
+  daemon.stop(x, problems);
+  return path;
+}
+
+bool acceleration_case(const Options& options, XServer& x, TestMouse& mouse, const UeventMonitor& uevents) {
+  const auto start = Clock::now();
+  const std::string label =
+      "[f] the daemon's adaptive profile (absolute output) against X's libinput adaptive profile (relative output), "
+      "flat scene";
+  std::vector<std::string> problems, notes;
+  const std::vector<Counts> frames = out_and_back(options.acceleration_strokes, 4242);
+  const std::vector<Vec2> ours = cursor_path(
+      options, x, mouse, uevents, write_config(options.scratch, "f-absolute", ph::OutputMode::absolute, "adaptive", ""),
+      "", frames, problems);
+  const std::vector<Vec2> theirs = cursor_path(
+      options, x, mouse, uevents, write_config(options.scratch, "f-relative", ph::OutputMode::relative, "flat", ""),
+      "adaptive", frames, problems);
+  if (ours.size() != theirs.size() || ours.empty()) {
+    problems.push_back(fmt::format("paths of {} and {} checks", ours.size(), theirs.size()));
+  } else {
+    double length = 0, our_length = 0, max_distance = 0, sum_sq = 0;
+    std::size_t worst = 0;
+    for (std::size_t i = 0; i < ours.size(); ++i) {
+      if (i > 0) length += ph::length(theirs[i] - theirs[i - 1]);
+      if (i > 0) our_length += ph::length(ours[i] - ours[i - 1]);
+      const double d = ph::length(ours[i] - theirs[i]);
+      sum_sq += d * d;
+      if (d > max_distance) {
+        max_distance = d;
+        worst = i;
+      }
+    }
+    notes.push_back(fmt::format(
+        "{} motion frames; libinput's path {:.0f} px, ours {:.0f} px; the two cursors apart by max {:.1f} px ({:.2f} % "
+        "of the path; worst at check {}: ours ({:.1f}, {:.1f}), libinput's ({:.1f}, {:.1f})), RMS {:.1f} px, at the "
+        "end {:.1f} px",
+        ours.size(), length, our_length, max_distance, 100.0 * max_distance / length, worst, ours[worst].x,
+        ours[worst].y, theirs[worst].x, theirs[worst].y, std::sqrt(sum_sq / static_cast<double>(ours.size())),
+        ph::length(ours.back() - theirs.back())));
+    if (max_distance > 0.02 * length) problems.push_back("apart by more than 2 % of the path");
+  }
+  print_verdict(label, problems, notes, std::chrono::duration<double>(Clock::now() - start).count());
+  return problems.empty();
 }
 
 // ---- the session helper ------------------------------------------------------------------------------------
@@ -496,8 +749,8 @@ bool session_case(const Options& options, XServer& x) {
 
 int usage(const char* why) {
   std::fprintf(stderr,
-               "x11_cursor_e2e: %s\nusage: x11_cursor_e2e DAEMON [--scene DIR] [--frames N] [--relative-frames N] "
-               "[--cases abc] [-v]\n"
+               "x11_cursor_e2e: %s\nusage: x11_cursor_e2e DAEMON [--scene DIR] [--session HELPER] [--frames N] "
+               "[--relative-frames N] [--cases abcedf] [-v [--trace-from FRAME]]\n"
                "       x11_cursor_e2e --write-scene DIR\n",
                why);
   return 2;
@@ -555,7 +808,9 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < cases.size(); ++i) {
       const CaseSpec& spec = cases[i];
       if (options.cases.find(static_cast<char>('a' + i)) == std::string::npos) continue;
-      const std::filesystem::path config = write_config(options.scratch, regions, spec.mode);
+      // The daemon's acceleration flat at speed 0 (the identity): the offline model is the plain pipeline.
+      const std::filesystem::path config =
+          write_config(options.scratch, std::string(1, static_cast<char>('a' + i)), spec.mode, "flat", regions);
       try {
         if (!report(spec, run_case(options, x, mouse, &untaken, uevents, config, spec))) ++failed;
       } catch (const Fatal& e) {
@@ -566,6 +821,24 @@ int main(int argc, char** argv) {
     }
     if (!options.session.empty() && options.cases.find('e') != std::string::npos && !session_case(options, x)) {
       ++failed;
+    }
+    if (!options.session.empty() && options.cases.find('d') != std::string::npos) {
+      const std::filesystem::path config =
+          write_config(options.scratch, "d", ph::OutputMode::absolute, "adaptive", regions);
+      try {
+        failed += follow_cases(options, x, mouse, untaken, uevents, config);
+      } catch (const Fatal& e) {
+        std::printf("FAIL [d, g]: %s\n", e.what());
+        ++failed;
+      }
+    }
+    if (options.cases.find('f') != std::string::npos) {
+      try {
+        failed += !acceleration_case(options, x, mouse, uevents);
+      } catch (const Fatal& e) {
+        std::printf("FAIL [f]: %s\n", e.what());
+        ++failed;
+      }
     }
   } catch (const std::exception& e) {
     std::printf("FAIL x11_cursor_e2e: %s\n", e.what());
