@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 
+#include "control/protocol.hpp"
 #include "daemon/unique_fd.hpp"
 #include "session/control_connection.hpp"
 #include "session/protocol.hpp"
@@ -59,7 +60,7 @@ class Log {
 struct Link {
   std::optional<ControlConnection> connection;
   Conversation conversation;
-  LineSplitter lines;
+  ph::control::LineBuffer lines;
   std::optional<ph::Rect> layout_sent;
   int failures = 0;  // connection attempts failed in a row
   Clock::time_point next_attempt = Clock::now();
@@ -148,15 +149,15 @@ class Helper {
 
   void read_daemon() {
     const ControlConnection::Received received = link_.connection->read_available();
-    link_.lines.feed(received.data);
-    while (const std::optional<std::string> line = link_.lines.next()) {
+    const bool in_bounds = link_.lines.append(received.data);
+    while (const std::optional<std::string> line = link_.lines.next_line()) {
       const Conversation::Reaction reaction = link_.conversation.on_line(*line);
       if (!reaction.complaint.empty()) log_.error(reaction.complaint);
       if (reaction.send_position) send_position();
       if (!link_.connection) return;
     }
-    if (link_.lines.overflowed()) {
-      drop(fmt::format("the daemon sent a line longer than {} bytes", kMaxLine));
+    if (!in_bounds) {
+      drop(fmt::format("the daemon sent a line longer than {} bytes", ph::control::kMaxLine));
     } else if (received.closed) {
       drop("the daemon closed the connection");
     }

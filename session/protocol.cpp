@@ -3,64 +3,24 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cmath>
 #include <limits>
+
+#include "control/protocol.hpp"
 
 namespace ph::session {
 
-namespace {
-
-// A coordinate in the C locale: up to three decimals, trailing zeros dropped ("960", "960.5").
-std::string coordinate(double v) {
-  std::string text = fmt::format("{:.3f}", v);  // fmt ignores the locale unless asked
-  while (!text.empty() && text.back() == '0') text.pop_back();
-  if (!text.empty() && text.back() == '.') text.pop_back();
-  if (text == "-0") text = "0";
-  return text;
+std::string helper_request(std::string_view backend) {
+  return control::format_request(control::HelperRequest{std::string(backend)}) + "\n";
 }
-
-bool starts_with_word(std::string_view line, std::string_view word) {
-  return line.substr(0, word.size()) == word && (line.size() == word.size() || line[word.size()] == ' ');
-}
-
-}  // namespace
-
-void LineSplitter::feed(std::string_view bytes) {
-  if (overflowed_) return;
-  if (start_ > 0 && start_ >= buffer_.size() / 2) {  // keep the buffer from growing with what was read
-    buffer_.erase(0, start_);
-    start_ = 0;
-  }
-  buffer_.append(bytes);
-}
-
-std::optional<std::string> LineSplitter::next() {
-  if (overflowed_) return std::nullopt;
-  const std::size_t end = buffer_.find('\n', start_);
-  if (end == std::string::npos) {
-    if (buffer_.size() - start_ > kMaxLine) overflowed_ = true;
-    return std::nullopt;
-  }
-  if (end - start_ > kMaxLine) {
-    overflowed_ = true;
-    return std::nullopt;
-  }
-  std::string line = buffer_.substr(start_, end - start_);
-  start_ = end + 1;
-  if (!line.empty() && line.back() == '\r') line.pop_back();
-  return line;
-}
-
-std::string helper_request(std::string_view backend) { return fmt::format("helper {}\n", backend); }
 
 std::optional<std::string> layout_request(Rect layout) {
   if (layout.w <= 0 || layout.h <= 0) return std::nullopt;
-  return fmt::format("layout {} {} {} {}\n", layout.x, layout.y, layout.w, layout.h);
+  return control::format_request(control::LayoutRequest{layout}) + "\n";
 }
 
 std::optional<std::string> position_request(Vec2 position) {
   if (!is_finite(position)) return std::nullopt;
-  return fmt::format("position {} {}\n", coordinate(position.x), coordinate(position.y));
+  return control::format_request(control::PositionRequest{position}) + "\n";
 }
 
 std::optional<Rect> bounding_box(const std::vector<Rect>& outputs) {
@@ -97,8 +57,8 @@ Conversation::Reaction Conversation::on_line(std::string_view line) {
     reaction.send_position = true;
     return reaction;
   }
-  const bool ok = starts_with_word(line, "ok"), error = starts_with_word(line, "error");
-  if (!ok && !error) {
+  const std::optional<control::Reply> reply = control::parse_reply(line);
+  if (!reply) {
     reaction.complaint = fmt::format("the daemon sent a line not understood: '{}'", line);
     return reaction;
   }
@@ -107,9 +67,7 @@ Conversation::Reaction Conversation::on_line(std::string_view line) {
     request = std::move(awaiting_.front());
     awaiting_.pop_front();
   }
-  if (error)
-    reaction.complaint =
-        fmt::format("the daemon refused '{}': {}", request, line.substr(std::min<std::size_t>(6, line.size())));
+  if (!reply->ok) reaction.complaint = fmt::format("the daemon refused '{}': {}", request, reply->text);
   return reaction;
 }
 

@@ -1,6 +1,6 @@
 // The session helper's side of pseudohapticd's control socket (docs/SERVICE.md, "The control socket"),
-// as pure functions and a small state machine: splitting the byte stream into lines, the lines the
-// helper sends, and what it makes of the daemon's lines. No I/O here; main.cpp does that.
+// pure: the lines it sends (control/protocol.hpp formats them), the layout it reports, how long it waits
+// before reconnecting, and what it makes of the daemon's lines. No I/O here; main.cpp does that.
 #pragma once
 
 #include <chrono>
@@ -15,29 +15,11 @@
 
 namespace ph::session {
 
-// Longest line either side may send, without its '\n'.
-inline constexpr std::size_t kMaxLine = 1024;
-
-// Splits a byte stream into lines ending in '\n' (the '\n', and a '\r' before it, removed).
-class LineSplitter {
- public:
-  void feed(std::string_view bytes);
-  // The next complete line, nullopt when none is complete yet.
-  std::optional<std::string> next();
-  // True once more than kMaxLine bytes came without a '\n': the stream is broken and is closed.
-  bool overflowed() const { return overflowed_; }
-
- private:
-  std::string buffer_;
-  std::size_t start_ = 0;  // where the unread part of buffer_ begins
-  bool overflowed_ = false;
-};
-
-// The requests, each a whole line with its '\n'. Numbers in the C locale, whatever the process locale.
+// The requests, each a whole line with its '\n'.
 std::string helper_request(std::string_view backend);  // "helper x11"
 // "layout X Y W H"; nullopt unless W and H are > 0.
 std::optional<std::string> layout_request(Rect layout);
-// "position X Y" with at most three decimals and no exponent; nullopt for a non-finite coordinate.
+// "position X Y"; nullopt for a non-finite coordinate.
 std::optional<std::string> position_request(Vec2 position);
 
 // The bounding box of the outputs with a positive size; nullopt when there is none.

@@ -1,65 +1,32 @@
-// pseudohaptic-session's side of the control socket: line splitting, the requests it formats, the
-// layout's bounding box, the reconnection back-off and what it makes of the daemon's lines.
+// pseudohaptic-session's side of the control socket: the requests it sends (which the daemon's parser
+// must read back), the layout's bounding box, the reconnection back-off and what it makes of the
+// daemon's lines. Splitting the stream into lines is control/'s (tests/test_control_protocol.cpp).
 #include <gtest/gtest.h>
 
 #include <clocale>
+#include <cmath>
 #include <string>
+#include <variant>
 
+#include "control/protocol.hpp"
 #include "session/protocol.hpp"
 
 namespace ph::session {
 namespace {
 
-TEST(SessionLines, SplitsWhereverTheBytesBreak) {
-  LineSplitter lines;
-  lines.feed("ok\nque");
-  EXPECT_EQ(lines.next(), "ok");
-  EXPECT_EQ(lines.next(), std::nullopt);  // "que" is not a line yet
-  lines.feed("ry\r\nerror bad");
-  EXPECT_EQ(lines.next(), "query");  // a '\r' before the '\n' goes too
-  EXPECT_EQ(lines.next(), std::nullopt);
-  lines.feed(" thing\n\n");
-  EXPECT_EQ(lines.next(), "error bad thing");
-  EXPECT_EQ(lines.next(), "");
-  EXPECT_FALSE(lines.overflowed());
-}
-
-TEST(SessionLines, ManyLinesInOneReadAndOneByteAtATime) {
-  LineSplitter lines;
-  std::string stream;
-  for (int i = 0; i < 500; ++i) stream += "ok " + std::to_string(i) + "\n";
-  for (char c : stream) lines.feed(std::string(1, c));
-  for (int i = 0; i < 500; ++i) ASSERT_EQ(lines.next(), "ok " + std::to_string(i));
-  EXPECT_EQ(lines.next(), std::nullopt);
-}
-
-TEST(SessionLines, ALineOfTheLimitPassesOneMoreByteBreaksTheStream) {
-  LineSplitter at_limit;
-  at_limit.feed(std::string(kMaxLine, 'a') + "\n");
-  EXPECT_EQ(at_limit.next()->size(), kMaxLine);
-  EXPECT_FALSE(at_limit.overflowed());
-
-  LineSplitter over;
-  over.feed(std::string(kMaxLine + 1, 'a'));  // no newline yet, already too long
-  EXPECT_EQ(over.next(), std::nullopt);
-  EXPECT_TRUE(over.overflowed());
-  over.feed("\nok\n");  // nothing after a broken line is trusted
-  EXPECT_EQ(over.next(), std::nullopt);
-
-  LineSplitter over_with_newline;
-  over_with_newline.feed(std::string(kMaxLine + 1, 'a') + "\nok\n");
-  EXPECT_EQ(over_with_newline.next(), std::nullopt);
-  EXPECT_TRUE(over_with_newline.overflowed());
-}
-
-TEST(SessionRequests, AreWholeLinesInTheCLocale) {
+TEST(SessionRequests, AreWholeLinesTheDaemonParses) {
   EXPECT_EQ(helper_request("x11"), "helper x11\n");
   EXPECT_EQ(layout_request({0, 0, 1920, 1080}), "layout 0 0 1920 1080\n");
   EXPECT_EQ(layout_request({-1280, -200, 3200, 1280}), "layout -1280 -200 3200 1280\n");
   EXPECT_EQ(position_request({960, 540}), "position 960 540\n");
   EXPECT_EQ(position_request({960.5, 0.25}), "position 960.5 0.25\n");
-  EXPECT_EQ(position_request({-0.0001, 1919.9999}), "position 0 1920\n");  // three decimals at most
-  EXPECT_EQ(position_request({-12.125, 3}), "position -12.125 3\n");
+  // Whatever it sends, the daemon's parser reads back the same request.
+  for (const std::string& line : {helper_request("x11"), *layout_request({-1280, -200, 3200, 1280}),
+                                  *position_request({-12.125, 1919.75}), *position_request({3, 0})}) {
+    const auto parsed = control::parse_request(std::string_view(line).substr(0, line.size() - 1));
+    ASSERT_TRUE(std::holds_alternative<control::Request>(parsed)) << line << ": " << std::get<std::string>(parsed);
+    EXPECT_EQ(control::format_request(std::get<control::Request>(parsed)) + "\n", line);
+  }
   // A locale with a decimal comma changes nothing (where the system has one).
   if (std::setlocale(LC_ALL, "de_DE.UTF-8") != nullptr) {
     EXPECT_EQ(position_request({960.5, 0.25}), "position 960.5 0.25\n");

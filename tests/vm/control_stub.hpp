@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-#include "session/protocol.hpp"
+#include "control/protocol.hpp"
 #include "tests/vm/e2e_support.hpp"
 
 namespace ph::e2e {
@@ -27,7 +27,7 @@ class ControlStub {
     pollfd p{listener_.get(), POLLIN, 0};
     if (::poll(&p, 1, ms_until(Clock::now() + timeout)) <= 0) return false;
     client_ = Fd(::accept4(listener_.get(), nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK));
-    lines_ = session::LineSplitter{};
+    lines_ = control::LineBuffer{};
     return static_cast<bool>(client_);
   }
 
@@ -35,13 +35,13 @@ class ControlStub {
   std::optional<std::string> next_line(Clock::duration timeout) {
     const auto deadline = Clock::now() + timeout;
     for (;;) {
-      if (std::optional<std::string> line = lines_.next()) return line;
+      if (std::optional<std::string> line = lines_.next_line()) return line;
       pollfd p{client_.get(), POLLIN, 0};
       if (::poll(&p, 1, ms_until(deadline)) <= 0) return std::nullopt;
       char buffer[2048];
       const ssize_t n = ::recv(client_.get(), buffer, sizeof buffer, 0);
       if (n <= 0) return std::nullopt;
-      lines_.feed(std::string_view(buffer, static_cast<std::size_t>(n)));
+      lines_.append(std::string_view(buffer, static_cast<std::size_t>(n)));
     }
   }
 
@@ -76,7 +76,7 @@ class ControlStub {
 
   std::string path_;
   Fd listener_, client_;
-  session::LineSplitter lines_;
+  control::LineBuffer lines_;
 };
 
 }  // namespace ph::e2e
@@ -109,13 +109,13 @@ class ControlClient {
     }
     const auto deadline = Clock::now() + timeout;
     for (;;) {
-      if (std::optional<std::string> line = lines_.next()) return *line;
+      if (std::optional<std::string> line = lines_.next_line()) return *line;
       pollfd p{fd_.get(), POLLIN, 0};
       char buffer[2048];
       if (::poll(&p, 1, ms_until(deadline)) <= 0) throw Fatal("no reply to '" + request + "' from the control socket");
       const ssize_t n = ::recv(fd_.get(), buffer, sizeof buffer, 0);
       if (n <= 0) throw Fatal("the control socket closed after '" + request + "'");
-      lines_.feed(std::string_view(buffer, static_cast<std::size_t>(n)));
+      lines_.append(std::string_view(buffer, static_cast<std::size_t>(n)));
     }
   }
 
@@ -130,7 +130,7 @@ class ControlClient {
 
  private:
   Fd fd_;
-  session::LineSplitter lines_;
+  control::LineBuffer lines_;
 };
 
 }  // namespace ph::e2e
