@@ -82,12 +82,17 @@ std::variant<Request, std::string> parse_request(std::string_view line) {
   }
   if (verb == "position") return parse_position(w);
   if (verb == "layout") return parse_layout(w);
+  if (verb == "passthrough") {
+    if (w.size() != 2 || (w[1] != "on" && w[1] != "off")) return std::string("passthrough needs on or off");
+    return Request{PassthroughRequest{w[1] == "on"}};
+  }
   if (verb == "helper") {
     if (w.size() != 2 || !printable_word(w[1]))
       return std::string("helper needs one backend name (letters, digits, -_.)");
     return Request{HelperRequest{std::string(w[1])}};
   }
-  return std::string("unknown request; expected status, cursor, position X Y, layout X Y W H or helper NAME");
+  return std::string(
+      "unknown request; expected status, cursor, position X Y, layout X Y W H, helper NAME or passthrough on|off");
 }
 
 std::string format_request(const Request& request) {
@@ -101,6 +106,7 @@ std::string format_request(const Request& request) {
       return fmt::format("layout {} {} {} {}", r.desktop.x, r.desktop.y, r.desktop.w, r.desktop.h);
     }
     std::string operator()(const HelperRequest& r) const { return "helper " + r.backend; }
+    std::string operator()(const PassthroughRequest& r) const { return r.on ? "passthrough on" : "passthrough off"; }
   };
   return std::visit(Format{}, request);
 }
@@ -116,10 +122,11 @@ std::string format_error(std::string_view reason) {
 }
 
 std::string format_status(const Status& s) {
-  return format_ok(fmt::format("mode={} mice={} regions={} desktop={},{},{},{} cursor={},{} helper={} scene={}",
-                               s.absolute ? "absolute" : "relative", s.mice, s.regions, s.desktop.x, s.desktop.y,
-                               s.desktop.w, s.desktop.h, s.cursor.x, s.cursor.y, s.helper ? "yes" : "no",
-                               s.scene.empty() ? "default" : s.scene));
+  return format_ok(
+      fmt::format("mode={} mice={} regions={} desktop={},{},{},{} cursor={},{} helper={} passthrough={} scene={}",
+                  s.absolute ? "absolute" : "relative", s.mice, s.regions, s.desktop.x, s.desktop.y, s.desktop.w,
+                  s.desktop.h, s.cursor.x, s.cursor.y, s.helper ? "yes" : "no", s.passthrough ? "on" : "off",
+                  s.scene.empty() ? "default" : s.scene));
 }
 
 std::string format_cursor(Vec2 cursor) { return format_ok(fmt::format("{} {}", cursor.x, cursor.y)); }
@@ -182,6 +189,10 @@ std::optional<Status> parse_status(std::string_view words) {
     } else if (key == "helper") {
       good = value == "yes" || value == "no";
       s.helper = value == "yes";
+    } else if (key == "passthrough") {
+      good = value == "on" || value == "off";
+      s.passthrough = value == "on";
+      continue;  // optional: older daemons do not say
     } else {
       continue;  // a newer daemon may say more
     }

@@ -27,7 +27,11 @@ struct LayoutRequest {  // the bounding box of all outputs, logical px
 struct HelperRequest {  // this connection is the session helper, with this backend
   std::string backend;
 };
-using Request = std::variant<StatusRequest, CursorRequest, PositionRequest, LayoutRequest, HelperRequest>;
+struct PassthroughRequest {  // an application that reads raw relative motion has the focus (or had)
+  bool on = false;
+};
+using Request =
+    std::variant<StatusRequest, CursorRequest, PositionRequest, LayoutRequest, HelperRequest, PassthroughRequest>;
 
 // A request, or the reason it is malformed (sent back as `error REASON`).
 std::variant<Request, std::string> parse_request(std::string_view line);
@@ -41,6 +45,7 @@ struct Status {
   Rect desktop;
   Vec2 cursor;
   bool helper = false;
+  bool passthrough = false;
   std::string scene;  // a path, or "default"
 };
 

@@ -139,6 +139,10 @@ std::string ControlServer::answer(int fd, const std::string& line, ControlHandle
     handler.layout(l->desktop);
     return control::format_ok();
   }
+  if (const auto* p = std::get_if<control::PassthroughRequest>(&request)) {
+    handler.passthrough(p->on);
+    return control::format_ok();
+  }
   const auto& h = std::get<control::HelperRequest>(request);
   const bool had = has_helper();
   helper_fd_ = fd;  // the newest helper wins: a restarted session replaces the old one

@@ -25,6 +25,9 @@ class ControlHandler {
   virtual void position(Vec2 position, bool from_helper) = 0;
   virtual void layout(Rect desktop) = 0;
   virtual void helper_changed(bool present) = 0;
+  // An application that reads raw relative motion (a game holding a pointer grab) has the focus: the
+  // mice's frames go unchanged through relative devices until it is off again.
+  virtual void passthrough(bool on) = 0;
 };
 
 class ControlServer {

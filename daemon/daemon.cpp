@@ -245,6 +245,7 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
     return;
   }
   mouse.frames = std::make_unique<FrameProcessor>(*pipeline_, *mouse.sink);
+  if (passthrough_wanted_) make_passthrough_sink(node, mouse);
   watch(epoll_.get(), device.fd());
   log_.info("took {} {}; emitting through {} \"{}\"", node, quoted_name(device), mouse.sink->devnode(),
             output_device(device.description(), pipeline_->config()).name);
@@ -290,7 +291,7 @@ void Daemon::on_mouse_readable(int fd) {
     }
     last_motion_ = now;
     try {
-      const ReadStatus status = mouse->device->read_available([&](const InputEvent& e) { mouse->frames->push(e); });
+      const ReadStatus status = mouse->device->read_available([&](const InputEvent& e) { route(*mouse, e); });
       remember_emitted();
       if (status == ReadStatus::gone) let_go(name, "unplugged");
     } catch (const DeviceError& e) {
@@ -359,6 +360,57 @@ void Daemon::update_retry_timer() {
   retry_armed_ = needed;
 }
 
+// A frame goes through the pipeline, or unchanged through the pass-through device; the route changes
+// only between frames and while no button is held on the device in use, so no press loses its release.
+void Daemon::route(Mouse& mouse, const InputEvent& event) {
+  if (!mouse.passing) {
+    bool frame_done = false;
+    mouse.frames->push(event, nullptr, &frame_done);
+    if (frame_done && passthrough_wanted_ && mouse.passthrough_sink && !mouse.sink->holds_keys()) mouse.passing = true;
+    return;
+  }
+  mouse.raw_frame.events.push_back(event);
+  if (event.type != ev::kSyn || event.code != ev::kSynReport) return;
+  mouse.passthrough_sink->write(mouse.raw_frame);
+  mouse.raw_frame.events.clear();
+  if (!passthrough_wanted_ && !mouse.passthrough_sink->holds_keys()) mouse.passing = false;
+}
+
+bool Daemon::make_passthrough_sink(const std::string& node, Mouse& mouse) {
+  if (mouse.passthrough_sink) return true;
+  PipelineConfig relative = config_.pipeline;
+  relative.mode = OutputMode::relative;
+  DeviceDescription description = output_device(mouse.device->description(), relative);
+  description.name += " (pass-through)";
+  try {
+    mouse.passthrough_sink = std::make_unique<UinputSink>(description);
+  } catch (const UinputError& e) {
+    log_.warning("{}: no pass-through device: {}", node, e.what());
+    return false;
+  }
+  log_.info("{} {}: pass-through device {} \"{}\"", node, quoted_name(*mouse.device), mouse.passthrough_sink->devnode(),
+            description.name);
+  return true;
+}
+
+void Daemon::passthrough(bool on) {
+  if (on == passthrough_wanted_) return;
+  passthrough_wanted_ = on;
+  if (on && config_.pipeline.mode == OutputMode::relative) {
+    passthrough_wanted_ = false;  // relative output already reaches such applications as motion
+    return;
+  }
+  log_.info(
+      "pass-through {}: {}", on ? "on" : "off",
+      on ? "the mice's motion goes unchanged to the application that holds the pointer" : "the textures are back");
+  for (auto& [node, mouse] : mice_) {
+    if (on && mouse->frames != nullptr) make_passthrough_sink(node, *mouse);
+  }
+  // The application may have moved the cursor while it held it.
+  if (!on && control_) control_->query_helper();
+  notifier_.status(status_line());
+}
+
 void Daemon::watch_untaken(const std::string& node, std::unique_ptr<EvdevDevice> device) {
   watch(epoll_.get(), device->fd());
   log_.debug("{} {}: watched without a grab; its motion makes the daemon ask where the cursor is", node,
@@ -420,6 +472,7 @@ control::Status Daemon::status() const {
   s.regions = static_cast<int>(config_.scene->regions().size());
   s.desktop = pipeline_->config().desktop;
   s.cursor = pipeline_->cursor().position;
+  s.passthrough = passthrough_wanted_;
   s.scene = choice_.default_scene || !choice_.file ? config_.source : choice_.file->string();
   if (config_.source == "the embedded default scene") s.scene = "default";
   return s;

@@ -53,6 +53,11 @@ class Daemon final : private ControlHandler {
     std::unique_ptr<EvdevDevice> device;
     std::unique_ptr<UinputSink> sink;
     std::unique_ptr<FrameProcessor> frames;
+    // Pass-through (docs/SERVICE.md, "Applications that lock the pointer"): a relative device that
+    // carries the mouse's frames unchanged while `passing`, made the first time it is needed.
+    std::unique_ptr<UinputSink> passthrough_sink;
+    Frame raw_frame;
+    bool passing = false;
     bool told_waiting = false;
   };
 
@@ -64,6 +69,9 @@ class Daemon final : private ControlHandler {
   void position(Vec2 position, bool from_helper) override;
   void layout(Rect desktop) override;
   void helper_changed(bool present) override;
+  void passthrough(bool on) override;
+  void route(Mouse& mouse, const InputEvent& event);
+  bool make_passthrough_sink(const std::string& node, Mouse& mouse);
 
   void start_control(const std::string& path);
   void start_pipeline();
@@ -105,6 +113,7 @@ class Daemon final : private ControlHandler {
   SteadyTime last_query_{};
   SteadyTime last_untaken_motion_{};
   bool settle_query_due_ = false;
+  bool passthrough_wanted_ = false;
   std::map<std::string, std::unique_ptr<Mouse>> mice_;  // by node
   std::map<std::string, int> unopened_;                 // node -> tries left (not yet accessible)
   std::set<std::string> passed_over_;                   // not a pointer, not matched, ours, busy

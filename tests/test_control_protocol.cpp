@@ -32,8 +32,12 @@ TEST(ControlProtocol, RequestsRoundTrip) {
   const auto l = std::get<LayoutRequest>(parsed("layout -1920 0 3840 1080"));
   EXPECT_EQ(l.desktop, (Rect{-1920, 0, 3840, 1080}));
   EXPECT_EQ(std::get<HelperRequest>(parsed("helper x11")).backend, "x11");
+  EXPECT_TRUE(std::get<PassthroughRequest>(parsed("passthrough on")).on);
+  EXPECT_FALSE(std::get<PassthroughRequest>(parsed("passthrough off")).on);
+  EXPECT_NE(refusal("passthrough yes").find("on or off"), std::string::npos);
   for (const Request& r : {Request{StatusRequest{}}, Request{CursorRequest{}}, Request{PositionRequest{{0.1, 1e-3}}},
-                           Request{LayoutRequest{{1, 2, 3, 4}}}, Request{HelperRequest{"wayland-kwin"}}}) {
+                           Request{LayoutRequest{{1, 2, 3, 4}}}, Request{HelperRequest{"wayland-kwin"}},
+                           Request{PassthroughRequest{true}}, Request{PassthroughRequest{false}}}) {
     EXPECT_EQ(format_request(parsed(format_request(r))), format_request(r));
   }
   // Extra spaces between words are harmless.
@@ -65,6 +69,7 @@ TEST(ControlProtocol, StatusAndCursorRepliesRoundTrip) {
   s.desktop = {-1280, 0, 3200, 1080};
   s.cursor = {12.5, 1079.75};
   s.helper = true;
+  s.passthrough = true;
   s.scene = "/home/a user/my scene.toml";
   const std::optional<Reply> reply = parse_reply(format_status(s));
   ASSERT_TRUE(reply && reply->ok);
@@ -76,6 +81,7 @@ TEST(ControlProtocol, StatusAndCursorRepliesRoundTrip) {
   EXPECT_EQ(back->desktop, s.desktop);
   EXPECT_EQ(back->cursor, s.cursor);
   EXPECT_TRUE(back->helper);
+  EXPECT_TRUE(back->passthrough);
   EXPECT_EQ(back->scene, s.scene);
   EXPECT_FALSE(parse_status("mode=absolute mice=1").has_value());  // incomplete
   EXPECT_FALSE(parse_status("mode=sideways mice=1 regions=0 desktop=0,0,1,1 cursor=0,0 helper=no scene=x"));

@@ -51,6 +51,8 @@ class RecordingHandler final : public ControlHandler {
     desktop_ = d;
   }
   void helper_changed(bool present) override { helper_present_ = present; }
+  void passthrough(bool on) override { passthrough_ = on; }
+  std::atomic<bool> passthrough_{false};
 
   Vec2 at() {
     std::lock_guard lock(mutex_);
@@ -148,6 +150,10 @@ TEST(ControlServer, AnswersEveryRequestAndQueriesTheHelper) {
     EXPECT_EQ(helper.read_line(2s), "query");
     ASSERT_TRUE(helper.request("position 5 6").ok);
     EXPECT_EQ(server.handler.helper_positions(), 1);
+    ASSERT_TRUE(helper.request("passthrough on").ok);
+    EXPECT_TRUE(server.handler.passthrough_);
+    ASSERT_TRUE(helper.request("passthrough off").ok);
+    EXPECT_FALSE(server.handler.passthrough_);
   }
   for (int i = 0; i < 100 && server.handler.helper_present_; ++i) std::this_thread::sleep_for(10ms);
   EXPECT_FALSE(server.handler.helper_present_);  // the helper's connection closed

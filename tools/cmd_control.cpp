@@ -43,6 +43,7 @@ int run_status(const ControlOptions& o) {
   fmt::print("cursor:  {:.2f},{:.2f} (the daemon's model)\n", s->cursor.x, s->cursor.y);
   fmt::print("helper:  {}\n", s->helper ? "connected (the model follows the desktop's cursor)"
                                         : "none (the first motion puts the cursor where the model is)");
+  if (s->passthrough) fmt::print("pass-through: on (an application holds the pointer; no textures)\n");
   return 0;
 }
 

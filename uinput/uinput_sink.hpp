@@ -52,6 +52,7 @@ class UinputSink final : public EventSink {
   void write(const Frame& frame) override;
   // The /dev/input/eventN node of the virtual device ("" when the kernel did not say).
   std::string devnode() const;
+  bool holds_keys() const { return held_.any(); }
   std::string syspath() const;
 
  private:
