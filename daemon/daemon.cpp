@@ -454,9 +454,14 @@ void Daemon::on_resync_tick() {
   }
 }
 
+// The pixel the desktop shows the cursor on: floor of the model's position, what absolute output emits.
+// Not the traversal's texel: a model stopped on a pixel's left or top edge after moving right or down is
+// still in the texel before it, and the helper would report the pixel itself.
+Texel Daemon::cursor_pixel() const { return texel_at(pipeline_->cursor().position); }
+
 void Daemon::remember_emitted() {
   const SteadyTime now = std::chrono::steady_clock::now();
-  const Texel pixel = pipeline_->cursor().texel;
+  const Texel pixel = cursor_pixel();
   if (emitted_.empty() || emitted_.back().second != pixel) emitted_.emplace_back(now, pixel);
   while (emitted_.size() > kEmittedAlwaysKept && now - emitted_.front().first > kEmittedMemory) emitted_.pop_front();
 }
@@ -484,7 +489,7 @@ void Daemon::position(Vec2 position, bool from_helper) {
   const Texel pixel = texel_at(position);
   // The helper reports pixels; one the daemon put the cursor on lately is its own motion still on its way
   // through the desktop, not a move by someone else.
-  if (from_helper && (pixel == pipeline_->cursor().texel || emitted_recently(pixel))) return;
+  if (from_helper && (pixel == cursor_pixel() || emitted_recently(pixel))) return;
   const Vec2 was = pipeline_->cursor().position;
   pipeline_->move_cursor_to(position);
   emitted_.clear();

@@ -79,6 +79,7 @@ class Daemon final : private ControlHandler {
   void watch_untaken(const std::string& node, std::unique_ptr<EvdevDevice> device);
   void on_untaken_readable(int fd);
   void on_resync_tick();
+  Texel cursor_pixel() const;
   void remember_emitted();
   bool emitted_recently(Texel pixel) const;
   void take_present_mice();
