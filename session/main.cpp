@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "control/protocol.hpp"
 #include "daemon/unique_fd.hpp"
@@ -62,24 +63,29 @@ struct Link {
   Conversation conversation;
   ph::control::LineBuffer lines;
   std::optional<ph::Rect> layout_sent;
+  std::optional<bool> passthrough_sent;
   int failures = 0;  // connection attempts failed in a row
   Clock::time_point next_attempt = Clock::now();
 };
 
 class Helper {
  public:
-  Helper(std::string control, X11Desktop& desktop, const Log& log)
-      : control_(std::move(control)), desktop_(desktop), log_(log) {}
+  Helper(std::string control, std::vector<std::string> passthrough, X11Desktop& desktop, const Log& log)
+      : control_(std::move(control)), passthrough_(std::move(passthrough)), desktop_(desktop), log_(log) {}
 
   // Runs until SIGTERM or SIGINT arrives on `signals`; returns the exit status.
   int run(int signals) {
     for (;;) {
       if (!link_.connection && Clock::now() >= link_.next_attempt) connect();
-      if (desktop_.layout_changed() && link_.connection) send_layout();
+      const X11Desktop::Changes changes = desktop_.read_events();
+      if (changes.layout && link_.connection) send_layout();
+      if (changes.focus && link_.connection) send_passthrough();
       pollfd fds[3] = {{signals, POLLIN, 0}, {desktop_.fd(), POLLIN, 0}, {-1, POLLIN, 0}};
       if (link_.connection) fds[2].fd = link_.connection->fd();
       int timeout = -1;
-      if (!link_.connection) {
+      if (desktop_.events_queued()) {
+        timeout = 0;  // read while answering: handle them before sleeping
+      } else if (!link_.connection) {
         timeout = static_cast<int>(std::max<long long>(
             0, std::chrono::ceil<std::chrono::milliseconds>(link_.next_attempt - Clock::now()).count()));
       }
@@ -115,6 +121,7 @@ class Helper {
     log_.info(fmt::format("connected to pseudohapticd at {}", control_));
     if (send(helper_request("x11"))) send_layout();
     if (link_.connection) send_position();
+    if (link_.connection) send_passthrough();
   }
 
   void drop(const std::string& why) {
@@ -147,6 +154,16 @@ class Helper {
     if (const std::optional<std::string> line = position_request(*at)) send(*line);
   }
 
+  // Pass-through while a listed application has the focus (pseudohaptic-session(1), --passthrough).
+  void send_passthrough() {
+    if (passthrough_.empty()) return;
+    const auto active = desktop_.active_class();
+    const bool on = active && is_listed(passthrough_, active->first, active->second);
+    log_.debug(fmt::format("the focus is on {}", active ? active->first + " (" + active->second + ")" : "no window"));
+    if (link_.passthrough_sent == on) return;
+    if (send(passthrough_request(on))) link_.passthrough_sent = on;
+  }
+
   void read_daemon() {
     const ControlConnection::Received received = link_.connection->read_available();
     const bool in_bounds = link_.lines.append(received.data);
@@ -164,6 +181,7 @@ class Helper {
   }
 
   std::string control_;
+  std::vector<std::string> passthrough_;
   X11Desktop& desktop_;
   const Log& log_;
   Link link_;
@@ -186,6 +204,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "x11"}))
       ->capture_default_str();
   app.add_option("--display", display, "The X display (x11 backend; default: $DISPLAY)");
+  std::vector<std::string> passthrough;
+  app.add_option("--passthrough", passthrough,
+                 "An application (WM_CLASS instance or class name, any case) that reads raw relative motion, such "
+                 "as a game: while it has the focus the daemon passes the mice through unchanged. Repeatable");
   app.add_flag("-v,--verbose", verbose, "Also log every line sent and every connection attempt");
   app.set_version_flag("--version", "pseudohaptic-session 0.1.0");
   try {
@@ -218,7 +240,7 @@ int main(int argc, char** argv) {
   try {
     X11Desktop desktop(display);
     if (!desktop.has_randr()) log.notice("X has no RandR 1.2: the layout is the root window's size");
-    return Helper(control, desktop, log).run(signals.get());
+    return Helper(control, passthrough, desktop, log).run(signals.get());
   } catch (const X11Error& e) {
     log.error(e.what());
     return 1;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <limits>
 
 #include "control/protocol.hpp"
@@ -21,6 +22,19 @@ std::optional<std::string> layout_request(Rect layout) {
 std::optional<std::string> position_request(Vec2 position) {
   if (!is_finite(position)) return std::nullopt;
   return control::format_request(control::PositionRequest{position}) + "\n";
+}
+
+std::string passthrough_request(bool on) { return control::format_request(control::PassthroughRequest{on}) + "\n"; }
+
+bool is_listed(const std::vector<std::string>& applications, std::string_view instance, std::string_view class_name) {
+  const auto same = [](std::string_view a, std::string_view b) {
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+             return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
+           });
+  };
+  return std::any_of(applications.begin(), applications.end(), [&](const std::string& name) {
+    return !name.empty() && (same(name, instance) || same(name, class_name));
+  });
 }
 
 std::optional<Rect> bounding_box(const std::vector<Rect>& outputs) {

@@ -21,6 +21,11 @@ std::string helper_request(std::string_view backend);  // "helper x11"
 std::optional<std::string> layout_request(Rect layout);
 // "position X Y"; nullopt for a non-finite coordinate.
 std::optional<std::string> position_request(Vec2 position);
+std::string passthrough_request(bool on);  // "passthrough on" / "passthrough off"
+
+// Whether a window of this WM_CLASS (its instance and class names) belongs to one of `applications`,
+// the names the user listed for pass-through (either name matches, whatever the case).
+bool is_listed(const std::vector<std::string>& applications, std::string_view instance, std::string_view class_name);
 
 // The bounding box of the outputs with a positive size; nullopt when there is none.
 std::optional<Rect> bounding_box(const std::vector<Rect>& outputs);

@@ -1,5 +1,7 @@
 #include "session/x11_desktop.hpp"
 
+#include <X11/Xatom.h>
+#include <X11/Xutil.h>
 #include <X11/extensions/Xrandr.h>
 
 #include <cstdlib>
@@ -30,10 +32,14 @@ X11Desktop::X11Desktop(const std::string& display)
     XRRSelectInput(display_.get(), DefaultRootWindow(display_.get()),
                    RRScreenChangeNotifyMask | RRCrtcChangeNotifyMask | RROutputChangeNotifyMask);
   }
+  active_window_ = XInternAtom(display_.get(), "_NET_ACTIVE_WINDOW", False);
+  XSelectInput(display_.get(), DefaultRootWindow(display_.get()), PropertyChangeMask);
   XFlush(display_.get());
 }
 
 int X11Desktop::fd() const { return ConnectionNumber(display_.get()); }
+
+bool X11Desktop::events_queued() const { return XEventsQueued(display_.get(), QueuedAlready) > 0; }
 
 Rect X11Desktop::layout() const {
   Display* d = display_.get();
@@ -67,20 +73,44 @@ std::optional<Vec2> X11Desktop::pointer() const {
   return Vec2{static_cast<double>(x), static_cast<double>(y)};
 }
 
-bool X11Desktop::layout_changed() {
-  bool changed = false;
+X11Desktop::Changes X11Desktop::read_events() {
+  Changes changes;
   while (XPending(display_.get()) > 0) {
     XEvent event;
     XNextEvent(display_.get(), &event);
-    if (!has_randr()) continue;
-    if (event.type == randr_event_base_ + RRScreenChangeNotify) {
+    if (event.type == PropertyNotify && event.xproperty.atom == active_window_) {
+      changes.focus = true;
+    } else if (has_randr() && event.type == randr_event_base_ + RRScreenChangeNotify) {
       XRRUpdateConfiguration(&event);  // keeps Xlib's idea of the screen size current
-      changed = true;
-    } else if (event.type == randr_event_base_ + RRNotify) {
-      changed = true;
+      changes.layout = true;
+    } else if (has_randr() && event.type == randr_event_base_ + RRNotify) {
+      changes.layout = true;
     }
   }
-  return changed;
+  return changes;
+}
+
+std::optional<std::pair<std::string, std::string>> X11Desktop::active_class() const {
+  Display* d = display_.get();
+  Atom type = None;
+  int format = 0;
+  unsigned long count = 0, after = 0;
+  unsigned char* data = nullptr;
+  Window window = None;
+  if (XGetWindowProperty(d, DefaultRootWindow(d), active_window_, 0, 1, False, XA_WINDOW, &type, &format, &count,
+                         &after, &data) == Success &&
+      type == XA_WINDOW && format == 32 && count == 1) {
+    window = static_cast<Window>(*reinterpret_cast<unsigned long*>(data));
+  }
+  if (data != nullptr) XFree(data);
+  if (window == None) return std::nullopt;
+  XClassHint hint{};
+  if (!XGetClassHint(d, window, &hint)) return std::nullopt;  // gone meanwhile, or no WM_CLASS
+  std::pair<std::string, std::string> names{hint.res_name != nullptr ? hint.res_name : "",
+                                            hint.res_class != nullptr ? hint.res_class : ""};
+  if (hint.res_name != nullptr) XFree(hint.res_name);
+  if (hint.res_class != nullptr) XFree(hint.res_class);
+  return names;
 }
 
 }  // namespace ph::session

@@ -9,6 +9,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "core/geometry.hpp"
 
@@ -26,12 +27,22 @@ class X11Desktop {
   explicit X11Desktop(const std::string& display);
 
   int fd() const;  // readable when X has sent events
+  // Events Xlib has already read from the socket (during a request's round trip): poll(2) on fd() does
+  // not see them.
+  bool events_queued() const;
   bool has_randr() const { return randr_event_base_ >= 0; }
   Rect layout() const;
   // Where the pointer is; nullopt while it is on another X screen than the default one.
   std::optional<Vec2> pointer() const;
-  // Reads the events X has sent; true when one of them says the screen or an output changed.
-  bool layout_changed();
+  // What the events X has sent so far say changed.
+  struct Changes {
+    bool layout = false;  // the screen or an output (RandR)
+    bool focus = false;   // the active window (_NET_ACTIVE_WINDOW on the root window)
+  };
+  Changes read_events();
+  // The WM_CLASS (instance, class) of the active window, as the window manager names it in
+  // _NET_ACTIVE_WINDOW; nullopt when there is none or it has no WM_CLASS.
+  std::optional<std::pair<std::string, std::string>> active_class() const;
 
  private:
   struct Closer {
@@ -39,6 +50,7 @@ class X11Desktop {
   };
   std::unique_ptr<Display, Closer> display_;
   int randr_event_base_ = -1;
+  Atom active_window_ = None;
 };
 
 }  // namespace ph::session

@@ -21,9 +21,10 @@ TEST(SessionRequests, AreWholeLinesTheDaemonParses) {
   EXPECT_EQ(position_request({960, 540}), "position 960 540\n");
   EXPECT_EQ(position_request({960.5, 0.25}), "position 960.5 0.25\n");
   // Whatever it sends, the daemon's parser reads back the same request.
-  for (const std::string& line : {helper_request("x11"), *layout_request({-1280, -200, 3200, 1280}),
-                                  *position_request({-12.125, 1919.75}), *position_request({3, 0})}) {
-    const auto parsed = control::parse_request(std::string_view(line).substr(0, line.size() - 1));
+  for (const std::string& line :
+       {helper_request("x11"), *layout_request({-1280, -200, 3200, 1280}), *position_request({-12.125, 1919.75}),
+        *position_request({3, 0}), passthrough_request(true), passthrough_request(false)}) {
+    const auto parsed = control::parse_request(std::string_view(line).substr(0, line.size() - 1));  // no '\n'
     ASSERT_TRUE(std::holds_alternative<control::Request>(parsed)) << line << ": " << std::get<std::string>(parsed);
     EXPECT_EQ(control::format_request(std::get<control::Request>(parsed)) + "\n", line);
   }
@@ -39,6 +40,18 @@ TEST(SessionRequests, RefuseWhatTheDaemonWouldRefuse) {
   EXPECT_EQ(layout_request({0, 0, 1920, -1}), std::nullopt);
   EXPECT_EQ(position_request({std::nan(""), 1}), std::nullopt);
   EXPECT_EQ(position_request({1, HUGE_VAL}), std::nullopt);
+}
+
+TEST(SessionPassthrough, ListedApplicationsMatchEitherNameInAnyCase) {
+  EXPECT_EQ(passthrough_request(true), "passthrough on\n");
+  EXPECT_EQ(passthrough_request(false), "passthrough off\n");
+  const std::vector<std::string> listed{"steam_app_570", "Xonotic"};
+  EXPECT_TRUE(is_listed(listed, "steam_app_570", "steam_app_570"));
+  EXPECT_TRUE(is_listed(listed, "xonotic-glx", "XONOTIC"));  // the class name, another case
+  EXPECT_FALSE(is_listed(listed, "firefox-esr", "firefox-esr"));
+  EXPECT_FALSE(is_listed(listed, "steam_app_57", "Steam"));  // whole names only
+  EXPECT_FALSE(is_listed({}, "xonotic", "Xonotic"));
+  EXPECT_FALSE(is_listed({""}, "", ""));  // an empty name lists nothing
 }
 
 TEST(SessionLayout, IsTheBoundingBoxOfTheOutputs) {

@@ -681,7 +681,7 @@ bool session_case(const Options& options, XServer& x) {
   ControlStub stub((options.scratch / "control").string());
   x.warp(700, 300);
   const char* display = std::getenv("DISPLAY");
-  ChildProcess helper({options.session, "--control", stub.path(), "-v"},
+  ChildProcess helper({options.session, "--control", stub.path(), "--passthrough", "PH-GAME", "-v"},
                       {std::string("DISPLAY=") + (display != nullptr ? display : ""), "PATH=/usr/bin:/bin"},
                       (options.scratch / "session.log").string());
   // Reads lines until `want` (answering each with ok); a line before it is noted, none at all a problem.
@@ -719,6 +719,16 @@ bool session_case(const Options& options, XServer& x) {
     expect("layout 0 0 3200 1080", "after a second output to the right");
     xrandr("--output DUMMY1 --off");
     expect("layout 0 0 1920 1080", "after the second output is off");
+    // A listed application gets the focus (as a window manager says: _NET_ACTIVE_WINDOW), then none has it.
+    const Window game = XCreateSimpleWindow(x.get(), x.root(), 0, 0, 64, 64, 0, 0, 0);
+    XClassHint hint{const_cast<char*>("ph-game"), const_cast<char*>("Ph-game")};
+    XSetClassHint(x.get(), game, &hint);
+    x.set_active_window(game);
+    expect("passthrough on", "when a listed application has the focus");
+    x.set_active_window(None);
+    expect("passthrough off", "when it has lost the focus");
+    XDestroyWindow(x.get(), game);
+    XSync(x.get(), False);
     stub.stop();  // as a daemon restart: the socket goes away and comes back
     std::this_thread::sleep_for(700ms);
     stub.restart();

@@ -5,6 +5,7 @@
 
 #include <X11/Xatom.h>
 #include <X11/Xlib.h>
+#include <X11/Xutil.h>
 #include <X11/extensions/XInput2.h>
 #include <X11/extensions/XTest.h>
 #include <poll.h>
@@ -113,6 +114,14 @@ class XServer {
   // A relative motion through X's own XTEST pointer.
   void xtest_move_by(int dx, int dy) const {
     XTestFakeRelativeMotionEvent(get(), dx, dy, CurrentTime);
+    XSync(get(), False);
+  }
+
+  // Sets _NET_ACTIVE_WINDOW on the root window, as a window manager does when the focus moves.
+  void set_active_window(Window window) const {
+    const unsigned long value = window;
+    XChangeProperty(get(), root(), XInternAtom(get(), "_NET_ACTIVE_WINDOW", False), XA_WINDOW, 32, PropModeReplace,
+                    reinterpret_cast<const unsigned char*>(&value), 1);
     XSync(get(), False);
   }
 
