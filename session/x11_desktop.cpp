@@ -70,7 +70,9 @@ std::optional<Vec2> X11Desktop::pointer() const {
                      &mask)) {
     return std::nullopt;
   }
-  return Vec2{static_cast<double>(x), static_cast<double>(y)};
+  // X gives the pixel only; its centre is where the pointer is within half a pixel, and what the daemon's
+  // absolute output emits for a model anywhere in that pixel.
+  return Vec2{x + 0.5, y + 0.5};
 }
 
 X11Desktop::Changes X11Desktop::read_events() {

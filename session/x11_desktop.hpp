@@ -32,7 +32,7 @@ class X11Desktop {
   bool events_queued() const;
   bool has_randr() const { return randr_event_base_ >= 0; }
   Rect layout() const;
-  // Where the pointer is; nullopt while it is on another X screen than the default one.
+  // Where the pointer is (the centre of its pixel); nullopt while it is on another X screen than the default one.
   std::optional<Vec2> pointer() const;
   // What the events X has sent so far say changed.
   struct Changes {

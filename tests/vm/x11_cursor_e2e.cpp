@@ -706,10 +706,10 @@ bool session_case(const Options& options, XServer& x) {
     if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
     expect("helper x11", "at start");
     expect("layout 0 0 1920 1080", "at start");
-    expect("position 700 300", "at start");
+    expect("position 700.5 300.5", "at start");
     x.warp(123, 456);
     stub.send("query");
-    expect("position 123 456", "after a query");
+    expect("position 123.5 456.5", "after a query");
     xrandr("--output DUMMY0 --mode 1280x720");
     expect("layout 0 0 1280 720", "after a smaller mode");
     xrandr("--output DUMMY0 --mode 1920x1080");
@@ -736,7 +736,7 @@ bool session_case(const Options& options, XServer& x) {
     x.warp(300, 200);
     expect("helper x11", "after reconnecting");
     expect("layout 0 0 1920 1080", "after reconnecting");
-    expect("position 300 200", "after reconnecting");
+    expect("position 300.5 200.5", "after reconnecting");
     helper.signal(SIGTERM);
     const std::optional<int> status = helper.wait_exit(10s);
     if (!status || !WIFEXITED(*status) || WEXITSTATUS(*status) != 0) {
