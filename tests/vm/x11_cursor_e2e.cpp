@@ -730,10 +730,10 @@ bool session_case(const Options& options, XServer& x) {
     XDestroyWindow(x.get(), game);
     XSync(x.get(), False);
     stub.stop();  // as a daemon restart: the socket goes away and comes back
+    x.warp(300, 200);  // before the helper can reconnect: it says where the pointer is as it connects
     std::this_thread::sleep_for(700ms);
     stub.restart();
     if (!stub.accept(20s)) throw Fatal("the helper did not reconnect within 20 s");
-    x.warp(300, 200);
     expect("helper x11", "after reconnecting");
     expect("layout 0 0 1920 1080", "after reconnecting");
     expect("position 300.5 200.5", "after reconnecting");
