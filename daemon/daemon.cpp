@@ -36,6 +36,9 @@ constexpr std::chrono::milliseconds kSettleAfterOtherPointer{100};
 constexpr std::chrono::milliseconds kQueryAtMostEvery{50};
 constexpr std::chrono::milliseconds kEmittedMemory{2000};
 constexpr std::size_t kEmittedAlwaysKept = 8;
+// The first frames after a pause wait this long at most for the helper's answer, so that they start
+// from where the cursor really is (an application may have warped it during the pause).
+constexpr long kHoldForHelperNs = 30'000'000;
 
 [[noreturn]] void fail_system(std::string_view what) {
   throw StartupError(fmt::format("{}: {}", what, std::strerror(errno)));
@@ -91,9 +94,11 @@ Daemon::Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& no
   retry_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
   watchdog_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
   resync_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
-  if (!signals_ || !epoll_ || !retry_timer_ || !watchdog_timer_ || !resync_timer_)
+  hold_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
+  if (!signals_ || !epoll_ || !retry_timer_ || !watchdog_timer_ || !resync_timer_ || !hold_timer_)
     fail_system("cannot set up the event loop");
-  for (int fd : {signals_.get(), udev_.fd(), retry_timer_.get(), watchdog_timer_.get(), resync_timer_.get()})
+  for (int fd :
+       {signals_.get(), udev_.fd(), retry_timer_.get(), watchdog_timer_.get(), resync_timer_.get(), hold_timer_.get()})
     watch(epoll_.get(), fd);
   if (const auto interval = ServiceNotifier::watchdog_interval()) {
     set_timer(watchdog_timer_.get(), static_cast<long>(interval->count()) * 1000);
@@ -150,6 +155,11 @@ int Daemon::run() {
       } else if (fd == watchdog_timer_.get()) {
         drain_timer(fd);
         notifier_.watchdog();
+      } else if (fd == hold_timer_.get()) {
+        drain_timer(fd);
+        log_.debug("resync: no answer from the session helper within {} ms; going on from the model",
+                   kHoldForHelperNs / 1'000'000);
+        release_held();
       } else if (fd == resync_timer_.get()) {
         drain_timer(fd);
         on_resync_tick();
@@ -285,13 +295,20 @@ void Daemon::on_mouse_readable(int fd) {
     const std::string name = node;  // let_go erases the map entry
     const SteadyTime now = std::chrono::steady_clock::now();
     // Motion after a pause: whatever happened meanwhile (a warp, another pointer), ask where the cursor is.
-    if (now - last_motion_ > kPauseBeforeQuery && control_) {
+    if (now - last_motion_ > kPauseBeforeQuery && control_ && control_->has_helper()) {
       control_->query_helper();
       last_query_ = now;
+      if (!holding_) start_holding();
     }
     last_motion_ = now;
     try {
-      const ReadStatus status = mouse->device->read_available([&](const InputEvent& e) { route(*mouse, e); });
+      const ReadStatus status = mouse->device->read_available([&](const InputEvent& e) {
+        if (holding_) {
+          held_events_.emplace_back(name, e);
+        } else {
+          route(*mouse, e);
+        }
+      });
       remember_emitted();
       if (status == ReadStatus::gone) let_go(name, "unplugged");
     } catch (const DeviceError& e) {
@@ -411,6 +428,33 @@ void Daemon::passthrough(bool on) {
   notifier_.status(status_line());
 }
 
+void Daemon::start_holding() {
+  holding_ = true;
+  itimerspec once{};
+  once.it_value.tv_nsec = kHoldForHelperNs;
+  ::timerfd_settime(hold_timer_.get(), 0, &once, nullptr);
+}
+
+// The frames read while waiting for the helper, in order, through the mice that are still taken.
+void Daemon::release_held() {
+  if (!holding_) return;
+  holding_ = false;
+  set_timer(hold_timer_.get(), 0);
+  std::vector<std::pair<std::string, InputEvent>> held;
+  held.swap(held_events_);
+  for (const auto& [node, event] : held) {
+    const auto it = mice_.find(node);
+    if (it == mice_.end() || it->second->frames == nullptr) continue;
+    try {
+      route(*it->second, event);
+    } catch (const UinputError& e) {
+      log_.error("{}", e.what());
+      let_go(node, "virtual device failed");
+    }
+  }
+  remember_emitted();
+}
+
 void Daemon::watch_untaken(const std::string& node, std::unique_ptr<EvdevDevice> device) {
   watch(epoll_.get(), device->fd());
   log_.debug("{} {}: watched without a grab; its motion makes the daemon ask where the cursor is", node,
@@ -454,9 +498,14 @@ void Daemon::on_resync_tick() {
   }
 }
 
+// The pixel the desktop shows the cursor on: floor of the model's position, what absolute output emits.
+// Not the traversal's texel: a model stopped on a pixel's left or top edge after moving right or down is
+// still in the texel before it, and the helper would report the pixel itself.
+Texel Daemon::cursor_pixel() const { return texel_at(pipeline_->cursor().position); }
+
 void Daemon::remember_emitted() {
   const SteadyTime now = std::chrono::steady_clock::now();
-  const Texel pixel = pipeline_->cursor().texel;
+  const Texel pixel = cursor_pixel();
   if (emitted_.empty() || emitted_.back().second != pixel) emitted_.emplace_back(now, pixel);
   while (emitted_.size() > kEmittedAlwaysKept && now - emitted_.front().first > kEmittedMemory) emitted_.pop_front();
 }
@@ -484,13 +533,17 @@ void Daemon::position(Vec2 position, bool from_helper) {
   const Texel pixel = texel_at(position);
   // The helper reports pixels; one the daemon put the cursor on lately is its own motion still on its way
   // through the desktop, not a move by someone else.
-  if (from_helper && (pixel == pipeline_->cursor().texel || emitted_recently(pixel))) return;
+  if (from_helper && (pixel == cursor_pixel() || emitted_recently(pixel))) {
+    release_held();
+    return;
+  }
   const Vec2 was = pipeline_->cursor().position;
   pipeline_->move_cursor_to(position);
   emitted_.clear();
   remember_emitted();
   log_.debug("resync: the cursor is at ({:.1f}, {:.1f}) ({}); the model was at ({:.1f}, {:.1f})", position.x,
              position.y, from_helper ? "session helper" : "set by a client", was.x, was.y);
+  if (from_helper) release_held();
 }
 
 void Daemon::layout(Rect desktop) {
@@ -513,6 +566,7 @@ void Daemon::layout(Rect desktop) {
 
 void Daemon::helper_changed(bool present) {
   set_timer(resync_timer_.get(), present ? kResyncTickNs : 0);
+  if (!present) release_held();
   notifier_.status(status_line());
 }
 

@@ -79,6 +79,9 @@ class Daemon final : private ControlHandler {
   void watch_untaken(const std::string& node, std::unique_ptr<EvdevDevice> device);
   void on_untaken_readable(int fd);
   void on_resync_tick();
+  Texel cursor_pixel() const;
+  void start_holding();
+  void release_held();
   void remember_emitted();
   bool emitted_recently(Texel pixel) const;
   void take_present_mice();
@@ -102,7 +105,7 @@ class Daemon final : private ControlHandler {
   std::optional<Rect> helper_desktop_;  // the session helper's layout, over `desktop = "auto"`
   std::unique_ptr<Pipeline> pipeline_;
   UdevWatch udev_;
-  UniqueFd epoll_, signals_, retry_timer_, watchdog_timer_, resync_timer_;
+  UniqueFd epoll_, signals_, retry_timer_, watchdog_timer_, resync_timer_, hold_timer_;
   LogindSessions sessions_;
   std::unique_ptr<ControlServer> control_;
   // Resync: pointers the daemon does not take, watched without a grab; the pixels it emitted lately (a
@@ -114,6 +117,9 @@ class Daemon final : private ControlHandler {
   SteadyTime last_untaken_motion_{};
   bool settle_query_due_ = false;
   bool passthrough_wanted_ = false;
+  // Motion after a pause waits for the helper's answer (at most kHoldForHelperNs): events by node.
+  bool holding_ = false;
+  std::vector<std::pair<std::string, InputEvent>> held_events_;
   std::map<std::string, std::unique_ptr<Mouse>> mice_;  // by node
   std::map<std::string, int> unopened_;                 // node -> tries left (not yet accessible)
   std::set<std::string> passed_over_;                   // not a pointer, not matched, ours, busy

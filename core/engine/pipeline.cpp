@@ -45,12 +45,15 @@ Frame rewrite_motion(const Frame& in, std::int64_t in_x, std::int64_t in_y, std:
   };
   for (const InputEvent& e : in.events) {
     const bool is_x = is_motion(e) && e.code == ev::kRelX, is_y = is_motion(e) && e.code == ev::kRelY;
+    // A kept event is that axis' one event: the other axis' rewrite must not write it again.
     if (is_x && keep_x) {
       out.events.push_back(e);
+      wrote_x = true;
       continue;
     }
     if (is_y && keep_y) {
       out.events.push_back(e);
+      wrote_y = true;
       continue;
     }
     if (is_x) {

@@ -14,9 +14,11 @@
 #include <sys/syscall.h>
 #include <sys/un.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <climits>
@@ -37,6 +39,8 @@
 #include <utility>
 #include <vector>
 
+#include "control/client.hpp"
+#include "control/protocol.hpp"
 #include "core/engine/event.hpp"
 #include "daemon/unique_fd.hpp"
 #include "tests/vm/vm_check.hpp"
@@ -188,17 +192,50 @@ inline bool delivers_something(const Frame& frame) {
   return std::any_of(frame.events.begin(), frame.events.end(), [](const InputEvent& e) { return e.type != ev::kSyn; });
 }
 
-// The frame's events other than REL_X/REL_Y, in order.
+inline bool is_pointer_motion(const InputEvent& e) {
+  return (e.type == ev::kRel && (e.code == ev::kRelX || e.code == ev::kRelY)) ||
+         (e.type == ev::kAbs && (e.code == ev::kAbsX || e.code == ev::kAbsY));
+}
+
+// The frame's events other than the pointer's motion (REL_X/REL_Y, ABS_X/ABS_Y), in order.
 inline Frame without_motion(const Frame& frame) {
   Frame out;
   for (const InputEvent& e : frame.events) {
-    if (e.type == ev::kRel && (e.code == ev::kRelX || e.code == ev::kRelY)) continue;
-    out.events.push_back(e);
+    if (!is_pointer_motion(e)) out.events.push_back(e);
   }
   return out;
 }
 
+// Whether the frame moves the pointer (a REL_X or REL_Y that is not 0).
+inline bool has_motion(const Frame& frame) {
+  return std::any_of(frame.events.begin(), frame.events.end(),
+                     [](const InputEvent& e) { return e.type == ev::kRel && is_pointer_motion(e) && e.value != 0; });
+}
+
+// The value of an event of the frame, nullopt when the frame has none.
+inline std::optional<std::int32_t> value_in(const Frame& frame, std::uint16_t type, std::uint16_t code) {
+  for (const InputEvent& e : frame.events) {
+    if (e.type == type && e.code == code) return e.value;
+  }
+  return std::nullopt;
+}
+
+// The clock of the events the daemon reads: it asks the kernel for CLOCK_MONOTONIC (EVIOCSCLOCKID), and
+// the kernel stamps a frame when its SYN_REPORT is written. In microseconds, as InputEvent::time.
+inline TimeUs monotonic_us() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<TimeUs>(ts.tv_sec) * 1000000 + static_cast<TimeUs>(ts.tv_nsec / 1000);
+}
+
+// The frame with every event at `time`.
+inline Frame stamped(Frame frame, TimeUs time) {
+  for (InputEvent& e : frame.events) e.time = time;
+  return frame;
+}
+
 inline InputEvent rel(std::uint16_t code, std::int32_t value) { return {0, ev::kRel, code, value}; }
+inline InputEvent abs_event(std::uint16_t code, std::int32_t value) { return {0, ev::kAbs, code, value}; }
 inline InputEvent key(std::uint16_t code, std::int32_t value) { return {0, ev::kKey, code, value}; }
 
 // A frame of these events, ended by SYN_REPORT.
@@ -484,6 +521,17 @@ inline long rss_kib(pid_t pid) {
   return -1;
 }
 
+// Whether a process has `path` open (a link in /proc/PID/fd).
+inline bool process_has_open(pid_t pid, const std::string& path) {
+  std::error_code error;
+  for (auto it = std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/fd", error);
+       !error && it != std::filesystem::directory_iterator(); it.increment(error)) {
+    std::error_code link_error;
+    if (std::filesystem::read_symlink(it->path(), link_error).string() == path) return true;
+  }
+  return false;
+}
+
 // A "physical" mouse through uinput: REL_X/REL_Y, wheel and horizontal wheel with their hi-res
 // companions, left, right and middle buttons. Destroying it releases what it holds, then removes it.
 class TestMouse {
@@ -507,6 +555,134 @@ class TestMouse {
   std::string name_;
   UinputSink sink_;
   std::string node_;
+};
+
+// A touchpad-like pointer through uinput: ABS_X/ABS_Y (0..1000), BTN_TOUCH, BTN_TOOL_FINGER and BTN_LEFT,
+// no REL_X/REL_Y. The daemon does not take it (not a mouse) but watches it to resync its cursor model.
+class TestTouchpad {
+ public:
+  explicit TestTouchpad(const std::string& name) : sink_(description(name)), node_(sink_.devnode()) {
+    if (node_.empty()) throw Fatal("the kernel gave no device node for test touchpad '" + name + "'");
+  }
+
+  const std::string& node() const { return node_; }
+  void send(const Frame& frame) { sink_.write(frame); }
+
+ private:
+  static DeviceDescription description(const std::string& name) {
+    DeviceDescription d;
+    d.name = name;
+    d.bustype = 0x18;        // BUS_I2C, as laptop touchpads
+    d.properties.set(0x00);  // INPUT_PROP_POINTER
+    for (std::uint16_t type : {ev::kSyn, ev::kKey, ev::kAbs}) d.enable(ev::kSyn, type);
+    for (std::uint16_t code : {std::uint16_t{BTN_LEFT}, std::uint16_t{BTN_TOUCH}, std::uint16_t{BTN_TOOL_FINGER}}) {
+      d.enable(ev::kKey, code);
+    }
+    for (std::uint16_t code : {ev::kAbsX, ev::kAbsY}) {
+      d.enable(ev::kAbs, code);
+      d.absinfo[code] = {0, 1000, 0, 0, 10};
+    }
+    return d;
+  }
+
+  UinputSink sink_;
+  std::string node_;
+};
+
+// A session helper of our own on the daemon's control socket: says `helper test`, records when each
+// `query` arrives, and answers it with `position X Y` of the point it is given (none: no answer). A
+// thread of its own reads the socket all the time, as a real helper would.
+class FakeHelper {
+ public:
+  explicit FakeHelper(const std::string& socket) : client_(socket) {
+    if (!client_.send_line("helper test")) throw Fatal("the fake helper could not send 'helper test'");
+    for (;;) {  // the reply; a query may come first
+      const std::optional<std::string> line = client_.read_line(std::chrono::milliseconds(5000));
+      if (!line) throw Fatal("no reply to 'helper test' within 5 s");
+      if (*line == "ok") break;
+      if (*line != "query") throw Fatal("'helper test' answered: " + *line);
+      queries_.push_back(Clock::now());
+    }
+    reader_ = std::thread([this] { read_until_stopped(); });
+  }
+  ~FakeHelper() {
+    stop_ = true;
+    reader_.join();
+  }
+  FakeHelper(const FakeHelper&) = delete;
+  FakeHelper& operator=(const FakeHelper&) = delete;
+
+  // What to answer the next queries with (nullopt: nothing).
+  void answer_with(std::optional<Vec2> point) {
+    const std::lock_guard lock(mutex_);
+    point_ = point;
+  }
+
+  // The first query that arrived at or after `after`, waiting at most `timeout`.
+  std::optional<Clock::time_point> query_after(Clock::time_point after, Clock::duration timeout) {
+    std::unique_lock lock(mutex_);
+    const auto found = [&]() -> std::optional<Clock::time_point> {
+      for (const Clock::time_point t : queries_) {
+        if (t >= after) return t;
+      }
+      return std::nullopt;
+    };
+    arrived_.wait_for(lock, timeout, [&] { return found().has_value(); });
+    return found();
+  }
+
+  // Queries that arrived in [from, to].
+  int queries_between(Clock::time_point from, Clock::time_point to) const {
+    const std::lock_guard lock(mutex_);
+    return static_cast<int>(
+        std::count_if(queries_.begin(), queries_.end(), [&](Clock::time_point t) { return t >= from && t <= to; }));
+  }
+
+  // When the last query arrived (nullopt: none yet).
+  std::optional<Clock::time_point> last_query() const {
+    const std::lock_guard lock(mutex_);
+    return queries_.empty() ? std::nullopt : std::optional<Clock::time_point>(queries_.back());
+  }
+
+  int answers() const { return answers_; }
+  // Lines other than `query` and `ok` (an error from the daemon), for the report.
+  std::vector<std::string> unexpected() const {
+    const std::lock_guard lock(mutex_);
+    return unexpected_;
+  }
+
+ private:
+  void read_until_stopped() {
+    try {
+      while (!stop_) {
+        const std::optional<std::string> line = client_.read_line(std::chrono::milliseconds(20));
+        if (!line || *line == "ok") continue;
+        std::unique_lock lock(mutex_);
+        if (*line != "query") {
+          unexpected_.push_back(*line);
+          continue;
+        }
+        queries_.push_back(Clock::now());
+        const std::optional<Vec2> point = point_;
+        lock.unlock();
+        arrived_.notify_all();
+        if (point && client_.send_line(control::format_request(control::PositionRequest{*point}))) ++answers_;
+      }
+    } catch (const control::ControlError& e) {
+      const std::lock_guard lock(mutex_);
+      unexpected_.push_back(std::string("connection ended: ") + e.what());
+    }
+  }
+
+  control::Client client_;
+  mutable std::mutex mutex_;
+  std::condition_variable arrived_;
+  std::vector<Clock::time_point> queries_;
+  std::vector<std::string> unexpected_;
+  std::optional<Vec2> point_;
+  std::atomic<int> answers_{0};
+  std::atomic<bool> stop_{false};
+  std::thread reader_;  // last: started once everything it uses exists
 };
 
 }  // namespace ph::e2e

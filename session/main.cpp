@@ -1,0 +1,248 @@
+// pseudohaptic-session: runs in the user's desktop session and tells pseudohapticd, over its control
+// socket, the desktop's layout and where the real cursor is: at start, when the layout changes, and
+// whenever the daemon asks. Reconnects when the daemon restarts; exits on SIGTERM or SIGINT.
+#include <fmt/format.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/signalfd.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "control/protocol.hpp"
+#include "daemon/unique_fd.hpp"
+#include "session/control_connection.hpp"
+#include "session/protocol.hpp"
+#include "session/x11_desktop.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using namespace ph::session;
+
+// One line per message on stderr; "<N>" syslog prefixes when stderr is the journal (JOURNAL_STREAM).
+class Log {
+ public:
+  explicit Log(bool verbose) : verbose_(verbose), journal_(stderr_is_journal()) {}
+  void error(const std::string& m) const { write(3, "error", m); }
+  void notice(const std::string& m) const { write(5, "notice", m); }
+  void info(const std::string& m) const { write(6, "info", m); }
+  void debug(const std::string& m) const {
+    if (verbose_) write(7, "debug", m);
+  }
+
+ private:
+  static bool stderr_is_journal() {
+    const char* stream = std::getenv("JOURNAL_STREAM");  // "DEVICE:INODE"
+    struct stat st {};
+    unsigned long long device = 0, inode = 0;
+    return stream != nullptr && ::fstat(STDERR_FILENO, &st) == 0 &&
+           std::sscanf(stream, "%llu:%llu", &device, &inode) == 2 && device == st.st_dev && inode == st.st_ino;
+  }
+  void write(int priority, const char* level, const std::string& message) const {
+    if (journal_) {
+      fmt::print(stderr, "<{}>{}\n", priority, message);
+    } else {
+      fmt::print(stderr, "pseudohaptic-session: {}: {}\n", level, message);
+    }
+    std::fflush(stderr);
+  }
+  bool verbose_, journal_;
+};
+
+// The connection to the daemon and what it has said so far; empty while there is none.
+struct Link {
+  std::optional<ControlConnection> connection;
+  Conversation conversation;
+  ph::control::LineBuffer lines;
+  std::optional<ph::Rect> layout_sent;
+  std::optional<bool> passthrough_sent;
+  int failures = 0;  // connection attempts failed in a row
+  Clock::time_point next_attempt = Clock::now();
+};
+
+class Helper {
+ public:
+  Helper(std::string control, std::vector<std::string> passthrough, X11Desktop& desktop, const Log& log)
+      : control_(std::move(control)), passthrough_(std::move(passthrough)), desktop_(desktop), log_(log) {}
+
+  // Runs until SIGTERM or SIGINT arrives on `signals`; returns the exit status.
+  int run(int signals) {
+    for (;;) {
+      if (!link_.connection && Clock::now() >= link_.next_attempt) connect();
+      const X11Desktop::Changes changes = desktop_.read_events();
+      if (changes.layout && link_.connection) send_layout();
+      if (changes.focus && link_.connection) send_passthrough();
+      pollfd fds[3] = {{signals, POLLIN, 0}, {desktop_.fd(), POLLIN, 0}, {-1, POLLIN, 0}};
+      if (link_.connection) fds[2].fd = link_.connection->fd();
+      int timeout = -1;
+      if (desktop_.events_queued()) {
+        timeout = 0;  // read while answering: handle them before sleeping
+      } else if (!link_.connection) {
+        timeout = static_cast<int>(std::max<long long>(
+            0, std::chrono::ceil<std::chrono::milliseconds>(link_.next_attempt - Clock::now()).count()));
+      }
+      if (::poll(fds, 3, timeout) < 0 && errno != EINTR) {
+        log_.error(fmt::format("poll: {}", std::strerror(errno)));
+        return 1;
+      }
+      if (fds[0].revents != 0) {
+        log_.info("stopping");
+        return 0;
+      }
+      if (link_.connection && fds[2].revents != 0) read_daemon();
+    }
+  }
+
+ private:
+  void connect() {
+    std::string why;
+    std::optional<ControlConnection> connection = ControlConnection::connect(control_, why);
+    if (!connection) {
+      ++link_.failures;
+      link_.next_attempt = Clock::now() + reconnect_delay(link_.failures);
+      const std::string message = fmt::format("no pseudohapticd at {} ({}); trying again", control_, why);
+      if (link_.failures == 1) {
+        log_.notice(message);
+      } else {
+        log_.debug(message);
+      }
+      return;
+    }
+    link_ = Link{};
+    link_.connection = std::move(connection);
+    log_.info(fmt::format("connected to pseudohapticd at {}", control_));
+    if (send(helper_request("x11"))) send_layout();
+    if (link_.connection) send_position();
+    if (link_.connection) send_passthrough();
+  }
+
+  void drop(const std::string& why) {
+    log_.notice(fmt::format("{}; reconnecting", why));
+    link_.connection.reset();
+    link_.failures = 1;
+    link_.next_attempt = Clock::now() + reconnect_delay(link_.failures);
+  }
+
+  bool send(const std::string& line) {
+    if (!link_.connection->send(line)) {
+      drop("the daemon went away");
+      return false;
+    }
+    link_.conversation.sent(line);
+    log_.debug(fmt::format("sent: {}", std::string_view(line).substr(0, line.size() - 1)));
+    return true;
+  }
+
+  void send_layout() {
+    const ph::Rect layout = desktop_.layout();
+    if (link_.layout_sent == layout) return;
+    const std::optional<std::string> line = layout_request(layout);
+    if (line && send(*line)) link_.layout_sent = layout;
+  }
+
+  void send_position() {
+    const std::optional<ph::Vec2> at = desktop_.pointer();
+    if (!at) return;  // on another X screen: nothing the daemon can use
+    if (const std::optional<std::string> line = position_request(*at)) send(*line);
+  }
+
+  // Pass-through while a listed application has the focus (pseudohaptic-session(1), --passthrough).
+  void send_passthrough() {
+    if (passthrough_.empty()) return;
+    const auto active = desktop_.active_class();
+    const bool on = active && is_listed(passthrough_, active->first, active->second);
+    log_.debug(fmt::format("the focus is on {}", active ? active->first + " (" + active->second + ")" : "no window"));
+    if (link_.passthrough_sent == on) return;
+    if (send(passthrough_request(on))) link_.passthrough_sent = on;
+  }
+
+  void read_daemon() {
+    const ControlConnection::Received received = link_.connection->read_available();
+    const bool in_bounds = link_.lines.append(received.data);
+    while (const std::optional<std::string> line = link_.lines.next_line()) {
+      const Conversation::Reaction reaction = link_.conversation.on_line(*line);
+      if (!reaction.complaint.empty()) log_.error(reaction.complaint);
+      if (reaction.send_position) send_position();
+      if (!link_.connection) return;
+    }
+    if (!in_bounds) {
+      drop(fmt::format("the daemon sent a line longer than {} bytes", ph::control::kMaxLine));
+    } else if (received.closed) {
+      drop("the daemon closed the connection");
+    }
+  }
+
+  std::string control_;
+  std::vector<std::string> passthrough_;
+  X11Desktop& desktop_;
+  const Log& log_;
+  Link link_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "pseudohaptic-session: tells pseudohapticd where the desktop's real cursor is and how the desktop is laid\n"
+      "out, over its control socket: at start, whenever the layout changes, and whenever the daemon asks.\n"
+      "Runs in the user's graphical session (the systemd user unit pseudohaptic-session.service) until\n"
+      "SIGTERM or SIGINT; reconnects when the daemon restarts. See pseudohaptic-session(1)."};
+  std::string control = "/run/pseudohaptic/control";
+  std::string backend = "auto";
+  std::string display;
+  bool verbose = false;
+  app.add_option("--control", control, "The daemon's control socket")->capture_default_str();
+  app.add_option("--backend", backend, "How to ask the desktop: auto (x11 when DISPLAY is set) or x11")
+      ->check(CLI::IsMember({"auto", "x11"}))
+      ->capture_default_str();
+  app.add_option("--display", display, "The X display (x11 backend; default: $DISPLAY)");
+  std::vector<std::string> passthrough;
+  app.add_option("--passthrough", passthrough,
+                 "An application (WM_CLASS instance or class name, any case) that reads raw relative motion, such "
+                 "as a game: while it has the focus the daemon passes the mice through unchanged. Repeatable");
+  app.add_flag("-v,--verbose", verbose, "Also log every line sent and every connection attempt");
+  app.set_version_flag("--version", "pseudohaptic-session 0.1.0");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  const Log log(verbose);
+  if (backend == "auto") {
+    const char* env = std::getenv("DISPLAY");
+    if (display.empty() && (env == nullptr || *env == '\0')) {
+      log.error(
+          "no desktop this helper knows: DISPLAY is not set (only X11 is supported; see pseudohaptic-session(1))");
+      return 1;
+    }
+    backend = "x11";
+  }
+
+  // SIGTERM and SIGINT wait for the loop, which then exits cleanly.
+  sigset_t stop;
+  sigemptyset(&stop);
+  sigaddset(&stop, SIGTERM);
+  sigaddset(&stop, SIGINT);
+  sigprocmask(SIG_BLOCK, &stop, nullptr);
+  const ph::UniqueFd signals(::signalfd(-1, &stop, SFD_CLOEXEC | SFD_NONBLOCK));
+  if (!signals) {
+    log.error(fmt::format("signalfd: {}", std::strerror(errno)));
+    return 1;
+  }
+  try {
+    X11Desktop desktop(display);
+    if (!desktop.has_randr()) log.notice("X has no RandR 1.2: the layout is the root window's size");
+    return Helper(control, passthrough, desktop, log).run(signals.get());
+  } catch (const X11Error& e) {
+    log.error(e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,88 @@
+#include "session/protocol.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <limits>
+
+#include "control/protocol.hpp"
+
+namespace ph::session {
+
+std::string helper_request(std::string_view backend) {
+  return control::format_request(control::HelperRequest{std::string(backend)}) + "\n";
+}
+
+std::optional<std::string> layout_request(Rect layout) {
+  if (layout.w <= 0 || layout.h <= 0) return std::nullopt;
+  return control::format_request(control::LayoutRequest{layout}) + "\n";
+}
+
+std::optional<std::string> position_request(Vec2 position) {
+  if (!is_finite(position)) return std::nullopt;
+  return control::format_request(control::PositionRequest{position}) + "\n";
+}
+
+std::string passthrough_request(bool on) { return control::format_request(control::PassthroughRequest{on}) + "\n"; }
+
+bool is_listed(const std::vector<std::string>& applications, std::string_view instance, std::string_view class_name) {
+  const auto same = [](std::string_view a, std::string_view b) {
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+             return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
+           });
+  };
+  return std::any_of(applications.begin(), applications.end(), [&](const std::string& name) {
+    return !name.empty() && (same(name, instance) || same(name, class_name));
+  });
+}
+
+std::optional<Rect> bounding_box(const std::vector<Rect>& outputs) {
+  std::int64_t x0 = std::numeric_limits<std::int64_t>::max(), y0 = x0;
+  std::int64_t x1 = std::numeric_limits<std::int64_t>::min(), y1 = x1;
+  bool any = false;
+  for (const Rect& r : outputs) {
+    if (r.w <= 0 || r.h <= 0) continue;
+    any = true;
+    x0 = std::min<std::int64_t>(x0, r.x);
+    y0 = std::min<std::int64_t>(y0, r.y);
+    x1 = std::max<std::int64_t>(x1, std::int64_t{r.x} + r.w);
+    y1 = std::max<std::int64_t>(y1, std::int64_t{r.y} + r.h);
+  }
+  if (!any) return std::nullopt;
+  constexpr std::int64_t kMax = std::numeric_limits<std::int32_t>::max();
+  return Rect{static_cast<std::int32_t>(x0), static_cast<std::int32_t>(y0),
+              static_cast<std::int32_t>(std::min(x1 - x0, kMax)), static_cast<std::int32_t>(std::min(y1 - y0, kMax))};
+}
+
+std::chrono::milliseconds reconnect_delay(int failures) {
+  const int doublings = std::clamp(failures - 1, 0, 5);
+  return std::min(std::chrono::milliseconds(250 << doublings), std::chrono::milliseconds(5000));
+}
+
+void Conversation::sent(std::string_view request) {
+  if (!request.empty() && request.back() == '\n') request.remove_suffix(1);
+  awaiting_.emplace_back(request);
+}
+
+Conversation::Reaction Conversation::on_line(std::string_view line) {
+  Reaction reaction;
+  if (line == "query") {
+    reaction.send_position = true;
+    return reaction;
+  }
+  const std::optional<control::Reply> reply = control::parse_reply(line);
+  if (!reply) {
+    reaction.complaint = fmt::format("the daemon sent a line not understood: '{}'", line);
+    return reaction;
+  }
+  std::string request = "(nothing)";
+  if (!awaiting_.empty()) {
+    request = std::move(awaiting_.front());
+    awaiting_.pop_front();
+  }
+  if (!reply->ok) reaction.complaint = fmt::format("the daemon refused '{}': {}", request, reply->text);
+  return reaction;
+}
+
+}  // namespace ph::session

@@ -1,0 +1,57 @@
+// The session helper's side of pseudohapticd's control socket (docs/SERVICE.md, "The control socket"),
+// pure: the lines it sends (control/protocol.hpp formats them), the layout it reports, how long it waits
+// before reconnecting, and what it makes of the daemon's lines. No I/O here; main.cpp does that.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <deque>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/engine/geometry.hpp"
+
+namespace ph::session {
+
+// The requests, each a whole line with its '\n'.
+std::string helper_request(std::string_view backend);  // "helper x11"
+// "layout X Y W H"; nullopt unless W and H are > 0.
+std::optional<std::string> layout_request(Rect layout);
+// "position X Y"; nullopt for a non-finite coordinate.
+std::optional<std::string> position_request(Vec2 position);
+std::string passthrough_request(bool on);  // "passthrough on" / "passthrough off"
+
+// Whether a window of this WM_CLASS (its instance and class names) belongs to one of `applications`,
+// the names the user listed for pass-through (either name matches, whatever the case).
+bool is_listed(const std::vector<std::string>& applications, std::string_view instance, std::string_view class_name);
+
+// The bounding box of the outputs with a positive size; nullopt when there is none.
+std::optional<Rect> bounding_box(const std::vector<Rect>& outputs);
+
+// How long to wait before the next connection attempt after `failures` failed ones in a row: 250 ms,
+// doubling, at most 5 s.
+std::chrono::milliseconds reconnect_delay(int failures);
+
+// One connection's conversation: the requests the helper has sent and awaits replies to, in order, and
+// what a line from the daemon asks of it.
+class Conversation {
+ public:
+  // What the helper does about one line from the daemon.
+  struct Reaction {
+    bool send_position = false;  // "query": answer with the real cursor's position
+    std::string complaint;       // non-empty: a line to log (an error reply, or a line not understood)
+  };
+
+  // Notes a request sent (its line, with or without '\n'), to pair with its reply.
+  void sent(std::string_view request);
+  Reaction on_line(std::string_view line);
+  // Requests still waiting for their reply.
+  std::size_t awaiting() const { return awaiting_.size(); }
+
+ private:
+  std::deque<std::string> awaiting_;  // the requests' lines without '\n'
+};
+
+}  // namespace ph::session

@@ -1,0 +1,118 @@
+#include "session/x11_desktop.hpp"
+
+#include <X11/Xatom.h>
+#include <X11/Xutil.h>
+#include <X11/extensions/Xrandr.h>
+
+#include <cstdlib>
+#include <vector>
+
+#include "session/protocol.hpp"
+
+namespace ph::session {
+
+namespace {
+
+// Xlib's default handler ends the program on any protocol error.
+int ignore_protocol_error(Display*, XErrorEvent*) { return 0; }
+
+}  // namespace
+
+X11Desktop::X11Desktop(const std::string& display)
+    : display_(XOpenDisplay(display.empty() ? nullptr : display.c_str())) {
+  if (!display_) {
+    const char* name = display.empty() ? std::getenv("DISPLAY") : display.c_str();
+    throw X11Error(std::string("cannot open the X display ") + (name != nullptr ? name : "(DISPLAY is not set)"));
+  }
+  XSetErrorHandler(ignore_protocol_error);
+  int event_base = 0, error_base = 0, major = 0, minor = 0;
+  if (XRRQueryExtension(display_.get(), &event_base, &error_base) && XRRQueryVersion(display_.get(), &major, &minor) &&
+      (major > 1 || (major == 1 && minor >= 2))) {
+    randr_event_base_ = event_base;
+    XRRSelectInput(display_.get(), DefaultRootWindow(display_.get()),
+                   RRScreenChangeNotifyMask | RRCrtcChangeNotifyMask | RROutputChangeNotifyMask);
+  }
+  active_window_ = XInternAtom(display_.get(), "_NET_ACTIVE_WINDOW", False);
+  XSelectInput(display_.get(), DefaultRootWindow(display_.get()), PropertyChangeMask);
+  XFlush(display_.get());
+}
+
+int X11Desktop::fd() const { return ConnectionNumber(display_.get()); }
+
+bool X11Desktop::events_queued() const { return XEventsQueued(display_.get(), QueuedAlready) > 0; }
+
+Rect X11Desktop::layout() const {
+  Display* d = display_.get();
+  const Window root = DefaultRootWindow(d);
+  const Rect whole{0, 0, DisplayWidth(d, DefaultScreen(d)), DisplayHeight(d, DefaultScreen(d))};
+  if (!has_randr()) return whole;
+  XRRScreenResources* resources = XRRGetScreenResourcesCurrent(d, root);
+  if (resources == nullptr) return whole;
+  std::vector<Rect> outputs;
+  for (int i = 0; i < resources->ncrtc; ++i) {
+    XRRCrtcInfo* crtc = XRRGetCrtcInfo(d, resources, resources->crtcs[i]);
+    if (crtc == nullptr) continue;
+    if (crtc->mode != None && crtc->noutput > 0) {
+      outputs.push_back(
+          {crtc->x, crtc->y, static_cast<std::int32_t>(crtc->width), static_cast<std::int32_t>(crtc->height)});
+    }
+    XRRFreeCrtcInfo(crtc);
+  }
+  XRRFreeScreenResources(resources);
+  return bounding_box(outputs).value_or(whole);
+}
+
+std::optional<Vec2> X11Desktop::pointer() const {
+  Window root = 0, child = 0;
+  int x = 0, y = 0, window_x = 0, window_y = 0;
+  unsigned int mask = 0;
+  if (!XQueryPointer(display_.get(), DefaultRootWindow(display_.get()), &root, &child, &x, &y, &window_x, &window_y,
+                     &mask)) {
+    return std::nullopt;
+  }
+  // X gives the pixel only; its centre is where the pointer is within half a pixel, and what the daemon's
+  // absolute output emits for a model anywhere in that pixel.
+  return Vec2{x + 0.5, y + 0.5};
+}
+
+X11Desktop::Changes X11Desktop::read_events() {
+  Changes changes;
+  while (XPending(display_.get()) > 0) {
+    XEvent event;
+    XNextEvent(display_.get(), &event);
+    if (event.type == PropertyNotify && event.xproperty.atom == active_window_) {
+      changes.focus = true;
+    } else if (has_randr() && event.type == randr_event_base_ + RRScreenChangeNotify) {
+      XRRUpdateConfiguration(&event);  // keeps Xlib's idea of the screen size current
+      changes.layout = true;
+    } else if (has_randr() && event.type == randr_event_base_ + RRNotify) {
+      changes.layout = true;
+    }
+  }
+  return changes;
+}
+
+std::optional<std::pair<std::string, std::string>> X11Desktop::active_class() const {
+  Display* d = display_.get();
+  Atom type = None;
+  int format = 0;
+  unsigned long count = 0, after = 0;
+  unsigned char* data = nullptr;
+  Window window = None;
+  if (XGetWindowProperty(d, DefaultRootWindow(d), active_window_, 0, 1, False, XA_WINDOW, &type, &format, &count,
+                         &after, &data) == Success &&
+      type == XA_WINDOW && format == 32 && count == 1) {
+    window = static_cast<Window>(*reinterpret_cast<unsigned long*>(data));
+  }
+  if (data != nullptr) XFree(data);
+  if (window == None) return std::nullopt;
+  XClassHint hint{};
+  if (!XGetClassHint(d, window, &hint)) return std::nullopt;  // gone meanwhile, or no WM_CLASS
+  std::pair<std::string, std::string> names{hint.res_name != nullptr ? hint.res_name : "",
+                                            hint.res_class != nullptr ? hint.res_class : ""};
+  if (hint.res_name != nullptr) XFree(hint.res_name);
+  if (hint.res_class != nullptr) XFree(hint.res_class);
+  return names;
+}
+
+}  // namespace ph::session

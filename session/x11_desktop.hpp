@@ -1,0 +1,56 @@
+// The X11 backend of pseudohaptic-session: where the pointer is (XQueryPointer on the root window) and
+// the desktop's layout (the bounding box of the active RandR CRTCs, or the root window's size where
+// RandR is absent), and whether RandR says the layout changed.
+#pragma once
+
+#include <X11/Xlib.h>
+
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "core/engine/geometry.hpp"
+
+namespace ph::session {
+
+class X11Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class X11Desktop {
+ public:
+  // Opens `display` (empty: $DISPLAY). Throws X11Error when it cannot. X protocol errors (an output
+  // that went away between two requests) are ignored from then on: the next layout is asked afresh.
+  explicit X11Desktop(const std::string& display);
+
+  int fd() const;  // readable when X has sent events
+  // Events Xlib has already read from the socket (during a request's round trip): poll(2) on fd() does
+  // not see them.
+  bool events_queued() const;
+  bool has_randr() const { return randr_event_base_ >= 0; }
+  Rect layout() const;
+  // Where the pointer is (the centre of its pixel); nullopt while it is on another X screen than the default one.
+  std::optional<Vec2> pointer() const;
+  // What the events X has sent so far say changed.
+  struct Changes {
+    bool layout = false;  // the screen or an output (RandR)
+    bool focus = false;   // the active window (_NET_ACTIVE_WINDOW on the root window)
+  };
+  Changes read_events();
+  // The WM_CLASS (instance, class) of the active window, as the window manager names it in
+  // _NET_ACTIVE_WINDOW; nullopt when there is none or it has no WM_CLASS.
+  std::optional<std::pair<std::string, std::string>> active_class() const;
+
+ private:
+  struct Closer {
+    void operator()(Display* d) const { XCloseDisplay(d); }
+  };
+  std::unique_ptr<Display, Closer> display_;
+  int randr_event_base_ = -1;
+  Atom active_window_ = None;
+};
+
+}  // namespace ph::session

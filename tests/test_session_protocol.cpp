@@ -1,0 +1,112 @@
+// pseudohaptic-session's side of the control socket: the requests it sends (which the daemon's parser
+// must read back), the layout's bounding box, the reconnection back-off and what it makes of the
+// daemon's lines. Splitting the stream into lines is control/'s (tests/test_control_protocol.cpp).
+#include <gtest/gtest.h>
+
+#include <clocale>
+#include <cmath>
+#include <string>
+#include <variant>
+
+#include "control/protocol.hpp"
+#include "session/protocol.hpp"
+
+namespace ph::session {
+namespace {
+
+TEST(SessionRequests, AreWholeLinesTheDaemonParses) {
+  EXPECT_EQ(helper_request("x11"), "helper x11\n");
+  EXPECT_EQ(layout_request({0, 0, 1920, 1080}), "layout 0 0 1920 1080\n");
+  EXPECT_EQ(layout_request({-1280, -200, 3200, 1280}), "layout -1280 -200 3200 1280\n");
+  EXPECT_EQ(position_request({960, 540}), "position 960 540\n");
+  EXPECT_EQ(position_request({960.5, 0.25}), "position 960.5 0.25\n");
+  // Whatever it sends, the daemon's parser reads back the same request.
+  for (const std::string& line :
+       {helper_request("x11"), *layout_request({-1280, -200, 3200, 1280}), *position_request({-12.125, 1919.75}),
+        *position_request({3, 0}), passthrough_request(true), passthrough_request(false)}) {
+    const auto parsed = control::parse_request(std::string_view(line).substr(0, line.size() - 1));  // no '\n'
+    ASSERT_TRUE(std::holds_alternative<control::Request>(parsed)) << line << ": " << std::get<std::string>(parsed);
+    EXPECT_EQ(control::format_request(std::get<control::Request>(parsed)) + "\n", line);
+  }
+  // A locale with a decimal comma changes nothing (where the system has one).
+  if (std::setlocale(LC_ALL, "de_DE.UTF-8") != nullptr) {
+    EXPECT_EQ(position_request({960.5, 0.25}), "position 960.5 0.25\n");
+    std::setlocale(LC_ALL, "C");
+  }
+}
+
+TEST(SessionRequests, RefuseWhatTheDaemonWouldRefuse) {
+  EXPECT_EQ(layout_request({0, 0, 0, 1080}), std::nullopt);
+  EXPECT_EQ(layout_request({0, 0, 1920, -1}), std::nullopt);
+  EXPECT_EQ(position_request({std::nan(""), 1}), std::nullopt);
+  EXPECT_EQ(position_request({1, HUGE_VAL}), std::nullopt);
+}
+
+TEST(SessionPassthrough, ListedApplicationsMatchEitherNameInAnyCase) {
+  EXPECT_EQ(passthrough_request(true), "passthrough on\n");
+  EXPECT_EQ(passthrough_request(false), "passthrough off\n");
+  const std::vector<std::string> listed{"steam_app_570", "Xonotic"};
+  EXPECT_TRUE(is_listed(listed, "steam_app_570", "steam_app_570"));
+  EXPECT_TRUE(is_listed(listed, "xonotic-glx", "XONOTIC"));  // the class name, another case
+  EXPECT_FALSE(is_listed(listed, "firefox-esr", "firefox-esr"));
+  EXPECT_FALSE(is_listed(listed, "steam_app_57", "Steam"));  // whole names only
+  EXPECT_FALSE(is_listed({}, "xonotic", "Xonotic"));
+  EXPECT_FALSE(is_listed({""}, "", ""));  // an empty name lists nothing
+}
+
+TEST(SessionLayout, IsTheBoundingBoxOfTheOutputs) {
+  EXPECT_EQ(bounding_box({}), std::nullopt);
+  EXPECT_EQ(bounding_box({{0, 0, 0, 0}}), std::nullopt);  // a disabled output
+  EXPECT_EQ(bounding_box({{0, 0, 1920, 1080}}), (Rect{0, 0, 1920, 1080}));
+  // Side by side, the second one taller and lower; one left of the origin; a mirror; a disabled one.
+  EXPECT_EQ(bounding_box({{0, 0, 1920, 1080}, {1920, 200, 1280, 1024}}), (Rect{0, 0, 3200, 1224}));
+  EXPECT_EQ(bounding_box({{0, 0, 1920, 1080}, {-1280, 0, 1280, 720}, {0, 0, 1920, 1080}, {5000, 5000, 0, 0}}),
+            (Rect{-1280, 0, 3200, 1080}));
+}
+
+TEST(SessionReconnect, BacksOffUpToFiveSeconds) {
+  using std::chrono::milliseconds;
+  EXPECT_EQ(reconnect_delay(0), milliseconds(250));
+  EXPECT_EQ(reconnect_delay(1), milliseconds(250));
+  EXPECT_EQ(reconnect_delay(2), milliseconds(500));
+  EXPECT_EQ(reconnect_delay(3), milliseconds(1000));
+  EXPECT_EQ(reconnect_delay(5), milliseconds(4000));
+  EXPECT_EQ(reconnect_delay(6), milliseconds(5000));
+  EXPECT_EQ(reconnect_delay(1000000), milliseconds(5000));
+}
+
+TEST(SessionConversation, AnswersQueriesAndPairsRepliesWithRequests) {
+  Conversation c;
+  c.sent("helper x11\n");
+  c.sent("layout 0 0 1920 1080\n");
+  c.sent("position 960 540");
+  EXPECT_EQ(c.awaiting(), 3u);
+
+  // A query may come before the replies; it asks for a position and is no reply itself.
+  const Conversation::Reaction query = c.on_line("query");
+  EXPECT_TRUE(query.send_position);
+  EXPECT_TRUE(query.complaint.empty());
+  EXPECT_EQ(c.awaiting(), 3u);
+
+  EXPECT_TRUE(c.on_line("ok").complaint.empty());
+  const Conversation::Reaction refused = c.on_line("error layout: width must be > 0");
+  EXPECT_FALSE(refused.send_position);
+  EXPECT_EQ(refused.complaint, "the daemon refused 'layout 0 0 1920 1080': layout: width must be > 0");
+  EXPECT_TRUE(c.on_line("ok extra words").complaint.empty());
+  EXPECT_EQ(c.awaiting(), 0u);
+}
+
+TEST(SessionConversation, ComplainsAboutLinesItDoesNotKnow) {
+  Conversation c;
+  for (const char* line : {"", "okay", "querying", "QUERY", "errors"}) {
+    const Conversation::Reaction r = c.on_line(line);
+    EXPECT_FALSE(r.send_position) << line;
+    EXPECT_NE(r.complaint.find("not understood"), std::string::npos) << line;
+  }
+  // An error with no request waiting still gets logged.
+  EXPECT_EQ(c.on_line("error permission denied: uid 1001 is not in the active session").complaint,
+            "the daemon refused '(nothing)': permission denied: uid 1001 is not in the active session");
+}
+
+}  // namespace
+}  // namespace ph::session

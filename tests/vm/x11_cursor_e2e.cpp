@@ -1,0 +1,859 @@
+// Run inside the VM under tests/vm/with-xorg (a real Xorg whose libinput driver reads the input devices
+// named "pseudohaptic ..." and "ph-x11 untaken"), as root: is the cursor the daemon models the cursor X
+// shows? Creates uinput test mice, starts the daemon (argv[1]) on one, moves it like a hand and, after
+// every frame, compares where X put its pointer (XQueryPointer) with the cursor model: that of
+// ph::Pipeline fed the same frames offline (the daemon's own: every frame the daemon emits is checked
+// against it too, and its `cursor` over the control socket at the end), or, where something else moves
+// the cursor, the daemon's `cursor` over the control socket.
+//
+//   x11_cursor_e2e DAEMON [--scene DIR] [--session HELPER] [--frames N] [--relative-frames N]
+//                  [--cases abcedf] [-v [--trace-from FRAME]]
+//   x11_cursor_e2e --write-scene DIR     (on the host, before: writes the scene's maps into DIR)
+//
+// Cases, one daemon each (d and g share one), all on one X server; the scene is the embedded default
+// scene's three targets, loaded from files, on a 1920 x 1080 desktop (f: no region):
+//   a  absolute output: X's pixel holds the model at every frame (within 0.5 px of the pixel's centre);
+//      then an untaken pointer moves X's pointer on without a jump;
+//   b  relative output, X's flat acceleration profile: within 1 px;
+//   c  relative output, X's default adaptive profile: the drift, measured and reported only;
+//   e  pseudohaptic-session (HELPER) against a stand-in control socket;
+//   d  with the helper connected: an application warp, then motion: the model follows within two frames;
+//   g  ... a pointer the daemon does not take moves the cursor: the model follows;
+//   f  the daemon's adaptive profile (absolute output) against X's libinput adaptive profile (relative
+//      output) on the same out-and-back strokes: the two cursors within 2 % of the path's length.
+// The distance at a check is from the model to the centre of the pixel X reports, per axis:
+// |model - (pixel + 0.5)|. One PASS, FAIL or INFO line per case; exit status 1 when any failed.
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "config/scene_file.hpp"
+#include "config/target_files.hpp"
+#include "core/engine/pipeline.hpp"
+#include "core/engine/targets.hpp"
+#include "tests/vm/control_stub.hpp"
+#include "tests/vm/e2e_support.hpp"
+#include "tests/vm/hand_motion.hpp"
+#include "tests/vm/x11_support.hpp"
+
+namespace {
+
+using namespace ph::e2e;
+using ph::Frame;
+using ph::Vec2;
+namespace ev = ph::ev;
+
+constexpr const char* kMouseName = "ph-x11 mouse";
+constexpr const char* kVirtualName = "pseudohaptic ph-x11 mouse";
+constexpr ph::Rect kDesktop{0, 0, 1920, 1080};
+constexpr auto kFrameTimeout = 5s;  // a frame through the daemon, or through X (TCG is slow)
+
+struct Options {
+  std::string daemon;
+  int frames = 2000;          // motion frames of the absolute case
+  int relative_frames = 600;  // motion frames of each relative case
+  bool verbose = false;
+  std::string cases = "abcedf";  // which run, by letter (e: the helper alone; d: d and g; f)
+  long trace_from = -1;          // -v: trace 12 frames from this one
+  int acceleration_strokes = 8;  // out-and-back strokes of case f
+  std::filesystem::path scratch;
+  std::filesystem::path scene_dir;  // the targets' maps; default: in scratch
+  std::string session;              // pseudohaptic-session, for its case; none: not run
+};
+
+void trace(const Options& options, const std::string& what) {
+  static const auto start = Clock::now();
+  if (!options.verbose) return;
+  std::fprintf(stderr, "[%9.3f] %s\n", std::chrono::duration<double>(Clock::now() - start).count(), what.c_str());
+}
+
+// ---- the scene: the default scene's three targets, from files ------------------------------------------------
+
+struct Target {
+  const char* name;
+  int x, y;
+};
+constexpr Target kTargets[] = {
+    {"bump-gaussian-h1-r200", 135, 290}, {"hole-polynomial-h1-r200", 710, 290}, {"bump-linear-h1-r100", 1285, 290}};
+
+std::vector<ph::TargetSpec> scene_targets() {
+  std::vector<ph::TargetSpec> specs;
+  for (const Target& t : kTargets) {
+    for (const ph::TargetSpec& spec : ph::all_targets()) {
+      if (spec.name() == t.name) specs.push_back(spec);
+    }
+  }
+  if (specs.size() != std::size(kTargets)) throw Fatal("a target of the default scene is missing");
+  return specs;
+}
+
+// The regions' scene text, naming the maps in `dir` by absolute path. Writes the maps there when they
+// are missing (slow under TCG: scripts/vm-test writes them on the host first, with --write-scene).
+std::string scene_regions(const std::filesystem::path& dir) {
+  const std::vector<ph::TargetSpec> specs = scene_targets();
+  if (!ph::target_files_present(dir, specs)) ph::write_target_files(dir, specs);
+  const std::string prefix = std::filesystem::absolute(dir).string() + "/";
+  std::string regions;
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    std::string region = ph::target_scene_text(specs[i]);
+    const std::string at_origin = "x = 0\ny = 0\n";
+    const auto pos = region.find(at_origin);
+    if (pos == std::string::npos) throw Fatal("unexpected target scene text:\n" + region);
+    region.replace(pos, at_origin.size(), fmt::format("x = {}\ny = {}\n", kTargets[i].x, kTargets[i].y));
+    for (const char* key : {"normal_map = \"", "depth_map = \""}) {
+      const auto at = region.find(key);
+      if (at == std::string::npos) throw Fatal("unexpected target scene text:\n" + region);
+      region.insert(at + std::strlen(key), prefix);
+    }
+    regions += "\n" + region;
+  }
+  return regions;
+}
+
+// A config file `name`.toml: the test mouse only, the desktop spelled out, `mode`, the daemon's own
+// acceleration `acceleration` at speed 0, and `regions` (scene text).
+std::filesystem::path write_config(const std::filesystem::path& dir, const std::string& name, ph::OutputMode mode,
+                                   const std::string& acceleration, const std::string& regions) {
+  const std::filesystem::path path = dir / (name + ".toml");
+  std::ofstream out(path, std::ios::trunc);
+  out << "[daemon]\n"
+      << "devices = [\"name:ph-x11 mouse\"]\n"
+      << "output = \"" << (mode == ph::OutputMode::absolute ? "absolute" : "relative") << "\"\n"
+      << "acceleration = \"" << acceleration << "\"\n"
+      << "speed = 0.0\n"
+      << "desktop = [0, 0, 1920, 1080]\n"
+      << "pointer_speed = 1.0\n"
+      << regions;
+  if (!out) throw Fatal("cannot write " + path.string());
+  return path;
+}
+
+// ---- figures -------------------------------------------------------------------------------------------------
+
+// Distances from the model to the centre of the pixel X shows, over the checks of a case.
+class Distances {
+ public:
+  void add(long frame, Vec2 model, XServer::Pointer pixel) {
+    const double dx = std::abs(model.x - (pixel.x + 0.5)), dy = std::abs(model.y - (pixel.y + 0.5));
+    const double axis = std::max(dx, dy), euclid = std::hypot(dx, dy);
+    if (axis > max_axis_) {
+      max_axis_ = axis;
+      worst_ =
+          fmt::format("frame {}: model ({:.3f}, {:.3f}), X pixel ({}, {})", frame, model.x, model.y, pixel.x, pixel.y);
+    }
+    max_euclid_ = std::max(max_euclid_, euclid);
+    sum_sq_ += euclid * euclid;
+    last_ = euclid;
+    ++checks_;
+    axes_.push_back(axis);
+    texts_.push_back(
+        fmt::format("frame {}: model ({:.3f}, {:.3f}), X pixel ({}, {})", frame, model.x, model.y, pixel.x, pixel.y));
+  }
+  // The first check whose per-axis distance exceeds `bound`, in words.
+  std::string first_over(double bound) const {
+    for (std::size_t i = 0; i < axes_.size(); ++i) {
+      if (axes_[i] > bound) return texts_[i];
+    }
+    return "none";
+  }
+  // Checks whose per-axis distance exceeds `bound`.
+  long over(double bound) const {
+    return std::count_if(axes_.begin(), axes_.end(), [&](double a) { return a > bound; });
+  }
+
+  double max_axis() const { return max_axis_; }
+  double max_euclid() const { return max_euclid_; }
+  double rms() const { return checks_ > 0 ? std::sqrt(sum_sq_ / static_cast<double>(checks_)) : 0.0; }
+  double last() const { return last_; }
+  long checks() const { return checks_; }
+  const std::string& worst() const { return worst_; }
+
+ private:
+  double max_axis_ = 0, max_euclid_ = 0, sum_sq_ = 0, last_ = 0;
+  long checks_ = 0;
+  std::vector<double> axes_;
+  std::vector<std::string> texts_;
+  std::string worst_;
+};
+
+// ---- one case ------------------------------------------------------------------------------------------------
+
+struct CaseSpec {
+  std::string label;
+  ph::OutputMode mode;
+  std::string x_profile;  // relative output: the profile X's libinput driver gets ("flat", "adaptive")
+  int frames;
+  std::optional<double> bound;  // per-axis distance every check must keep; none: measured only
+  bool untaken_after = false;   // then an untaken pointer moves X's pointer
+};
+
+struct CaseResult {
+  Distances distances;
+  long motion_frames = 0, daemon_frames = 0, daemon_mismatches = 0, lost_syncs = 0;
+  double model_path = 0, seconds = 0, late_ms = 0;
+  long late_frames = 0;
+  std::vector<std::string> problems;
+  std::vector<std::string> notes;
+};
+
+// What the kernel passes on of a frame the daemon writes: an ABS value equal to the axis' last one, a
+// REL value of 0 and an empty frame are dropped. `abs` holds the last ABS_X, ABS_Y.
+Frame as_delivered(const Frame& frame, std::int32_t abs[2]) {
+  Frame out;
+  bool any = false;
+  for (const ph::InputEvent& e : frame.events) {
+    if (e.type == ev::kAbs && (e.code == ev::kAbsX || e.code == ev::kAbsY)) {
+      std::int32_t& last = abs[e.code == ev::kAbsX ? 0 : 1];
+      if (e.value == last) continue;
+      last = e.value;
+    }
+    if (e.type == ev::kRel && e.value == 0) continue;
+    if (e.type != ev::kSyn) any = true;
+    out.events.push_back(e);
+  }
+  if (!any) out.events.clear();
+  return out;
+}
+
+std::int32_t abs_value(int fd, std::uint16_t code) {
+  input_absinfo info{};
+  if (::ioctl(fd, EVIOCGABS(code), &info) < 0) return 0;
+  return info.value;
+}
+
+// The daemon takes the mouse just after it creates the virtual device: sends wheel notches until one
+// comes out, then reads up to a horizontal one, so that nothing of them is left to read.
+bool wait_taken(TestMouse& mouse, EventReader& out, Clock::duration timeout) {
+  const auto deadline = Clock::now() + timeout;
+  bool through = false;
+  while (!through && Clock::now() < deadline) {
+    mouse.send(make_frame({rel(ev::kRelWheel, 1)}));
+    through = out.next_frame(200ms).has_value();
+  }
+  if (!through) return false;
+  const Frame marker = make_frame({rel(ev::kRelHWheel, 1)});
+  mouse.send(marker);
+  while (const std::optional<Frame> got = out.next_frame(kFrameTimeout)) {
+    if (same_events(*got, marker)) return true;
+  }
+  return false;
+}
+
+// The daemon (on `config`, with a control socket in the scratch folder) as a child, once it has taken
+// the test mouse and X has added its virtual device. stop() ends it as the service manager would.
+class RunningDaemon {
+ public:
+  RunningDaemon(const Options& options, XServer& x, TestMouse& mouse, const UeventMonitor& uevents,
+                const std::filesystem::path& config)
+      : notify_((options.scratch / "notify.sock").string()),
+        control_((options.scratch / "daemon.control").string()),
+        daemon_(arguments(options, config, control_),
+                {"NOTIFY_SOCKET=" + notify_.path(), "PATH=/usr/sbin:/usr/bin:/sbin:/bin", "LANG=C.UTF-8"},
+                (options.scratch / "daemon.log").string()) {
+    if (!notify_.expect("READY=1", 120s)) fatal("no READY=1 within 120 s");
+    const std::string node = wait_for_device(kVirtualName, 10s, uevents);
+    if (node.empty()) fatal("no virtual device '" + std::string(kVirtualName) + "'");
+    out_.emplace(node);
+    if (!wait_taken(mouse, *out_, 10s)) fatal("the daemon did not take the test mouse");
+    const std::optional<int> device = x.wait_for_pointer(kVirtualName, 30s);
+    if (!device) fatal("X did not add the virtual device within 30 s");
+    device_ = *device;
+  }
+
+  [[noreturn]] void fatal(const std::string& what) { throw Fatal(what + "; the daemon's output:\n" + daemon_.log()); }
+  EventReader& out() { return *out_; }
+  int x_device() const { return device_; }                 // the virtual device's XInput id
+  const std::string& control() const { return control_; }  // its control socket
+
+  // SIGTERM: the daemon exits 0 and X lets go of its device. Adds what went wrong to `problems`.
+  void stop(XServer& x, std::vector<std::string>& problems) {
+    daemon_.signal(SIGTERM);
+    const std::optional<int> status = daemon_.wait_exit(10s);
+    if (!status || !WIFEXITED(*status) || WEXITSTATUS(*status) != 0) {
+      problems.push_back("the daemon did not exit 0 on SIGTERM: " +
+                         (status ? describe_wait_status(*status) : std::string("still running")));
+    }
+    if (!x.wait_pointer_gone(kVirtualName, 30s)) problems.push_back("X kept the virtual device");
+  }
+
+ private:
+  static std::vector<std::string> arguments(const Options& options, const std::filesystem::path& config,
+                                            const std::string& control) {
+    std::vector<std::string> argv{options.daemon, "-c", config.string(), "--control", control};
+    if (options.verbose) argv.emplace_back("-v");
+    return argv;
+  }
+
+  NotifySocket notify_;
+  std::string control_;
+  ChildProcess daemon_;
+  std::optional<EventReader> out_;
+  int device_ = 0;
+};
+
+CaseResult run_case(const Options& options, XServer& x, TestMouse& mouse, TestMouse* untaken,
+                    const UeventMonitor& uevents, const std::filesystem::path& config, const CaseSpec& spec) {
+  CaseResult result;
+  const auto start = Clock::now();
+  RunningDaemon daemon(options, x, mouse, uevents, config);
+  auto fatal = [&](const std::string& what) { daemon.fatal(what); };
+  EventReader& out = daemon.out();
+  const int device = daemon.x_device();
+  trace(options, fmt::format("{}: X device {}", spec.label, device));
+
+  ph::PipelineConfig pipeline_config;
+  pipeline_config.mode = spec.mode;
+  pipeline_config.desktop = kDesktop;
+  pipeline_config.pointer_gain = 1.0;
+  const auto scene = std::make_shared<const ph::Scene>(ph::load_scene(ph::parse_scene_file(config)));
+  ph::Pipeline model(scene, pipeline_config);
+  if (spec.mode == ph::OutputMode::relative) {
+    x.set_accel_profile(device, spec.x_profile);
+    if (x.accel_profile(device) != spec.x_profile) fatal("X kept the profile " + x.accel_profile(device));
+    // Relative output moves X's pointer from where it is: start it where the model starts.
+    const Vec2 at = model.cursor().position;
+    // A warp, then the first motion of a new relative device put X's pointer in the screen's far corner
+    // when an absolute device had moved it last (X.Org 21.1.7); one relative XTEST motion first avoids it.
+    x.xtest_move_by(1, 1);
+    x.warp(static_cast<int>(at.x), static_cast<int>(at.y));
+    trace(options, fmt::format("{}: warped X's pointer to ({}, {})", spec.label, x.pointer().x, x.pointer().y));
+  }
+  x.drain();
+  long motions = x.motions(device);
+  std::int32_t abs[2] = {abs_value(out.fd(), ev::kAbsX), abs_value(out.fd(), ev::kAbsY)};
+
+  HandMotion hand({150, 150, 1620, 780}, 12345);
+  const auto first = Clock::now();
+  auto origin = first;  // frame i is due at origin + i * 8 ms; moved on when a frame is late
+  long frame = 0;
+  Vec2 previous = model.cursor().position;
+  for (; result.motion_frames < spec.frames; ++frame) {
+    const Counts counts = hand.next(model.cursor().position);
+    const auto due = origin + std::chrono::microseconds(frame * kFramePeriodUs);
+    const auto now = Clock::now();
+    if (now < due) {
+      std::this_thread::sleep_until(due);
+    } else if (now - due > 1ms) {
+      // Late (TCG): keep the 8 ms to the next frames rather than catching up with a burst, which
+      // would look like a faster hand to the acceleration profiles.
+      ++result.late_frames;
+      result.late_ms += std::chrono::duration<double, std::milli>(now - due).count();
+      origin += now - due;
+    }
+    if (!counts.any()) continue;  // a pause: time passes, nothing is sent
+    ++result.motion_frames;
+    std::vector<ph::InputEvent> events;
+    if (counts.dx != 0) events.push_back(rel(ev::kRelX, counts.dx));
+    if (counts.dy != 0) events.push_back(rel(ev::kRelY, counts.dy));
+    const Frame in = make_frame(std::move(events));
+    const Frame expected = as_delivered(model.process(in), abs);
+    result.model_path += length(model.cursor().position - previous);
+    previous = model.cursor().position;
+    mouse.send(in);
+    if (!expected.events.empty()) {
+      ++result.daemon_frames;
+      const std::optional<Frame> got = out.next_frame(kFrameTimeout);
+      if (!got)
+        fatal(fmt::format("frame {}: nothing came out of the daemon within {} s", frame, kFrameTimeout.count()));
+      if (!same_events(*got, expected) && result.daemon_mismatches++ < 3) {
+        result.problems.push_back(fmt::format("frame {}: the daemon emitted [{}], the offline pipeline [{}]", frame,
+                                              describe(*got), describe(expected)));
+      }
+      if (!x.wait_motions(device, ++motions, kFrameTimeout)) {
+        if (result.lost_syncs++ < 3) result.problems.push_back(fmt::format("frame {}: X reported no motion", frame));
+        x.drain();
+        motions = x.motions(device);
+      }
+    }
+    const XServer::Pointer pointer = x.pointer();
+    result.distances.add(frame, model.cursor().position, pointer);
+    if (result.motion_frames <= 3 ||
+        (options.trace_from >= 0 && frame >= options.trace_from && frame < options.trace_from + 12)) {
+      trace(options, fmt::format("{}: frame {} [{}] -> [{}]: model ({:.3f}, {:.3f}), X ({}, {})", spec.label, frame,
+                                 describe(in), describe(expected), model.cursor().position.x, model.cursor().position.y,
+                                 pointer.x, pointer.y));
+    }
+  }
+  result.seconds = std::chrono::duration<double>(Clock::now() - first).count();
+  if (spec.untaken_after && untaken != nullptr) {
+    // Another pointer, which the daemon does not take, moves X's pointer on from where the daemon's
+    // device left it: X switches between the two devices without a jump.
+    const std::optional<int> other = x.wait_for_pointer(untaken->name(), 10s);
+    if (!other) fatal("X did not add the untaken pointer");
+    x.drain();
+    const long seen = x.motions(*other);
+    const XServer::Pointer before = x.pointer();
+    untaken->send(make_frame({rel(ev::kRelX, 5), rel(ev::kRelY, 5)}));
+    if (!x.wait_motions(*other, seen + 1, kFrameTimeout)) result.problems.push_back("the untaken pointer: no motion");
+    const XServer::Pointer after = x.pointer();
+    result.notes.push_back(fmt::format("the untaken pointer's +5,+5 counts moved X's pointer from ({}, {}) by ({}, {})",
+                                       before.x, before.y, after.x - before.x, after.y - before.y));
+    const auto moved = [](int d) { return d >= 1 && d <= 15; };  // X's adaptive profile: a factor, not a jump
+    if (!moved(after.x - before.x) || !moved(after.y - before.y)) {
+      result.problems.push_back("the untaken pointer did not move X's pointer on from where it was: " +
+                                result.notes.back());
+    }
+  }
+
+  // The daemon's own model, through its control socket, is the offline one.
+  const Vec2 reported = ControlClient(daemon.control(), 5s).cursor();
+  if (std::abs(reported.x - model.cursor().position.x) > 1e-9 ||
+      std::abs(reported.y - model.cursor().position.y) > 1e-9) {
+    result.problems.push_back(fmt::format("the daemon's cursor model is ({}, {}), the offline one ({:.3f}, {:.3f})",
+                                          reported.x, reported.y, model.cursor().position.x,
+                                          model.cursor().position.y));
+  }
+  daemon.stop(x, result.problems);
+  trace(options,
+        fmt::format("{}: {:.1f} s in all", spec.label, std::chrono::duration<double>(Clock::now() - start).count()));
+  return result;
+}
+
+// One line per case: PASS / FAIL against the bound, INFO where the case only measures.
+bool report(const CaseSpec& spec, const CaseResult& r) {
+  const Distances& d = r.distances;
+  const long over = spec.bound ? d.over(*spec.bound) : 0;
+  const bool ok = over == 0 && r.problems.empty();
+  const char* verdict = !ok ? "FAIL" : spec.bound ? "PASS" : "INFO";
+  std::printf(
+      "%s %s: %ld motion frames in %.1f s (%ld frames late, by %.0f ms in all), model path %.0f px; distance "
+      "from the model to the centre of X's pixel over %ld checks: max %.3f px per axis (%.3f px), RMS %.3f px, "
+      "last %.3f px%s\n",
+      verdict, spec.label.c_str(), r.motion_frames, r.seconds, r.late_frames, r.late_ms, r.model_path, d.checks(),
+      d.max_axis(), d.max_euclid(), d.rms(), d.last(),
+      spec.bound ? fmt::format("; {} checks beyond {} px", over, *spec.bound).c_str() : "");
+  if (spec.bound && over > 0) std::printf("    first beyond: %s\n", d.first_over(*spec.bound).c_str());
+  std::printf("    worst: %s; daemon frames %ld, of them unlike the offline pipeline %ld; X syncs lost %ld\n",
+              d.worst().c_str(), r.daemon_frames, r.daemon_mismatches, r.lost_syncs);
+  for (const std::string& n : r.notes) std::printf("    %s\n", n.c_str());
+  for (const std::string& p : r.problems) std::printf("    %s\n", p.c_str());
+  std::fflush(stdout);
+  return ok;
+}
+
+// ---- the model follows what else moves the cursor (the session helper connected) ----------------------------
+
+// Sends the hand's next frame and, once X has taken in what the daemon made of it, returns the pixel X
+// shows; nullopt for a pause frame (nothing sent). Frames the daemon turns into nothing (an absolute
+// position that did not change) are waited for only briefly.
+struct Player {
+  XServer& x;
+  TestMouse& mouse;
+  RunningDaemon& daemon;
+  long motions = 0;
+  long frame = 0;
+  Clock::time_point origin = Clock::now();
+
+  std::optional<XServer::Pointer> play(Counts counts) {
+    const auto due = origin + std::chrono::microseconds(frame++ * kFramePeriodUs);
+    if (Clock::now() < due) {
+      std::this_thread::sleep_until(due);
+    } else {
+      origin += Clock::now() - due;  // late under TCG: keep the 8 ms rather than send a burst
+    }
+    if (!counts.any()) return std::nullopt;
+    std::vector<ph::InputEvent> events;
+    if (counts.dx != 0) events.push_back(rel(ev::kRelX, counts.dx));
+    if (counts.dy != 0) events.push_back(rel(ev::kRelY, counts.dy));
+    mouse.send(make_frame(std::move(events)));
+    if (daemon.out().next_frame(300ms)) {
+      if (!x.wait_motions(daemon.x_device(), ++motions, kFrameTimeout)) {
+        x.drain();
+        motions = x.motions(daemon.x_device());
+      }
+    }
+    return x.pointer();
+  }
+  // A pause: time passes, nothing is sent.
+  void pause(Clock::duration d) {
+    std::this_thread::sleep_for(d);
+    origin = Clock::now() - std::chrono::microseconds(frame * kFramePeriodUs);
+  }
+  void start() {
+    x.drain();
+    motions = x.motions(daemon.x_device());
+    origin = Clock::now() - std::chrono::microseconds(frame * kFramePeriodUs);
+  }
+};
+
+std::string distances_text(const Distances& d) {
+  return fmt::format("{} checks, max {:.3f} px per axis ({:.3f} px), RMS {:.3f} px", d.checks(), d.max_axis(),
+                     d.max_euclid(), d.rms());
+}
+
+void print_verdict(const std::string& label, const std::vector<std::string>& problems,
+                   const std::vector<std::string>& notes, double seconds) {
+  std::printf("%s %s (%.1f s)%s\n", problems.empty() ? "PASS" : "FAIL", label.c_str(), seconds,
+              problems.empty() ? "" : ":");
+  for (const std::string& n : notes) std::printf("    %s\n", n.c_str());
+  for (const std::string& p : problems) std::printf("    %s\n", p.c_str());
+  std::fflush(stdout);
+}
+
+// [d] an application warp (xdotool mousemove) and [g] a pointer the daemon does not take move X's pointer;
+// with pseudohaptic-session connected, the daemon's model (its `cursor` over the control socket) follows,
+// and X's pixel holds the model at every later check. Returns how many of the two failed.
+int follow_cases(const Options& options, XServer& x, TestMouse& mouse, TestMouse& untaken, const UeventMonitor& uevents,
+                 const std::filesystem::path& config) {
+  const auto start = Clock::now();
+  RunningDaemon daemon(options, x, mouse, uevents, config);
+  const char* display = std::getenv("DISPLAY");
+  ChildProcess helper({options.session, "--control", daemon.control(), "-v"},
+                      {std::string("DISPLAY=") + (display != nullptr ? display : ""), "PATH=/usr/bin:/bin"},
+                      (options.scratch / "session-follow.log").string());
+  ControlClient control(daemon.control(), 10s);
+  if (!wait_until([&] { return control.request("status").find("helper=yes") != std::string::npos; }, 20s, nullptr,
+                  200ms)) {
+    daemon.fatal("the session helper did not connect within 20 s; its log:\n" + helper.log());
+  }
+  Player player{x, mouse, daemon};
+  HandMotion hand({150, 150, 1620, 780}, 777);
+  // Hand frames; from `from` on, X's pixel must hold the model (read over the socket) at every check.
+  auto move = [&](int frames, int from, Distances& held, std::vector<XServer::Pointer>* seen) {
+    for (int k = 0; k < frames;) {
+      const Vec2 model = control.cursor();
+      const std::optional<XServer::Pointer> at = player.play(hand.next(model));
+      if (!at) continue;
+      ++k;
+      if (seen != nullptr) seen->push_back(*at);
+      if (k >= from) held.add(player.frame, control.cursor(), *at);
+    }
+  };
+  player.start();
+  Distances before;
+  move(100, 1, before, nullptr);
+
+  int failed = 0;
+  {  // [d] an application warp, then motion: the model follows within two frames
+    const auto case_start = Clock::now();
+    std::vector<std::string> problems, notes;
+    player.pause(400ms);
+    const int status = std::system("xdotool mousemove 400 300");
+    if (status != 0) problems.push_back(fmt::format("xdotool mousemove: status {}", status));
+    const XServer::Pointer warped = x.pointer();
+    player.pause(400ms);
+    Distances after;
+    std::vector<XServer::Pointer> seen;
+    move(60, 2, after, &seen);
+    if (seen.size() >= 2) {
+      const XServer::Pointer p = seen[1];
+      notes.push_back(
+          fmt::format("X's pointer warped to ({}, {}), after two frames at ({}, {})", warped.x, warped.y, p.x, p.y));
+      // Two frames move the cursor by some 10s of px; going back to the old place is hundreds away.
+      if (std::hypot(p.x - 400, p.y - 300) > 120) problems.push_back("the warp was undone: " + notes.back());
+    }
+    notes.push_back("from the second frame after the warp: " + distances_text(after));
+    if (after.over(0.5) > 0) problems.push_back("first beyond 0.5 px: " + after.first_over(0.5));
+    notes.push_back("before the warp: " + distances_text(before));
+    if (before.over(0.5) > 0) problems.push_back("before the warp, first beyond 0.5 px: " + before.first_over(0.5));
+    print_verdict("[d] an application warp (xdotool mousemove), then motion: the model follows", problems, notes,
+                  std::chrono::duration<double>(Clock::now() - case_start).count());
+    failed += !problems.empty();
+  }
+  {  // [g] an untaken pointer moves X's pointer: the model follows, then the mouse moves on from there
+    const auto case_start = Clock::now();
+    std::vector<std::string> problems, notes;
+    const std::optional<int> other = x.wait_for_pointer(untaken.name(), 10s);
+    if (!other) daemon.fatal("X did not add the untaken pointer");
+    x.drain();
+    long seen = x.motions(*other);
+    const XServer::Pointer from = x.pointer();
+    for (int i = 0; i < 3; ++i) {
+      untaken.send(make_frame({rel(ev::kRelX, 10), rel(ev::kRelY, 10)}));
+      if (!x.wait_motions(*other, ++seen, kFrameTimeout)) problems.push_back("the untaken pointer: no motion");
+      std::this_thread::sleep_for(8ms);
+    }
+    const XServer::Pointer to = x.pointer();
+    const auto moved = Clock::now();
+    const auto inside = [&] {
+      const Vec2 m = control.cursor();
+      return std::abs(m.x - (to.x + 0.5)) <= 0.5 && std::abs(m.y - (to.y + 0.5)) <= 0.5;
+    };
+    const bool followed = wait_until(inside, 3s, nullptr, 20ms);
+    const Vec2 m = control.cursor();
+    notes.push_back(
+        fmt::format("the untaken pointer moved X's pointer from ({}, {}) to ({}, {}); the model {} "
+                    "({:.2f}, {:.2f}) after {:.0f} ms",
+                    from.x, from.y, to.x, to.y, followed ? "followed to" : "stayed at", m.x, m.y,
+                    std::chrono::duration<double, std::milli>(Clock::now() - moved).count()));
+    if (!followed) problems.push_back("the model did not follow within 3 s");
+    Distances after;
+    player.start();
+    move(60, 1, after, nullptr);
+    notes.push_back("the mouse then: " + distances_text(after));
+    if (after.over(0.5) > 0) problems.push_back("first beyond 0.5 px: " + after.first_over(0.5));
+    print_verdict("[g] an untaken pointer moves the cursor: the model follows", problems, notes,
+                  std::chrono::duration<double>(Clock::now() - case_start).count());
+    failed += !problems.empty();
+  }
+  helper.signal(SIGTERM);
+  helper.wait_exit(5s);
+  std::vector<std::string> problems;
+  daemon.stop(x, problems);
+  for (const std::string& p : problems) std::printf("FAIL [d, g] %s\n", p.c_str());
+  trace(options, fmt::format("[d, g]: {:.1f} s in all", std::chrono::duration<double>(Clock::now() - start).count()));
+  if (failed > 0) std::printf("---- the daemon's log is in %s, the helper's:\n%s", "daemon.log", helper.log().c_str());
+  return failed + (problems.empty() ? 0 : 1);
+}
+
+// ---- [f] the daemon's adaptive profile against libinput's own ------------------------------------------------
+
+// The pixels X shows after each motion frame of `frames`, with the daemon on `config` (X's libinput
+// profile `x_profile` for relative output; X's pointer starts where the model does).
+std::vector<Vec2> cursor_path(const Options& options, XServer& x, TestMouse& mouse, const UeventMonitor& uevents,
+                              const std::filesystem::path& config, const std::string& x_profile,
+                              const std::vector<Counts>& frames, std::vector<std::string>& problems) {
+  RunningDaemon daemon(options, x, mouse, uevents, config);
+  if (!x_profile.empty()) {
+    x.set_accel_profile(daemon.x_device(), x_profile);
+    x.xtest_move_by(1, 1);  // see run_case: a warp after an absolute device needs a relative motion first
+    x.warp(960, 540);
+  }
+  Player player{x, mouse, daemon};
+  player.start();
+  std::vector<Vec2> path;
+  for (const Counts& c : frames) {
+    if (const std::optional<XServer::Pointer> at = player.play(c)) path.push_back({at->x + 0.5, at->y + 0.5});
+  }
+  daemon.stop(x, problems);
+  return path;
+}
+
+bool acceleration_case(const Options& options, XServer& x, TestMouse& mouse, const UeventMonitor& uevents) {
+  const auto start = Clock::now();
+  const std::string label =
+      "[f] the daemon's adaptive profile (absolute output) against X's libinput adaptive profile (relative output), "
+      "flat scene";
+  std::vector<std::string> problems, notes;
+  const std::vector<Counts> frames = out_and_back(options.acceleration_strokes, 4242);
+  const std::vector<Vec2> ours = cursor_path(
+      options, x, mouse, uevents, write_config(options.scratch, "f-absolute", ph::OutputMode::absolute, "adaptive", ""),
+      "", frames, problems);
+  const std::vector<Vec2> theirs = cursor_path(
+      options, x, mouse, uevents, write_config(options.scratch, "f-relative", ph::OutputMode::relative, "flat", ""),
+      "adaptive", frames, problems);
+  if (ours.size() != theirs.size() || ours.empty()) {
+    problems.push_back(fmt::format("paths of {} and {} checks", ours.size(), theirs.size()));
+  } else {
+    double length = 0, our_length = 0, max_distance = 0, sum_sq = 0;
+    std::size_t worst = 0;
+    for (std::size_t i = 0; i < ours.size(); ++i) {
+      if (i > 0) length += ph::length(theirs[i] - theirs[i - 1]);
+      if (i > 0) our_length += ph::length(ours[i] - ours[i - 1]);
+      const double d = ph::length(ours[i] - theirs[i]);
+      sum_sq += d * d;
+      if (d > max_distance) {
+        max_distance = d;
+        worst = i;
+      }
+    }
+    notes.push_back(fmt::format(
+        "{} motion frames; libinput's path {:.0f} px, ours {:.0f} px; the two cursors apart by max {:.1f} px ({:.2f} % "
+        "of the path; worst at check {}: ours ({:.1f}, {:.1f}), libinput's ({:.1f}, {:.1f})), RMS {:.1f} px, at the "
+        "end {:.1f} px",
+        ours.size(), length, our_length, max_distance, 100.0 * max_distance / length, worst, ours[worst].x,
+        ours[worst].y, theirs[worst].x, theirs[worst].y, std::sqrt(sum_sq / static_cast<double>(ours.size())),
+        ph::length(ours.back() - theirs.back())));
+    if (max_distance > 0.02 * length) problems.push_back("apart by more than 2 % of the path");
+  }
+  print_verdict(label, problems, notes, std::chrono::duration<double>(Clock::now() - start).count());
+  return problems.empty();
+}
+
+// ---- the session helper ------------------------------------------------------------------------------------
+
+// pseudohaptic-session on this X server, talking to a stand-in for the daemon's control socket: what it
+// says at start, its answer to a query, its layout after RandR changes, its reconnection, its exit.
+bool session_case(const Options& options, XServer& x) {
+  const std::string label = "pseudohaptic-session (x11 backend) against a stand-in control socket";
+  const auto start = Clock::now();
+  std::vector<std::string> problems;
+  ControlStub stub((options.scratch / "control").string());
+  x.warp(700, 300);
+  const char* display = std::getenv("DISPLAY");
+  ChildProcess helper({options.session, "--control", stub.path(), "--passthrough", "PH-GAME", "-v"},
+                      {std::string("DISPLAY=") + (display != nullptr ? display : ""), "PATH=/usr/bin:/bin"},
+                      (options.scratch / "session.log").string());
+  // Reads lines until `want` (answering each with ok); a line before it is noted, none at all a problem.
+  auto expect = [&](const std::string& want, const std::string& when) {
+    std::vector<std::string> before;
+    while (const std::optional<std::string> line = stub.next_line(15s)) {
+      stub.send("ok");
+      if (*line == want) {
+        if (!before.empty()) trace(options, fmt::format("{}: before '{}': {}", when, want, fmt::join(before, " | ")));
+        return;
+      }
+      before.push_back(*line);
+    }
+    problems.push_back(
+        fmt::format("{}: expected '{}', got [{}] and then nothing for 15 s", when, want, fmt::join(before, " | ")));
+  };
+  auto xrandr = [&](const std::string& args) {
+    const int status = std::system(("xrandr " + args).c_str());
+    if (status != 0) problems.push_back(fmt::format("xrandr {}: status {}", args, status));
+  };
+  try {
+    if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
+    expect("helper x11", "at start");
+    expect("layout 0 0 1920 1080", "at start");
+    expect("position 700.5 300.5", "at start");
+    x.warp(123, 456);
+    stub.send("query");
+    expect("position 123.5 456.5", "after a query");
+    xrandr("--output DUMMY0 --mode 1280x720");
+    expect("layout 0 0 1280 720", "after a smaller mode");
+    xrandr("--output DUMMY0 --mode 1920x1080");
+    expect("layout 0 0 1920 1080", "after the mode back");
+    xrandr("--addmode DUMMY1 1280x720");  // the dummy driver's other outputs are disconnected, without modes
+    xrandr("--output DUMMY1 --mode 1280x720 --right-of DUMMY0");
+    expect("layout 0 0 3200 1080", "after a second output to the right");
+    xrandr("--output DUMMY1 --off");
+    expect("layout 0 0 1920 1080", "after the second output is off");
+    // A listed application gets the focus (as a window manager says: _NET_ACTIVE_WINDOW), then none has it.
+    const Window game = XCreateSimpleWindow(x.get(), x.root(), 0, 0, 64, 64, 0, 0, 0);
+    XClassHint hint{const_cast<char*>("ph-game"), const_cast<char*>("Ph-game")};
+    XSetClassHint(x.get(), game, &hint);
+    x.set_active_window(game);
+    expect("passthrough on", "when a listed application has the focus");
+    x.set_active_window(None);
+    expect("passthrough off", "when it has lost the focus");
+    XDestroyWindow(x.get(), game);
+    XSync(x.get(), False);
+    stub.stop();  // as a daemon restart: the socket goes away and comes back
+    x.warp(300, 200);  // before the helper can reconnect: it says where the pointer is as it connects
+    std::this_thread::sleep_for(700ms);
+    stub.restart();
+    if (!stub.accept(20s)) throw Fatal("the helper did not reconnect within 20 s");
+    expect("helper x11", "after reconnecting");
+    expect("layout 0 0 1920 1080", "after reconnecting");
+    expect("position 300.5 200.5", "after reconnecting");
+    helper.signal(SIGTERM);
+    const std::optional<int> status = helper.wait_exit(10s);
+    if (!status || !WIFEXITED(*status) || WEXITSTATUS(*status) != 0) {
+      problems.push_back("SIGTERM: " + (status ? describe_wait_status(*status) : std::string("still running")));
+    }
+  } catch (const Fatal& e) {
+    problems.push_back(e.what());
+  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (problems.empty()) {
+    std::printf("PASS %s (%.1f s)\n", label.c_str(), seconds);
+  } else {
+    std::printf("FAIL %s (%.1f s):\n", label.c_str(), seconds);
+    for (const std::string& p : problems) std::printf("    %s\n", p.c_str());
+    std::printf("    the helper's log:\n%s", helper.log().c_str());
+  }
+  std::fflush(stdout);
+  return problems.empty();
+}
+
+int usage(const char* why) {
+  std::fprintf(stderr,
+               "x11_cursor_e2e: %s\nusage: x11_cursor_e2e DAEMON [--scene DIR] [--session HELPER] [--frames N] "
+               "[--relative-frames N] [--cases abcedf] [-v [--trace-from FRAME]]\n"
+               "       x11_cursor_e2e --write-scene DIR\n",
+               why);
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--frames" && i + 1 < argc) {
+      options.frames = std::atoi(argv[++i]);
+    } else if (arg == "--relative-frames" && i + 1 < argc) {
+      options.relative_frames = std::atoi(argv[++i]);
+    } else if (arg == "--scene" && i + 1 < argc) {
+      options.scene_dir = argv[++i];
+    } else if (arg == "--write-scene" && i + 1 < argc) {
+      ph::write_target_files(argv[i + 1], scene_targets());
+      return 0;
+    } else if (arg == "--trace-from" && i + 1 < argc) {
+      options.trace_from = std::atol(argv[++i]);
+    } else if (arg == "--session" && i + 1 < argc) {
+      options.session = std::filesystem::absolute(argv[++i]).string();
+    } else if (arg == "--cases" && i + 1 < argc) {
+      options.cases = argv[++i];
+    } else if (arg == "-v") {
+      options.verbose = true;
+    } else if (options.daemon.empty() && !arg.empty() && arg[0] != '-') {
+      options.daemon = std::filesystem::absolute(arg).string();
+    } else {
+      return usage(("unexpected argument " + arg).c_str());
+    }
+  }
+  if (options.daemon.empty()) return usage("no daemon given");
+  const char* tmp = std::getenv("TMPDIR");
+  options.scratch = std::filesystem::path(tmp != nullptr ? tmp : "/tmp") / "ph-x11";
+  std::filesystem::create_directories(options.scratch);
+
+  int failed = 0;
+  try {
+    XServer x;
+    const UeventMonitor uevents;
+    trace(options, "writing the scene");
+    const std::string regions = scene_regions(options.scene_dir.empty() ? options.scratch : options.scene_dir);
+    trace(options, "scene written");
+    TestMouse mouse(kMouseName);
+    TestMouse untaken("ph-x11 untaken");
+    const std::vector<CaseSpec> cases{
+        {"absolute output", ph::OutputMode::absolute, "", options.frames, 0.5, true},
+        {"relative output, X's flat profile", ph::OutputMode::relative, "flat", options.relative_frames, 1.0},
+        {"relative output, X's adaptive profile (drift, measured only)", ph::OutputMode::relative, "adaptive",
+         options.relative_frames, std::nullopt},
+    };
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+      const CaseSpec& spec = cases[i];
+      if (options.cases.find(static_cast<char>('a' + i)) == std::string::npos) continue;
+      // The daemon's acceleration flat at speed 0 (the identity): the offline model is the plain pipeline.
+      const std::filesystem::path config =
+          write_config(options.scratch, std::string(1, static_cast<char>('a' + i)), spec.mode, "flat", regions);
+      try {
+        if (!report(spec, run_case(options, x, mouse, &untaken, uevents, config, spec))) ++failed;
+      } catch (const Fatal& e) {
+        std::printf("FAIL %s: %s\n", spec.label.c_str(), e.what());
+        std::fflush(stdout);
+        ++failed;
+      }
+    }
+    if (!options.session.empty() && options.cases.find('e') != std::string::npos && !session_case(options, x)) {
+      ++failed;
+    }
+    if (!options.session.empty() && options.cases.find('d') != std::string::npos) {
+      const std::filesystem::path config =
+          write_config(options.scratch, "d", ph::OutputMode::absolute, "adaptive", regions);
+      try {
+        failed += follow_cases(options, x, mouse, untaken, uevents, config);
+      } catch (const Fatal& e) {
+        std::printf("FAIL [d, g]: %s\n", e.what());
+        ++failed;
+      }
+    }
+    if (options.cases.find('f') != std::string::npos) {
+      try {
+        failed += !acceleration_case(options, x, mouse, uevents);
+      } catch (const Fatal& e) {
+        std::printf("FAIL [f]: %s\n", e.what());
+        ++failed;
+      }
+    }
+  } catch (const std::exception& e) {
+    std::printf("FAIL x11_cursor_e2e: %s\n", e.what());
+    return 1;
+  }
+  std::printf("x11_cursor_e2e: %d failed\n", failed);
+  return failed > 0 ? 1 : 0;
+}
