@@ -729,7 +729,7 @@ bool session_case(const Options& options, XServer& x) {
     expect("passthrough off", "when it has lost the focus");
     XDestroyWindow(x.get(), game);
     XSync(x.get(), False);
-    stub.stop();  // as a daemon restart: the socket goes away and comes back
+    stub.stop();       // as a daemon restart: the socket goes away and comes back
     x.warp(300, 200);  // before the helper can reconnect: it says where the pointer is as it connects
     std::this_thread::sleep_for(700ms);
     stub.restart();
