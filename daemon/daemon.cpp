@@ -380,17 +380,23 @@ void Daemon::update_retry_timer() {
 // A frame goes through the pipeline, or unchanged through the pass-through device; the route changes
 // only between frames and while no button is held on the device in use, so no press loses its release.
 void Daemon::route(Mouse& mouse, const InputEvent& event) {
+  if (!mouse.mid_frame) {  // a frame starts here: the one place the route may change
+    if (passthrough_wanted_ && !mouse.passing && mouse.passthrough_sink && !mouse.sink->holds_keys()) {
+      mouse.passing = true;
+    } else if (!passthrough_wanted_ && mouse.passing && !mouse.passthrough_sink->holds_keys()) {
+      mouse.passing = false;
+    }
+  }
+  const bool ends_frame = event.type == ev::kSyn && event.code == ev::kSynReport;
+  mouse.mid_frame = !ends_frame;
   if (!mouse.passing) {
-    bool frame_done = false;
-    mouse.frames->push(event, nullptr, &frame_done);
-    if (frame_done && passthrough_wanted_ && mouse.passthrough_sink && !mouse.sink->holds_keys()) mouse.passing = true;
+    mouse.frames->push(event);
     return;
   }
   mouse.raw_frame.events.push_back(event);
-  if (event.type != ev::kSyn || event.code != ev::kSynReport) return;
+  if (!ends_frame) return;
   mouse.passthrough_sink->write(mouse.raw_frame);
   mouse.raw_frame.events.clear();
-  if (!passthrough_wanted_ && !mouse.passthrough_sink->holds_keys()) mouse.passing = false;
 }
 
 bool Daemon::make_passthrough_sink(const std::string& node, Mouse& mouse) {

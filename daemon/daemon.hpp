@@ -58,6 +58,7 @@ class Daemon final : private ControlHandler {
     std::unique_ptr<UinputSink> passthrough_sink;
     Frame raw_frame;
     bool passing = false;
+    bool mid_frame = false;  // events of a frame have been routed, its SYN_REPORT not yet
     bool told_waiting = false;
   };
 

@@ -63,7 +63,7 @@ struct Options {
   int frames = 2000;          // motion frames of the absolute case
   int relative_frames = 600;  // motion frames of each relative case
   bool verbose = false;
-  std::string cases = "abcedf";  // which run, by letter (e: the helper alone; d: d and g; f)
+  std::string cases = "abcedf";  // which run, by letter (e: the helper alone; d: d, g and h; f)
   long trace_from = -1;          // -v: trace 12 frames from this one
   int acceleration_strokes = 8;  // out-and-back strokes of case f
   std::filesystem::path scratch;
@@ -508,7 +508,7 @@ int follow_cases(const Options& options, XServer& x, TestMouse& mouse, TestMouse
   const auto start = Clock::now();
   RunningDaemon daemon(options, x, mouse, uevents, config);
   const char* display = std::getenv("DISPLAY");
-  ChildProcess helper({options.session, "--control", daemon.control(), "-v"},
+  ChildProcess helper({options.session, "--control", daemon.control(), "--passthrough", "PH-GAME", "-v"},
                       {std::string("DISPLAY=") + (display != nullptr ? display : ""), "PATH=/usr/bin:/bin"},
                       (options.scratch / "session-follow.log").string());
   ControlClient control(daemon.control(), 10s);
@@ -594,6 +594,68 @@ int follow_cases(const Options& options, XServer& x, TestMouse& mouse, TestMouse
     if (after.over(0.5) > 0) problems.push_back("first beyond 0.5 px: " + after.first_over(0.5));
     print_verdict("[g] an untaken pointer moves the cursor: the model follows", problems, notes,
                   std::chrono::duration<double>(Clock::now() - case_start).count());
+    failed += !problems.empty();
+  }
+  {  // [h] a listed application has the focus: the mouse's motion reaches X unchanged through the
+     // pass-through device, not through the absolute one, and the textures come back when it loses it
+    const auto case_start = Clock::now();
+    std::vector<std::string> problems, notes;
+    const Window game = XCreateSimpleWindow(x.get(), x.root(), 0, 0, 64, 64, 0, 0, 0);
+    XClassHint hint{const_cast<char*>("ph-game"), const_cast<char*>("Ph-game")};
+    XSetClassHint(x.get(), game, &hint);
+    x.set_active_window(game);
+    XSync(x.get(), False);
+    const auto passing = [&] { return control.request("status").find("passthrough=on") != std::string::npos; };
+    if (!wait_until(passing, 10s, nullptr, 50ms)) daemon.fatal("the daemon did not switch to pass-through");
+    const std::optional<int> relative = x.wait_for_pointer(std::string(kVirtualName) + " (pass-through)", 30s);
+    if (!relative) daemon.fatal("X did not add the pass-through device");
+    // What the daemon emits, read beside X from both of its devices.
+    EventReader through(find_input_node(std::string(kVirtualName) + " (pass-through)"));
+    EventReader positions(find_input_node(kVirtualName));
+    x.drain();
+    const XServer::Pointer from = x.pointer();
+    int unchanged = 0;
+    for (int i = 0; i < 5; ++i) {
+      const Frame in = make_frame({rel(ev::kRelX, -7), rel(ev::kRelY, 3)});
+      mouse.send(in);
+      const std::optional<Frame> got = through.next_frame(kFrameTimeout);
+      if (!got) {
+        problems.push_back(fmt::format("frame {}: nothing came out of the pass-through device", i));
+      } else if (!same_events(*got, in)) {
+        problems.push_back(
+            fmt::format("frame {}: sent [{}], the pass-through device emitted [{}]", i, describe(in), describe(*got)));
+      } else {
+        ++unchanged;
+      }
+      std::this_thread::sleep_for(8ms);
+    }
+    std::this_thread::sleep_for(200ms);
+    x.drain();
+    const XServer::Pointer to = x.pointer();
+    const std::size_t from_absolute = positions.read_now().size();
+    if (from_absolute != 0)
+      problems.push_back(
+          fmt::format("the absolute device emitted {} events while the application had the focus", from_absolute));
+    if (to.x >= from.x || to.y <= from.y) problems.push_back("X's pointer did not move with the relative motion");
+    notes.push_back(
+        fmt::format("{} of 5 frames of (-7, +3) counts came out of the pass-through device (XInput id {}) "
+                    "unchanged, nothing out of the absolute one; X's pointer went from ({}, {}) to ({}, {})",
+                    unchanged, *relative, from.x, from.y, to.x, to.y));
+    x.set_active_window(None);
+    XSync(x.get(), False);
+    if (!wait_until([&] { return !passing(); }, 10s, nullptr, 50ms)) problems.push_back("pass-through did not end");
+    XDestroyWindow(x.get(), game);
+    XSync(x.get(), False);
+    // Back to the textures: after the helper's answer, the mouse's frames come from the absolute device
+    // again and X's pixel holds the model.
+    std::this_thread::sleep_for(400ms);
+    Distances after;
+    player.start();
+    move(30, 2, after, nullptr);
+    notes.push_back("after the focus left: " + distances_text(after));
+    if (after.over(0.5) > 0) problems.push_back("after pass-through, first beyond 0.5 px: " + after.first_over(0.5));
+    print_verdict("[h] an application that holds the pointer gets the mouse's motion unchanged (pass-through)",
+                  problems, notes, std::chrono::duration<double>(Clock::now() - case_start).count());
     failed += !problems.empty();
   }
   helper.signal(SIGTERM);
