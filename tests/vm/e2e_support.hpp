@@ -685,4 +685,25 @@ class FakeHelper {
   std::thread reader_;  // last: started once everything it uses exists
 };
 
+// The daemon creates a mouse's virtual device just before it grabs the mouse, and drops what the mouse
+// queued before the grab: a frame sent in between goes to the mouse's other readers only. Sends a wheel
+// notch every 200 ms until one comes out of `out`, then a horizontal one and reads up to it, so that no
+// notch is left to read. The grab holds from then on. (Frames without motion leave the cursor model alone.)
+inline bool wait_taken(TestMouse& mouse, EventReader& out, Clock::duration timeout,
+                       Clock::duration frame_timeout = 5s) {
+  const auto deadline = Clock::now() + timeout;
+  bool through = false;
+  while (!through && Clock::now() < deadline) {
+    mouse.send(make_frame({rel(ev::kRelWheel, 1)}));
+    through = out.next_frame(200ms).has_value();
+  }
+  if (!through) return false;
+  const Frame marker = make_frame({rel(ev::kRelHWheel, 1)});
+  mouse.send(marker);
+  while (const std::optional<Frame> got = out.next_frame(frame_timeout)) {
+    if (same_events(*got, marker)) return true;
+  }
+  return false;
+}
+
 }  // namespace ph::e2e

@@ -231,24 +231,6 @@ std::int32_t abs_value(int fd, std::uint16_t code) {
   return info.value;
 }
 
-// The daemon takes the mouse just after it creates the virtual device: sends wheel notches until one
-// comes out, then reads up to a horizontal one, so that nothing of them is left to read.
-bool wait_taken(TestMouse& mouse, EventReader& out, Clock::duration timeout) {
-  const auto deadline = Clock::now() + timeout;
-  bool through = false;
-  while (!through && Clock::now() < deadline) {
-    mouse.send(make_frame({rel(ev::kRelWheel, 1)}));
-    through = out.next_frame(200ms).has_value();
-  }
-  if (!through) return false;
-  const Frame marker = make_frame({rel(ev::kRelHWheel, 1)});
-  mouse.send(marker);
-  while (const std::optional<Frame> got = out.next_frame(kFrameTimeout)) {
-    if (same_events(*got, marker)) return true;
-  }
-  return false;
-}
-
 // The daemon (on `config`, with a control socket in the scratch folder) as a child, once it has taken
 // the test mouse and X has added its virtual device. stop() ends it as the service manager would.
 class RunningDaemon {
