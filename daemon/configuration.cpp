@@ -47,6 +47,7 @@ Configuration load_configuration(const ConfigChoice& choice) {
   } else {
     c.scene = std::make_shared<const Scene>(default_scene());
     c.source = "the embedded default scene";
+    c.embedded = true;
   }
   std::string warning;
   c.pipeline.desktop = resolve_desktop(c.settings.desktop, choice.drm_dir, warning);

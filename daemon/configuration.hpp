@@ -22,7 +22,8 @@ struct ConfigChoice {
 };
 
 struct Configuration {
-  std::string source;  // "FILE" or "the embedded default scene", for the log
+  std::string source;     // "FILE" or "the embedded default scene", for the log
+  bool embedded = false;  // the embedded default scene, not a file
   std::shared_ptr<const Scene> scene;
   DaemonSettings settings;
   PipelineConfig pipeline;

@@ -528,8 +528,7 @@ control::Status Daemon::status() const {
   s.desktop = pipeline_->config().desktop;
   s.cursor = pipeline_->cursor().position;
   s.passthrough = passthrough_wanted_;
-  s.scene = choice_.default_scene || !choice_.file ? config_.source : choice_.file->string();
-  if (config_.source == "the embedded default scene") s.scene = "default";
+  s.scene = config_.embedded ? "default" : config_.source;
   return s;
 }
 
