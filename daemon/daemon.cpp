@@ -143,6 +143,10 @@ int Daemon::run() {
       if (errno == EINTR) continue;
       fail_system("epoll_wait failed");
     }
+    // Control requests last: a frame written into a mouse before a client asked `cursor` is then always
+    // in the answer (the mouse's node is readable in the same wake-up).
+    std::stable_partition(events.begin(), events.begin() + n,
+                          [this](const epoll_event& e) { return !(control_ && control_->owns(e.data.fd)); });
     for (int i = 0; i < n && !stop_; ++i) {
       const int fd = events[static_cast<std::size_t>(i)].data.fd;
       if (fd == signals_.get()) {

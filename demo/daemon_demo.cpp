@@ -9,7 +9,9 @@
 // before the next is sent. The same frames go through ph::Pipeline here with the daemon's configuration
 // (the embedded default scene, the desktop resolved as the daemon resolves it), which says what the
 // daemon should emit and the C/D ratio of each frame; a frame that came out otherwise is counted and
-// printed. Exit status 1 when the daemon did not start, a frame differed, or the texture changed none.
+// printed. With absolute output and the adaptive acceleration (the defaults) the check is the
+// end-to-end tests' (tests/vm/absolute_follower.hpp): within a pixel, for the kernel's frame times. Exit status 1 when
+// the daemon did not start, a frame differed, or the texture changed none.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -26,6 +28,7 @@
 #include "core/engine/pipeline.hpp"
 #include "daemon/configuration.hpp"
 #include "recording/recording_file.hpp"
+#include "tests/vm/absolute_follower.hpp"
 #include "tests/vm/e2e_support.hpp"
 
 namespace {
@@ -33,8 +36,6 @@ namespace {
 using namespace ph::e2e;
 using ph::Frame;
 namespace ev = ph::ev;
-
-constexpr auto kFrameTimeout = 5s;
 
 std::vector<Frame> split_frames(const std::vector<ph::InputEvent>& events) {
   std::vector<Frame> frames;
@@ -44,28 +45,6 @@ std::vector<Frame> split_frames(const std::vector<ph::InputEvent>& events) {
     if (e.type == ev::kSyn && e.code == ev::kSynReport) frames.push_back(std::exchange(pending, {}));
   }
   return frames;
-}
-
-// The kernel drops an absolute value equal to the axis' current one: what a reader receives of `frame`.
-Frame as_delivered(const Frame& frame, std::map<std::uint16_t, std::int32_t>& axis) {
-  Frame out;
-  for (const ph::InputEvent& e : frame.events) {
-    if (e.type == ev::kAbs) {
-      const auto it = axis.find(e.code);
-      if (it != axis.end() && it->second == e.value) continue;
-      axis[e.code] = e.value;
-    }
-    out.events.push_back(e);
-  }
-  return out;
-}
-
-Frame without_positions(const Frame& frame) {
-  Frame out;
-  for (const ph::InputEvent& e : frame.events) {
-    if (e.type != ev::kAbs) out.events.push_back(e);
-  }
-  return out;
 }
 
 // Per region of the scene (and "outside"): frames that started there and the C/D range met.
@@ -100,7 +79,8 @@ int main(int argc, char** argv) {
     const UeventMonitor uevents;
     TestMouse mouse("ph-demo mouse");
     NotifySocket notify((scratch / "notify.sock").string());
-    ChildProcess daemon({daemon_path, "--default-scene"},
+    const std::string control_path = (scratch / "control").string();
+    ChildProcess daemon({daemon_path, "--default-scene", "--control", control_path},
                         {"NOTIFY_SOCKET=" + notify.path(), "PATH=/usr/sbin:/usr/bin:/sbin:/bin", "LANG=C.UTF-8"},
                         (scratch / "daemon.log").string());
     const auto started = Clock::now();
@@ -126,13 +106,12 @@ int main(int argc, char** argv) {
     std::vector<std::string> order;
     for (const ph::Region& r : config.scene->regions()) order.push_back(r.name);
     order.emplace_back("outside the targets");
-    std::map<std::uint16_t, std::int32_t> axis;  // absolute mode: the output's current ABS_X/ABS_Y
-    for (const std::uint16_t code : {ev::kAbsX, ev::kAbsY}) {
-      input_absinfo info{};
-      if (absolute && ::ioctl(out.fd(), EVIOCGABS(code), &info) == 0) axis[code] = info.value;
-    }
-    std::map<std::uint16_t, std::int32_t> shown = axis;  // absolute mode: what the daemon emitted
-    ph::Vec2 cursor = model.cursor().position;           // from what came out
+    // Absolute output: the follower checks each frame against the model within the kernel's timing and
+    // moves the model to the daemon's own cursor where they part (tests/vm/absolute_follower.hpp).
+    ph::control::Client control(control_path);
+    AbsoluteFollower follower(model, control);
+    Check check;
+    ph::Vec2 cursor = model.cursor().position;  // from what came out
     std::vector<std::pair<ph::TimeUs, ph::Vec2>> path{{0, cursor}};
     int sent = 0, emitted = 0, changed = 0, mismatched = 0;
     std::string first_mismatch;
@@ -142,65 +121,35 @@ int main(int argc, char** argv) {
       const std::optional<std::size_t> index = config.scene->owner(
           {static_cast<std::int32_t>(std::floor(at.x)), static_cast<std::int32_t>(std::floor(at.y))});
       ph::FrameReport report;
-      // The daemon's acceleration reads the kernel's event times: the model gets the time of the send,
-      // within some tens of microseconds of the kernel's.
-      Frame timed = in;
+      // The same motion with and without texture, from the same place and acceleration history: did the
+      // texture change the frame?
       const ph::TimeUs now = monotonic_us();
-      for (ph::InputEvent& e : timed.events) e.time = now;
-      const ph::Pipeline before = model;  // to try the time after the send too
-      const Frame computed = untimed(model.process(timed, &report));
-      const std::map<std::uint16_t, std::int32_t> axis_before = axis;
-      const Frame expected = as_delivered(computed, axis);
-      // The same motion without texture, from the same place and with the same acceleration history.
+      ph::Pipeline textured = model;
       if (absolute) flat.move_cursor_to(at);
-      const bool texture = !same_events(computed, untimed(flat.process(timed)));
+      const bool texture =
+          !same_events(untimed(textured.process(stamped(in, now))), untimed(flat.process(stamped(in, now))));
       ++sent;
-      mouse.send(in);
-      // The kernel stamped the frame between `now` and `sent_by`; a guest stalled between the two can
-      // make the difference.
-      Frame timed_late = timed;
-      for (ph::InputEvent& e : timed_late.events) e.time = monotonic_us();
-      ph::Pipeline late = before;
-      std::map<std::uint16_t, std::int32_t> axis_late = axis_before;
-      as_delivered(untimed(late.process(timed_late)), axis_late);
       std::optional<Frame> got;
       bool agrees = true;
-      if (!absolute) {
+      if (absolute) {
+        const std::size_t failures_before = check.failed();
+        got = follower.through(check, mouse, out, in, fmt::format("frame {}", sent), nullptr, &report);
+        agrees = check.failed() == failures_before;
+        if (!got) continue;
+      } else {
+        const Frame expected = untimed(model.process(stamped(in, now), &report));
+        mouse.send(in);
         if (!delivers_something(expected)) continue;
         got = out.next_frame(kFrameTimeout);
         if (!got) throw Fatal(fmt::format("frame {}: nothing came out within 5 s", sent));
         agrees = same_events(*got, expected);
-      } else {
-        // The default adaptive acceleration reads the kernel's event times, which the demo knows only to
-        // some tens of microseconds: a position within one pixel of the offline model's agrees, and the
-        // model then goes on from the daemon's own pixel so that such differences never add up.
-        got = out.next_frame(delivers_something(expected) ? kFrameTimeout : 50ms);
-        if (!got && delivers_something(without_positions(expected)))
-          throw Fatal(fmt::format("frame {}: nothing came out within 5 s", sent));
-        const Frame received = got.value_or(Frame{});
-        for (const ph::InputEvent& e : received.events) {
-          if (e.type == ev::kAbs) shown[e.code] = e.value;
-        }
-        const auto near = [&](const std::map<std::uint16_t, std::int32_t>& model_axis) {
-          return std::abs(shown[ev::kAbsX] - model_axis.at(ev::kAbsX)) <= ph::kAbsUnitsPerPixel &&
-                 std::abs(shown[ev::kAbsY] - model_axis.at(ev::kAbsY)) <= ph::kAbsUnitsPerPixel;
-        };
-        agrees =
-            same_events(without_positions(received), without_positions(expected)) && (near(axis) || near(axis_late));
-        if (shown != axis) {
-          const auto centre = [](std::int32_t v) { return (v - 1) / ph::kAbsUnitsPerPixel + 0.5; };
-          model.move_cursor_to({centre(shown[ev::kAbsX]), centre(shown[ev::kAbsY])});
-          axis = shown;
-        }
-        if (!got) continue;
-      }
-      ++emitted;
-      if (!agrees) {
-        if (mismatched++ == 0) {
+        if (!agrees && mismatched == 0) {
           first_mismatch = fmt::format("frame {}: sent [{}], the offline pipeline says [{}], the daemon emitted [{}]",
                                        sent, describe(in), describe(expected), describe(*got));
         }
       }
+      ++emitted;
+      mismatched += agrees ? 0 : 1;
       for (const ph::InputEvent& e : got->events) {
         if (e.type == ev::kRel && e.code == ev::kRelX) cursor.x += e.value;
         if (e.type == ev::kRel && e.code == ev::kRelY) cursor.y += e.value;
@@ -227,10 +176,11 @@ int main(int argc, char** argv) {
                 daemon_path.c_str(), ready_s, mouse.name().c_str(), node.c_str());
     std::printf("Replayed %s: %d frames in, %d out (%.1f s under emulation); the texture changed %d of them.\n",
                 recording_path.c_str(), sent, emitted, replay_s, changed);
-    std::printf("Output %s; every frame %s the offline pipeline (ph::Pipeline over the same scene%s).\n",
+    std::printf("Output %s; every frame %s the offline pipeline (ph::Pipeline over the same scene%s).\n%s",
                 absolute ? "absolute (ABS_X/ABS_Y)" : "relative (REL_X/REL_Y)",
                 mismatched == 0 ? (absolute ? "within a pixel of" : "equal to") : "NOT as",
-                absolute ? ", with the daemon's acceleration" : "");
+                absolute ? ", with the daemon's acceleration" : "",
+                absolute ? ("  " + follower.summary() + ".\n").c_str() : "");
     std::string points;
     for (const auto& [t, p] : path) {
       points += fmt::format("{}({:.0f}, {:.0f})", points.empty() ? "" : " -> ", p.x, p.y);
@@ -247,7 +197,8 @@ int main(int argc, char** argv) {
       std::printf("%-26s %7d %8d %7.2f .. %5.2f\n", name.c_str(), s.frames, s.changed, s.cd_min, s.cd_max);
     }
     if (mismatched > 0) {
-      std::printf("%d frames differed from the offline pipeline; the first: %s\n", mismatched, first_mismatch.c_str());
+      std::printf("%d frames differed from the offline pipeline; the first:\n    %s\n", mismatched,
+                  absolute ? check.failures().c_str() : first_mismatch.c_str());
       return 1;
     }
     if (changed == 0) {
