@@ -1,6 +1,7 @@
 // pseudohaptic-session: runs in the user's desktop session and tells pseudohapticd, over its control
 // socket, the desktop's layout and where the real cursor is: at start, when the layout changes, and
-// whenever the daemon asks. Reconnects when the daemon restarts; exits on SIGTERM or SIGINT.
+// whenever the daemon asks. Reconnects when the daemon restarts; exits on SIGTERM or SIGINT. Backends: X11
+// (x11_desktop.hpp) and Wayland (wayland_desktop.hpp), each built where its libraries are found.
 #include <fmt/format.h>
 #include <poll.h>
 #include <signal.h>
@@ -12,15 +13,24 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "control/protocol.hpp"
 #include "daemon/unique_fd.hpp"
 #include "session/control_connection.hpp"
+#include "session/desktop.hpp"
 #include "session/protocol.hpp"
+#ifdef PH_SESSION_X11
 #include "session/x11_desktop.hpp"
+#endif
+#ifdef PH_SESSION_WAYLAND
+#include "session/compositor_cursor.hpp"
+#include "session/wayland_desktop.hpp"
+#endif
 
 namespace {
 
@@ -70,14 +80,14 @@ struct Link {
 
 class Helper {
  public:
-  Helper(std::string control, std::vector<std::string> passthrough, X11Desktop& desktop, const Log& log)
+  Helper(std::string control, std::vector<std::string> passthrough, Desktop& desktop, const Log& log)
       : control_(std::move(control)), passthrough_(std::move(passthrough)), desktop_(desktop), log_(log) {}
 
   // Runs until SIGTERM or SIGINT arrives on `signals`; returns the exit status.
   int run(int signals) {
     for (;;) {
       if (!link_.connection && Clock::now() >= link_.next_attempt) connect();
-      const X11Desktop::Changes changes = desktop_.read_events();
+      const Desktop::Changes changes = desktop_.read_events();
       if (changes.layout && link_.connection) send_layout();
       if (changes.focus && link_.connection) send_passthrough();
       pollfd fds[3] = {{signals, POLLIN, 0}, {desktop_.fd(), POLLIN, 0}, {-1, POLLIN, 0}};
@@ -119,7 +129,10 @@ class Helper {
     link_ = Link{};
     link_.connection = std::move(connection);
     log_.info(fmt::format("connected to pseudohapticd at {}", control_));
-    if (send(helper_request("x11"))) send_layout();
+    // A desktop that cannot say where the pointer is reports the layout only: as the daemon's helper it
+    // would be asked for positions it cannot give, and the daemon would wait for each answer.
+    if (desktop_.knows_pointer() && !send(helper_request(desktop_.backend_name()))) return;
+    send_layout();
     if (link_.connection) send_position();
     if (link_.connection) send_passthrough();
   }
@@ -142,15 +155,19 @@ class Helper {
   }
 
   void send_layout() {
-    const ph::Rect layout = desktop_.layout();
-    if (link_.layout_sent == layout) return;
-    const std::optional<std::string> line = layout_request(layout);
+    const std::optional<ph::Rect> layout = desktop_.layout();
+    if (!layout || link_.layout_sent == layout) return;  // no output yet: the next change brings one
+    const std::optional<std::string> line = layout_request(*layout);
     if (line && send(*line)) link_.layout_sent = layout;
   }
 
   void send_position() {
+    if (!desktop_.knows_pointer()) return;
     const std::optional<ph::Vec2> at = desktop_.pointer();
-    if (!at) return;  // on another X screen: nothing the daemon can use
+    if (!at) {  // on another X screen, or the compositor did not answer: nothing the daemon can use
+      log_.debug("the desktop did not say where the pointer is");
+      return;
+    }
     if (const std::optional<std::string> line = position_request(*at)) send(*line);
   }
 
@@ -182,10 +199,53 @@ class Helper {
 
   std::string control_;
   std::vector<std::string> passthrough_;
-  X11Desktop& desktop_;
+  Desktop& desktop_;
   const Log& log_;
   Link link_;
 };
+
+// Which backend to use: `requested`, or for "auto" the session's own (Wayland where WAYLAND_DISPLAY is
+// set, X11 where DISPLAY is, or the display given with --display); empty when none applies.
+std::string choose_backend(const std::string& requested, const std::string& x_display) {
+  if (requested != "auto") return requested;
+  const auto set = [](const char* name) {
+    const char* value = std::getenv(name);
+    return value != nullptr && *value != '\0';
+  };
+  if (set("WAYLAND_DISPLAY") && x_display.empty()) return "wayland";
+  if (set("DISPLAY") || !x_display.empty()) return "x11";
+  return "";
+}
+
+std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::string& x_display,
+                                      const std::string& wayland_display, const Log& log) {
+#ifdef PH_SESSION_X11
+  if (backend == "x11") {
+    auto desktop = std::make_unique<X11Desktop>(x_display);
+    if (!desktop->has_randr()) log.notice("X has no RandR 1.2: the layout is the root window's size");
+    return desktop;
+  }
+#endif
+#ifdef PH_SESSION_WAYLAND
+  if (backend == "wayland") {
+    auto desktop = std::make_unique<WaylandDesktop>(wayland_display, cursor_source_from_environment());
+    if (!desktop->has_xdg_output())
+      log.notice("the compositor has no xdg-output: the layout is each wl_output's mode divided by its scale");
+    if (const CursorSource* cursor = desktop->cursor()) {
+      log.info(fmt::format("the pointer's position from {} ({})", cursor->name(), cursor->socket()));
+    } else {
+      log.notice(
+          "this compositor gives no pointer position (only Hyprland and Wayfire do): telling the daemon the layout "
+          "only");
+    }
+    return desktop;
+  }
+#endif
+  (void)x_display;
+  (void)wayland_display;
+  (void)log;
+  throw std::runtime_error("the " + backend + " backend is not built into this pseudohaptic-session");
+}
 
 }  // namespace
 
@@ -194,20 +254,26 @@ int main(int argc, char** argv) {
       "pseudohaptic-session: tells pseudohapticd where the desktop's real cursor is and how the desktop is laid\n"
       "out, over its control socket: at start, whenever the layout changes, and whenever the daemon asks.\n"
       "Runs in the user's graphical session (the systemd user unit pseudohaptic-session.service) until\n"
-      "SIGTERM or SIGINT; reconnects when the daemon restarts. See pseudohaptic-session(1)."};
+      "SIGTERM or SIGINT; reconnects when the daemon restarts. On Wayland the position comes from Hyprland or\n"
+      "Wayfire; other compositors give only the layout. See pseudohaptic-session(1)."};
   std::string control = "/run/pseudohaptic/control";
   std::string backend = "auto";
-  std::string display;
+  std::string display, wayland_display;
   bool verbose = false;
   app.add_option("--control", control, "The daemon's control socket")->capture_default_str();
-  app.add_option("--backend", backend, "How to ask the desktop: auto (x11 when DISPLAY is set) or x11")
-      ->check(CLI::IsMember({"auto", "x11"}))
+  app.add_option("--backend", backend,
+                 "How to ask the desktop: auto (wayland when WAYLAND_DISPLAY is set, else x11 when DISPLAY is), "
+                 "x11 or wayland")
+      ->check(CLI::IsMember({"auto", "x11", "wayland"}))
       ->capture_default_str();
   app.add_option("--display", display, "The X display (x11 backend; default: $DISPLAY)");
+  app.add_option("--wayland-display", wayland_display,
+                 "The Wayland display (wayland backend; default: $WAYLAND_DISPLAY)");
   std::vector<std::string> passthrough;
   app.add_option("--passthrough", passthrough,
                  "An application (WM_CLASS instance or class name, any case) that reads raw relative motion, such "
-                 "as a game: while it has the focus the daemon passes the mice through unchanged. Repeatable");
+                 "as a game: while it has the focus the daemon passes the mice through unchanged (x11 backend "
+                 "only). Repeatable");
   app.add_flag("-v,--verbose", verbose, "Also log every line sent and every connection attempt");
   app.set_version_flag("--version", "pseudohaptic-session 0.1.0");
   try {
@@ -216,14 +282,14 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   const Log log(verbose);
-  if (backend == "auto") {
-    const char* env = std::getenv("DISPLAY");
-    if (display.empty() && (env == nullptr || *env == '\0')) {
-      log.error(
-          "no desktop this helper knows: DISPLAY is not set (only X11 is supported; see pseudohaptic-session(1))");
-      return 1;
-    }
-    backend = "x11";
+  backend = choose_backend(backend, display);
+  if (backend.empty()) {
+    log.error("no desktop this helper knows: neither WAYLAND_DISPLAY nor DISPLAY is set (see pseudohaptic-session(1))");
+    return 1;
+  }
+  if (backend != "x11" && !passthrough.empty()) {
+    log.notice("--passthrough needs the x11 backend (the focused window's WM_CLASS); ignored");
+    passthrough.clear();
   }
 
   // SIGTERM and SIGINT wait for the loop, which then exits cleanly.
@@ -238,10 +304,9 @@ int main(int argc, char** argv) {
     return 1;
   }
   try {
-    X11Desktop desktop(display);
-    if (!desktop.has_randr()) log.notice("X has no RandR 1.2: the layout is the root window's size");
-    return Helper(control, passthrough, desktop, log).run(signals.get());
-  } catch (const X11Error& e) {
+    const std::unique_ptr<Desktop> desktop = open_desktop(backend, display, wayland_display, log);
+    return Helper(control, passthrough, *desktop, log).run(signals.get());
+  } catch (const std::runtime_error& e) {  // X11Error, WaylandError: no display, or it went away
     log.error(e.what());
     return 1;
   }

@@ -41,7 +41,7 @@ int X11Desktop::fd() const { return ConnectionNumber(display_.get()); }
 
 bool X11Desktop::events_queued() const { return XEventsQueued(display_.get(), QueuedAlready) > 0; }
 
-Rect X11Desktop::layout() const {
+std::optional<Rect> X11Desktop::layout() const {
   Display* d = display_.get();
   const Window root = DefaultRootWindow(d);
   const Rect whole{0, 0, DisplayWidth(d, DefaultScreen(d)), DisplayHeight(d, DefaultScreen(d))};

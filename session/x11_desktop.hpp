@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "core/engine/geometry.hpp"
+#include "session/desktop.hpp"
 
 namespace ph::session {
 
@@ -20,29 +21,29 @@ class X11Error : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-class X11Desktop {
+class X11Desktop : public Desktop {
  public:
   // Opens `display` (empty: $DISPLAY). Throws X11Error when it cannot. X protocol errors (an output
   // that went away between two requests) are ignored from then on: the next layout is asked afresh.
   explicit X11Desktop(const std::string& display);
 
-  int fd() const;  // readable when X has sent events
+  std::string backend_name() const override { return "x11"; }
+  int fd() const override;  // readable when X has sent events
   // Events Xlib has already read from the socket (during a request's round trip): poll(2) on fd() does
   // not see them.
-  bool events_queued() const;
+  bool events_queued() const override;
   bool has_randr() const { return randr_event_base_ >= 0; }
-  Rect layout() const;
+  // Always known: the root window's size where RandR says nothing.
+  std::optional<Rect> layout() const override;
+  bool knows_pointer() const override { return true; }
   // Where the pointer is (the centre of its pixel); nullopt while it is on another X screen than the default one.
-  std::optional<Vec2> pointer() const;
-  // What the events X has sent so far say changed.
-  struct Changes {
-    bool layout = false;  // the screen or an output (RandR)
-    bool focus = false;   // the active window (_NET_ACTIVE_WINDOW on the root window)
-  };
-  Changes read_events();
+  std::optional<Vec2> pointer() const override;
+  // What the events X has sent so far say changed: the screen or an output (RandR), the active window
+  // (_NET_ACTIVE_WINDOW on the root window).
+  Changes read_events() override;
   // The WM_CLASS (instance, class) of the active window, as the window manager names it in
   // _NET_ACTIVE_WINDOW; nullopt when there is none or it has no WM_CLASS.
-  std::optional<std::pair<std::string, std::string>> active_class() const;
+  std::optional<std::pair<std::string, std::string>> active_class() const override;
 
  private:
   struct Closer {
