@@ -1,0 +1,267 @@
+// pseudohaptic-session's Wayland backend against a real compositor: weston's headless backend (one output,
+// 3200x1800 at scale 2: 1600x900 logical pixels, so only a client that reads xdg-output's logical size
+// gets it right) and a stand-in for the daemon's control socket. Runs in the VM of tests/vm/run-in-vm
+// (scripts/vm-test), or anywhere weston is installed, as any user:
+//
+//   wayland_session_check SESSION [--weston PATH] [--scratch DIR]
+//
+// Cases: (1) with weston alone the helper picks the wayland backend by itself (WAYLAND_DISPLAY set, DISPLAY
+// too), says the layout and nothing else (no `helper` line: weston gives no pointer position); reconnects
+// after the socket goes away and comes back; exits 0 on SIGTERM. (2) with a stand-in Hyprland request socket
+// beside it ($XDG_RUNTIME_DIR/hypr/SIGNATURE/.socket.sock), it says `helper wayland-hyprland`, the layout
+// and the position Hyprland gives, and answers a `query` with the new one. (3) when weston stops, the
+// helper exits with status 1. tests/vm/README.md, "Wayland: weston", has the figures.
+#include <fmt/format.h>
+#include <sys/stat.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tests/vm/control_stub.hpp"
+#include "tests/vm/e2e_support.hpp"
+
+namespace {
+
+using namespace ph::e2e;
+namespace fs = std::filesystem;
+
+constexpr const char* kSocketName = "ph-wayland-1";
+constexpr const char* kLayout = "layout 0 0 1600 900";  // weston's logical size, not its 3200x1800 mode
+
+struct Options {
+  std::string session;
+  std::string weston = "/usr/bin/weston";
+  fs::path scratch;
+};
+
+// A stand-in for Hyprland's request socket: each connection reads a request and gets "X, Y" for
+// `cursorpos` (then the end of the connection, as Hyprland does); counts the questions.
+class FakeHyprland {
+ public:
+  explicit FakeHyprland(const std::string& path) : path_(path) {
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
+    listener_ = Fd(::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
+    if (!listener_ || ::bind(listener_.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof addr) < 0 ||
+        ::listen(listener_.get(), 8) < 0) {
+      throw Fatal("fake Hyprland socket at " + path + ": " + errno_text(errno));
+    }
+    thread_ = std::thread([this] { serve(); });
+  }
+  ~FakeHyprland() {
+    stop_ = true;
+    thread_.join();
+    ::unlink(path_.c_str());
+  }
+  FakeHyprland(const FakeHyprland&) = delete;
+  FakeHyprland& operator=(const FakeHyprland&) = delete;
+
+  void move_to(int x, int y) { at_ = (static_cast<long long>(x) << 32) | static_cast<unsigned>(y); }
+  int questions() const { return questions_; }
+
+ private:
+  void serve() {
+    while (!stop_) {
+      pollfd p{listener_.get(), POLLIN, 0};
+      if (::poll(&p, 1, 100) <= 0) continue;
+      const Fd client(::accept4(listener_.get(), nullptr, nullptr, SOCK_CLOEXEC));
+      if (!client) continue;
+      char request[64] = {};
+      pollfd c{client.get(), POLLIN, 0};
+      if (::poll(&c, 1, 2000) <= 0) continue;
+      const ssize_t n = ::recv(client.get(), request, sizeof request - 1, 0);
+      if (n <= 0 || std::string_view(request, static_cast<std::size_t>(n)) != "cursorpos") continue;
+      ++questions_;
+      const long long at = at_;
+      const std::string answer = fmt::format("{}, {}", static_cast<int>(at >> 32), static_cast<int>(at & 0xffffffff));
+      (void)::send(client.get(), answer.data(), answer.size(), MSG_NOSIGNAL);
+    }
+  }
+
+  std::string path_;
+  Fd listener_;
+  std::atomic<long long> at_{0};
+  std::atomic<int> questions_{0};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+struct Case {
+  std::string label;
+  std::vector<std::string> problems;
+  Clock::time_point start = Clock::now();
+  // Reads lines until `want` (answering each with ok); what came before it is a problem when `exact`.
+  void expect(ControlStub& stub, const std::string& want, const std::string& when, bool exact = true) {
+    std::vector<std::string> before;
+    while (const std::optional<std::string> line = stub.next_line(20s)) {
+      stub.send("ok");
+      if (*line == want) {
+        if (exact && !before.empty())
+          problems.push_back(fmt::format("{}: '{}' came after [{}]", when, want, fmt::join(before, " | ")));
+        return;
+      }
+      before.push_back(*line);
+    }
+    problems.push_back(
+        fmt::format("{}: expected '{}', got [{}] and then nothing for 20 s", when, want, fmt::join(before, " | ")));
+  }
+  void expect_silence(ControlStub& stub, Clock::duration how_long, const std::string& when) {
+    if (const std::optional<std::string> line = stub.next_line(how_long))
+      problems.push_back(fmt::format("{}: expected nothing, got '{}'", when, *line));
+  }
+  bool verdict(const ChildProcess* helper) const {
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    if (problems.empty()) {
+      std::printf("PASS %s (%.1f s)\n", label.c_str(), seconds);
+    } else {
+      std::printf("FAIL %s (%.1f s):\n", label.c_str(), seconds);
+      for (const std::string& p : problems) std::printf("    %s\n", p.c_str());
+      if (helper != nullptr) std::printf("    the helper's log:\n%s", helper->log().c_str());
+    }
+    std::fflush(stdout);
+    return problems.empty();
+  }
+};
+
+std::vector<std::string> session_environment(const fs::path& runtime, const std::string& signature) {
+  std::vector<std::string> env{"XDG_RUNTIME_DIR=" + runtime.string(), std::string("WAYLAND_DISPLAY=") + kSocketName,
+                               "DISPLAY=:99",  // an X display too, as under Xwayland: auto must still pick wayland
+                               "PATH=/usr/bin:/bin"};
+  if (!signature.empty()) env.push_back("HYPRLAND_INSTANCE_SIGNATURE=" + signature);
+  return env;
+}
+
+void check_sigterm(ChildProcess& helper, Case& c) {
+  helper.signal(SIGTERM);
+  const std::optional<int> status = helper.wait_exit(10s);
+  if (!status || !WIFEXITED(*status) || WEXITSTATUS(*status) != 0)
+    c.problems.push_back("SIGTERM: " + (status ? describe_wait_status(*status) : std::string("still running")));
+}
+
+bool layout_only_case(const Options& options, const fs::path& runtime) {
+  Case c{"weston: the layout from xdg-output, no position, reconnection, SIGTERM", {}};
+  ControlStub stub((options.scratch / "control").string());
+  ChildProcess helper({options.session, "--control", stub.path(), "-v"}, session_environment(runtime, ""),
+                      (options.scratch / "session-weston.log").string());
+  try {
+    if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
+    c.expect(stub, kLayout, "at start");
+    c.expect_silence(stub, 1s, "after the layout (weston says nothing of the pointer)");
+    stub.send("query");  // not a helper: the daemon would never ask, and it has nothing to say
+    c.expect_silence(stub, 1s, "after a query");
+    stub.stop();
+    std::this_thread::sleep_for(700ms);
+    stub.restart();
+    if (!stub.accept(20s)) throw Fatal("the helper did not reconnect within 20 s");
+    c.expect(stub, kLayout, "after reconnecting");
+    check_sigterm(helper, c);
+  } catch (const Fatal& e) {
+    c.problems.push_back(e.what());
+  }
+  return c.verdict(&helper);
+}
+
+bool hyprland_case(const Options& options, const fs::path& runtime) {
+  Case c{"weston's layout with a stand-in Hyprland socket: helper, layout, position, query", {}};
+  const std::string signature = "ph_fake_hyprland";
+  fs::create_directories(runtime / "hypr" / signature);
+  FakeHyprland hyprland((runtime / "hypr" / signature / ".socket.sock").string());
+  hyprland.move_to(812, 95);
+  ControlStub stub((options.scratch / "control").string());
+  ChildProcess helper({options.session, "--control", stub.path(), "--backend", "wayland", "-v"},
+                      session_environment(runtime, signature), (options.scratch / "session-hyprland.log").string());
+  try {
+    if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
+    c.expect(stub, "helper wayland-hyprland", "at start");
+    c.expect(stub, kLayout, "at start");
+    c.expect(stub, "position 812.5 95.5", "at start");
+    hyprland.move_to(-3, 1200);
+    stub.send("query");
+    c.expect(stub, "position -2.5 1200.5", "after a query");
+    if (hyprland.questions() != 2)
+      c.problems.push_back(fmt::format("Hyprland was asked {} times, not 2", hyprland.questions()));
+    check_sigterm(helper, c);
+  } catch (const Fatal& e) {
+    c.problems.push_back(e.what());
+  }
+  return c.verdict(&helper);
+}
+
+bool compositor_gone_case(const Options& options, const fs::path& runtime, ChildProcess& weston) {
+  Case c{"weston stops: the helper exits with status 1", {}};
+  ControlStub stub((options.scratch / "control").string());
+  ChildProcess helper({options.session, "--control", stub.path()}, session_environment(runtime, ""),
+                      (options.scratch / "session-gone.log").string());
+  try {
+    if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
+    c.expect(stub, kLayout, "at start");
+    weston.signal(SIGTERM);
+    const std::optional<int> status = helper.wait_exit(20s);
+    if (!status || !WIFEXITED(*status) || WEXITSTATUS(*status) != 1)
+      c.problems.push_back("after weston stopped: " +
+                           (status ? describe_wait_status(*status) : std::string("still running")));
+    if (helper.log().find("went away") == std::string::npos) c.problems.push_back("no 'went away' in the helper's log");
+  } catch (const Fatal& e) {
+    c.problems.push_back(e.what());
+  }
+  return c.verdict(&helper);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--weston" && i + 1 < argc) {
+      options.weston = argv[++i];
+    } else if (arg == "--scratch" && i + 1 < argc) {
+      options.scratch = argv[++i];
+    } else if (options.session.empty() && arg.rfind("-", 0) != 0) {
+      options.session = arg;
+    } else {
+      std::fprintf(stderr, "usage: wayland_session_check SESSION [--weston PATH] [--scratch DIR]\n");
+      return 2;
+    }
+  }
+  if (options.session.empty()) {
+    std::fprintf(stderr, "usage: wayland_session_check SESSION [--weston PATH] [--scratch DIR]\n");
+    return 2;
+  }
+  if (options.scratch.empty()) {
+    const char* tmp = std::getenv("TMPDIR");
+    options.scratch = fs::path(tmp != nullptr ? tmp : "/tmp") / "ph-wayland";
+  }
+  try {
+    fs::remove_all(options.scratch);
+    const fs::path runtime = options.scratch / "runtime";
+    fs::create_directories(runtime);
+    fs::permissions(runtime, fs::perms::owner_all);  // as XDG_RUNTIME_DIR must be
+    const auto start = Clock::now();
+    ChildProcess weston(
+        {options.weston, "--backend=headless-backend.so", std::string("--socket=") + kSocketName, "--width=1600",
+         "--height=900", "--scale=2", "--shell=kiosk-shell.so", "--no-config", "--idle-time=0"},
+        {"XDG_RUNTIME_DIR=" + runtime.string(), "PATH=/usr/bin:/bin"}, (options.scratch / "weston.log").string());
+    if (!wait_until([&] { return fs::exists(runtime / kSocketName) || !weston.running(); }, 60s) || !weston.running()) {
+      std::printf("FAIL weston did not start within 60 s; its log:\n%s", weston.log().c_str());
+      return 1;
+    }
+    std::printf("weston listens after %.1f s\n", std::chrono::duration<double>(Clock::now() - start).count());
+    std::fflush(stdout);
+    int failed = 0;
+    failed += !layout_only_case(options, runtime);
+    failed += !hyprland_case(options, runtime);
+    failed += !compositor_gone_case(options, runtime, weston);
+    if (failed != 0) std::printf("weston's log:\n%s", weston.log().c_str());
+    std::printf("wayland_session_check: %d passed, %d failed\n", 3 - failed, failed);
+    return failed == 0 ? 0 : 1;
+  } catch (const std::exception& e) {
+    std::printf("FAIL %s\n", e.what());
+    return 1;
+  }
+}
