@@ -31,8 +31,8 @@ Rect logical_rect(const WaylandOutput& output);
 // The desktop: the bounding box of all outputs' logical rectangles; nullopt while there is none.
 std::optional<Rect> wayland_layout(const std::vector<WaylandOutput>& outputs);
 
-// Hyprland's request socket: $XDG_RUNTIME_DIR/hypr/SIGNATURE/.socket.sock (Hyprland 0.40 and later), then
-// /tmp/hypr/SIGNATURE/.socket.sock (earlier versions); empty without a signature.
+// Hyprland's request socket: $XDG_RUNTIME_DIR/hypr/SIGNATURE/.socket.sock, then /tmp/hypr/SIGNATURE/.socket.sock
+// (where older versions put it); empty without a signature.
 std::vector<std::string> hyprland_socket_candidates(std::string_view runtime_dir, std::string_view signature);
 // Hyprland's answer to `cursorpos`, "X, Y" (whole logical pixels, floored): the centre of that pixel.
 std::optional<Vec2> parse_hyprland_cursorpos(std::string_view answer);
