@@ -228,7 +228,15 @@ std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::str
 #endif
 #ifdef PH_SESSION_WAYLAND
   if (backend == "wayland") {
-    auto desktop = std::make_unique<WaylandDesktop>(wayland_display, cursor_source_from_environment());
+    std::unique_ptr<CursorSource> cursor = cursor_source_from_environment();
+    // A compositor that does not answer now (Wayfire without its ipc-rules plugin) would leave every
+    // question of the daemon's unanswered, and the daemon waiting: report the layout only instead.
+    if (cursor && !cursor->position()) {
+      log.notice(fmt::format("{} did not say where the pointer is ({}){}", cursor->name(), cursor->socket(),
+                             cursor->name() == "wayfire" ? "; is its ipc-rules plugin enabled?" : ""));
+      cursor.reset();
+    }
+    auto desktop = std::make_unique<WaylandDesktop>(wayland_display, std::move(cursor));
     if (!desktop->has_xdg_output())
       log.notice("the compositor has no xdg-output: the layout is each wl_output's mode divided by its scale");
     if (const CursorSource* cursor = desktop->cursor()) {
