@@ -3,14 +3,16 @@
 // gets it right) and a stand-in for the daemon's control socket. Runs in the VM of tests/vm/run-in-vm
 // (scripts/vm-test), or anywhere weston is installed, as any user:
 //
-//   wayland_session_check SESSION [--weston PATH] [--scratch DIR]
+//   wayland_session_check SESSION [--daemon PSEUDOHAPTICD] [--weston PATH] [--scratch DIR]
 //
 // Cases: (1) with weston alone the helper picks the wayland backend by itself (WAYLAND_DISPLAY set, DISPLAY
 // too), says the layout and nothing else (no `helper` line: weston gives no pointer position); reconnects
 // after the socket goes away and comes back; exits 0 on SIGTERM. (2) with a stand-in Hyprland request socket
 // beside it ($XDG_RUNTIME_DIR/hypr/SIGNATURE/.socket.sock), it says `helper wayland-hyprland`, the layout
 // and the position Hyprland gives, and answers a `query` with the new one. (3) when weston stops, the
-// helper exits with status 1. tests/vm/README.md, "Wayland: weston", has the figures.
+// helper exits with status 1. (4) with --daemon (it needs /dev/uinput: the VM), the real daemon on its
+// default scene takes weston's layout from the helper: `status` says desktop=0,0,1600,900 and helper=no.
+// tests/vm/README.md, "Wayland: weston", has the figures.
 #include <fmt/format.h>
 #include <sys/stat.h>
 
@@ -34,6 +36,7 @@ constexpr const char* kLayout = "layout 0 0 1600 900";  // weston's logical size
 
 struct Options {
   std::string session;
+  std::string daemon;
   std::string weston = "/usr/bin/weston";
   fs::path scratch;
 };
@@ -193,6 +196,42 @@ bool hyprland_case(const Options& options, const fs::path& runtime) {
   return c.verdict(&helper);
 }
 
+bool daemon_case(const Options& options, const fs::path& runtime) {
+  Case c{"pseudohapticd takes weston's layout from the helper", {}};
+  const std::string control = (options.scratch / "daemon.sock").string();
+  ChildProcess daemon({options.daemon, "--default-scene", "--control", control}, {"PATH=/usr/bin:/bin"},
+                      (options.scratch / "daemon.log").string());
+  std::optional<ChildProcess> helper;
+  std::string status;
+  try {
+    ControlClient client(control, 30s);
+    status = client.request("status");
+    if (status.find(" desktop=0,0,1600,900 ") != std::string::npos)
+      throw Fatal("the daemon's desktop is weston's before the helper said it: " + status);
+    helper.emplace(std::vector<std::string>{options.session, "--control", control, "-v"},
+                   session_environment(runtime, ""), (options.scratch / "session-daemon.log").string());
+    const bool told = wait_until(
+        [&] {
+          status = client.request("status");
+          return status.find(" desktop=0,0,1600,900 ") != std::string::npos;
+        },
+        20s, nullptr, 100ms);
+    if (!told) c.problems.push_back("the daemon's status after 20 s: " + status);
+    if (status.find(" helper=no ") == std::string::npos)
+      c.problems.push_back("a layout-only helper is not the daemon's helper, but status says: " + status);
+    check_sigterm(*helper, c);
+    daemon.signal(SIGTERM);
+    const std::optional<int> exit = daemon.wait_exit(10s);
+    if (!exit || !WIFEXITED(*exit) || WEXITSTATUS(*exit) != 0)
+      c.problems.push_back("the daemon on SIGTERM: " +
+                           (exit ? describe_wait_status(*exit) : std::string("still running")));
+  } catch (const Fatal& e) {
+    c.problems.push_back(e.what());
+  }
+  if (!c.problems.empty()) std::printf("    the daemon's log:\n%s", daemon.log().c_str());
+  return c.verdict(helper ? &*helper : nullptr);
+}
+
 bool compositor_gone_case(const Options& options, const fs::path& runtime, ChildProcess& weston) {
   Case c{"weston stops: the helper exits with status 1", {}};
   ControlStub stub((options.scratch / "control").string());
@@ -219,19 +258,23 @@ int main(int argc, char** argv) {
   Options options;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--weston" && i + 1 < argc) {
+    if (arg == "--daemon" && i + 1 < argc) {
+      options.daemon = argv[++i];
+    } else if (arg == "--weston" && i + 1 < argc) {
       options.weston = argv[++i];
     } else if (arg == "--scratch" && i + 1 < argc) {
       options.scratch = argv[++i];
     } else if (options.session.empty() && arg.rfind("-", 0) != 0) {
       options.session = arg;
     } else {
-      std::fprintf(stderr, "usage: wayland_session_check SESSION [--weston PATH] [--scratch DIR]\n");
+      std::fprintf(stderr,
+                   "usage: wayland_session_check SESSION [--daemon PSEUDOHAPTICD] [--weston PATH] [--scratch DIR]\n");
       return 2;
     }
   }
   if (options.session.empty()) {
-    std::fprintf(stderr, "usage: wayland_session_check SESSION [--weston PATH] [--scratch DIR]\n");
+    std::fprintf(stderr,
+                 "usage: wayland_session_check SESSION [--daemon PSEUDOHAPTICD] [--weston PATH] [--scratch DIR]\n");
     return 2;
   }
   if (options.scratch.empty()) {
@@ -257,9 +300,11 @@ int main(int argc, char** argv) {
     int failed = 0;
     failed += !layout_only_case(options, runtime);
     failed += !hyprland_case(options, runtime);
+    const int cases = options.daemon.empty() ? 3 : 4;
+    if (!options.daemon.empty()) failed += !daemon_case(options, runtime);
     failed += !compositor_gone_case(options, runtime, weston);
     if (failed != 0) std::printf("weston's log:\n%s", weston.log().c_str());
-    std::printf("wayland_session_check: %d passed, %d failed\n", 3 - failed, failed);
+    std::printf("wayland_session_check: %d passed, %d failed\n", cases - failed, failed);
     return failed == 0 ? 0 : 1;
   } catch (const std::exception& e) {
     std::printf("FAIL %s\n", e.what());
