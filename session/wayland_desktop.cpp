@@ -67,6 +67,9 @@ struct WaylandDesktop::State {
   }
 
   static void commit(Output& o) {
+    // With xdg-output, an output's first description waits for its logical size: the mode divided by
+    // the scale is wrong for fractional scales, and would reach the daemon for a moment.
+    if (o.state->manager && !o.pending.logical) return;
     const bool differs = !o.described || logical_rect(o.pending) != logical_rect(o.current);
     o.current = o.pending;
     o.described = true;

@@ -226,6 +226,14 @@ TEST(WaylandDesktop, FollowsOutputsThatComeChangeAndGo) {
   settle(desktop);
   EXPECT_FALSE(desktop.read_events().layout);
 
+  // Plugged in at a fractional scale: the first layout reported is already the logical one.
+  const int far = compositor.add({3200, 0, 1280, 720}, 3, 2.5);
+  ASSERT_TRUE(wait_for_layout_change(desktop));
+  EXPECT_EQ(desktop.layout(), (Rect{-1280, -900, 5760, 1980}));
+  compositor.remove(far);
+  ASSERT_TRUE(wait_for_layout_change(desktop));
+  EXPECT_EQ(desktop.layout(), (Rect{-1280, -900, 3200, 1980}));
+
   compositor.remove(above);
   ASSERT_TRUE(wait_for_layout_change(desktop));
   EXPECT_EQ(desktop.layout(), (Rect{-1280, 0, 3200, 1080}));
