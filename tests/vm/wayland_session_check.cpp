@@ -9,9 +9,11 @@
 // too), says the layout and nothing else (no `helper` line: weston gives no pointer position); reconnects
 // after the socket goes away and comes back; exits 0 on SIGTERM. (2) with a stand-in Hyprland request socket
 // beside it ($XDG_RUNTIME_DIR/hypr/SIGNATURE/.socket.sock), it says `helper wayland-hyprland`, the layout
-// and the position Hyprland gives, and answers a `query` with the new one. (3) when weston stops, the
-// helper exits with status 1. (4) with --daemon (it needs /dev/uinput: the VM), the real daemon on its
-// default scene takes weston's layout from the helper: `status` says desktop=0,0,1600,900 and helper=no.
+// and the position Hyprland gives, and answers a `query` with the new one. (3) with a stand-in Wayfire IPC
+// socket ($WAYFIRE_SOCKET), `helper wayland-wayfire` and its position; with one that answers as Wayfire
+// without its ipc-rules plugin does, the layout only. (4) with --daemon (it needs /dev/uinput: the VM), the
+// real daemon on its default scene takes weston's layout from the helper: `status` says
+// desktop=0,0,1600,900 and helper=no. (5) when weston stops, the helper exits with status 1.
 // tests/vm/README.md, "Wayland: weston", has the figures.
 #include <fmt/format.h>
 #include <sys/stat.h>
@@ -94,6 +96,73 @@ class FakeHyprland {
   std::thread thread_;
 };
 
+// A stand-in for Wayfire's IPC socket: each message (a 32-bit length in the machine's byte order, then
+// JSON) that asks for window-rules/get_cursor_position gets `reply`, framed the same way.
+class FakeWayfire {
+ public:
+  FakeWayfire(const std::string& path, std::string reply) : path_(path), reply_(std::move(reply)) {
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
+    listener_ = Fd(::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
+    if (!listener_ || ::bind(listener_.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof addr) < 0 ||
+        ::listen(listener_.get(), 8) < 0) {
+      throw Fatal("fake Wayfire socket at " + path + ": " + errno_text(errno));
+    }
+    thread_ = std::thread([this] { serve(); });
+  }
+  ~FakeWayfire() {
+    stop_ = true;
+    thread_.join();
+    ::unlink(path_.c_str());
+  }
+  FakeWayfire(const FakeWayfire&) = delete;
+  FakeWayfire& operator=(const FakeWayfire&) = delete;
+
+  int questions() const { return questions_; }
+
+ private:
+  static std::string read_exactly(int fd, std::size_t n) {
+    std::string data;
+    char buffer[512];
+    while (data.size() < n) {
+      pollfd p{fd, POLLIN, 0};
+      if (::poll(&p, 1, 2000) <= 0) break;
+      const ssize_t got = ::recv(fd, buffer, std::min(sizeof buffer, n - data.size()), 0);
+      if (got <= 0) break;
+      data.append(buffer, static_cast<std::size_t>(got));
+    }
+    return data;
+  }
+  void serve() {
+    while (!stop_) {
+      pollfd p{listener_.get(), POLLIN, 0};
+      if (::poll(&p, 1, 100) <= 0) continue;
+      const Fd client(::accept4(listener_.get(), nullptr, nullptr, SOCK_CLOEXEC));
+      if (!client) continue;
+      const std::string header = read_exactly(client.get(), 4);
+      if (header.size() != 4) continue;
+      std::uint32_t length = 0;
+      std::memcpy(&length, header.data(), 4);
+      if (length > 4096) continue;
+      const std::string request = read_exactly(client.get(), length);
+      if (request.find("\"window-rules/get_cursor_position\"") == std::string::npos) continue;
+      ++questions_;
+      const auto reply_length = static_cast<std::uint32_t>(reply_.size());
+      std::string framed(4, '\0');
+      std::memcpy(framed.data(), &reply_length, 4);
+      framed += reply_;
+      (void)::send(client.get(), framed.data(), framed.size(), MSG_NOSIGNAL);
+    }
+  }
+
+  std::string path_, reply_;
+  Fd listener_;
+  std::atomic<int> questions_{0};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
 struct Case {
   std::string label;
   std::vector<std::string> problems;
@@ -131,11 +200,13 @@ struct Case {
   }
 };
 
-std::vector<std::string> session_environment(const fs::path& runtime, const std::string& signature) {
+std::vector<std::string> session_environment(const fs::path& runtime, const std::string& signature,
+                                             const std::string& wayfire_socket = "") {
   std::vector<std::string> env{"XDG_RUNTIME_DIR=" + runtime.string(), std::string("WAYLAND_DISPLAY=") + kSocketName,
                                "DISPLAY=:99",  // an X display too, as under Xwayland: auto must still pick wayland
                                "PATH=/usr/bin:/bin"};
   if (!signature.empty()) env.push_back("HYPRLAND_INSTANCE_SIGNATURE=" + signature);
+  if (!wayfire_socket.empty()) env.push_back("WAYFIRE_SOCKET=" + wayfire_socket);
   return env;
 }
 
@@ -194,6 +265,42 @@ bool hyprland_case(const Options& options, const fs::path& runtime) {
     c.problems.push_back(e.what());
   }
   return c.verdict(&helper);
+}
+
+bool wayfire_case(const Options& options, const fs::path& runtime) {
+  Case c{"weston's layout with a stand-in Wayfire socket: with ipc-rules, then without", {}};
+  const std::string socket = (runtime / "wayfire-ph.socket").string();
+  std::optional<ChildProcess> helper;
+  try {
+    {
+      FakeWayfire wayfire(socket, R"({"result": "ok", "pos": {"x": 640.25, "y": -10.5}})");
+      ControlStub stub((options.scratch / "control").string());
+      helper.emplace(std::vector<std::string>{options.session, "--control", stub.path(), "-v"},
+                     session_environment(runtime, "", socket), (options.scratch / "session-wayfire.log").string());
+      if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
+      c.expect(stub, "helper wayland-wayfire", "with ipc-rules, at start");
+      c.expect(stub, kLayout, "with ipc-rules, at start");
+      c.expect(stub, "position 640.25 -10.5", "with ipc-rules, at start");
+      check_sigterm(*helper, c);
+      if (wayfire.questions() != 2)  // whether it answers at all, then the position at start
+        c.problems.push_back(fmt::format("Wayfire was asked {} times, not 2", wayfire.questions()));
+    }
+    // Without the ipc-rules plugin Wayfire answers the method with an error: the layout only.
+    FakeWayfire wayfire(socket, R"({"error": "No such method found!"})");
+    ControlStub stub((options.scratch / "control").string());
+    helper.reset();
+    helper.emplace(std::vector<std::string>{options.session, "--control", stub.path(), "-v"},
+                   session_environment(runtime, "", socket), (options.scratch / "session-wayfire-bare.log").string());
+    if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
+    c.expect(stub, kLayout, "without ipc-rules, at start");
+    c.expect_silence(stub, 1s, "without ipc-rules, after the layout");
+    if (helper->log().find("ipc-rules") == std::string::npos)
+      c.problems.push_back("without ipc-rules: no notice naming the plugin in the helper's log");
+    check_sigterm(*helper, c);
+  } catch (const Fatal& e) {
+    c.problems.push_back(e.what());
+  }
+  return c.verdict(helper ? &*helper : nullptr);
 }
 
 bool daemon_case(const Options& options, const fs::path& runtime) {
@@ -300,7 +407,8 @@ int main(int argc, char** argv) {
     int failed = 0;
     failed += !layout_only_case(options, runtime);
     failed += !hyprland_case(options, runtime);
-    const int cases = options.daemon.empty() ? 3 : 4;
+    failed += !wayfire_case(options, runtime);
+    const int cases = options.daemon.empty() ? 4 : 5;
     if (!options.daemon.empty()) failed += !daemon_case(options, runtime);
     failed += !compositor_gone_case(options, runtime, weston);
     if (failed != 0) std::printf("weston's log:\n%s", weston.log().c_str());
