@@ -204,19 +204,6 @@ class Helper {
   Link link_;
 };
 
-// Which backend to use: `requested`, or for "auto" the session's own (Wayland where WAYLAND_DISPLAY is
-// set, X11 where DISPLAY is, or the display given with --display); empty when none applies.
-std::string choose_backend(const std::string& requested, const std::string& x_display) {
-  if (requested != "auto") return requested;
-  const auto set = [](const char* name) {
-    const char* value = std::getenv(name);
-    return value != nullptr && *value != '\0';
-  };
-  if (set("WAYLAND_DISPLAY") && x_display.empty()) return "wayland";
-  if (set("DISPLAY") || !x_display.empty()) return "x11";
-  return "";
-}
-
 std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::string& x_display,
                                       const std::string& wayland_display, const Log& log) {
 #ifdef PH_SESSION_X11
@@ -290,7 +277,11 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   const Log log(verbose);
-  backend = choose_backend(backend, display);
+  const auto env = [](const char* name) -> std::string_view {
+    const char* value = std::getenv(name);
+    return value != nullptr ? value : "";
+  };
+  backend = choose_backend(backend, display, env("WAYLAND_DISPLAY"), env("DISPLAY"));
   if (backend.empty()) {
     log.error("no desktop this helper knows: neither WAYLAND_DISPLAY nor DISPLAY is set (see pseudohaptic-session(1))");
     return 1;

@@ -55,6 +55,14 @@ std::optional<Rect> bounding_box(const std::vector<Rect>& outputs) {
               static_cast<std::int32_t>(std::min(x1 - x0, kMax)), static_cast<std::int32_t>(std::min(y1 - y0, kMax))};
 }
 
+std::string choose_backend(std::string_view requested, std::string_view x_display_option,
+                           std::string_view wayland_display_env, std::string_view display_env) {
+  if (requested != "auto") return std::string(requested);
+  if (!wayland_display_env.empty() && x_display_option.empty()) return "wayland";
+  if (!display_env.empty() || !x_display_option.empty()) return "x11";
+  return "";
+}
+
 std::chrono::milliseconds reconnect_delay(int failures) {
   const int doublings = std::clamp(failures - 1, 0, 5);
   return std::min(std::chrono::milliseconds(250 << doublings), std::chrono::milliseconds(5000));

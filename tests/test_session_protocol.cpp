@@ -1,6 +1,7 @@
 // pseudohaptic-session's side of the control socket: the requests it sends (which the daemon's parser
-// must read back), the layout's bounding box, the reconnection back-off and what it makes of the
-// daemon's lines. Splitting the stream into lines is control/'s (tests/test_control_protocol.cpp).
+// must read back), the layout's bounding box, the backend `--backend auto` picks, the reconnection
+// back-off and what it makes of the daemon's lines. Splitting the stream into lines is control/'s
+// (tests/test_control_protocol.cpp).
 #include <gtest/gtest.h>
 
 #include <clocale>
@@ -40,6 +41,16 @@ TEST(SessionRequests, RefuseWhatTheDaemonWouldRefuse) {
   EXPECT_EQ(layout_request({0, 0, 1920, -1}), std::nullopt);
   EXPECT_EQ(position_request({std::nan(""), 1}), std::nullopt);
   EXPECT_EQ(position_request({1, HUGE_VAL}), std::nullopt);
+}
+
+TEST(SessionBackend, AutoPrefersWaylandThenX11) {
+  EXPECT_EQ(choose_backend("auto", "", "wayland-0", ":0"), "wayland");  // Xwayland sets both
+  EXPECT_EQ(choose_backend("auto", "", "wayland-0", ""), "wayland");
+  EXPECT_EQ(choose_backend("auto", "", "", ":0"), "x11");
+  EXPECT_EQ(choose_backend("auto", ":1", "wayland-0", ""), "x11");  // --display names an X display
+  EXPECT_EQ(choose_backend("auto", "", "", ""), "");
+  EXPECT_EQ(choose_backend("x11", "", "wayland-0", ""), "x11");  // asked for: taken as it is
+  EXPECT_EQ(choose_backend("wayland", "", "", ":0"), "wayland");
 }
 
 TEST(SessionPassthrough, ListedApplicationsMatchEitherNameInAnyCase) {
