@@ -38,6 +38,7 @@ struct StudyOptions {
   std::vector<std::string> techniques;
   std::optional<double> weber;
   std::optional<double> bound;
+  std::optional<double> speedup_weight;
 };
 
 // What the paper reports (Argelaguet et al. 2012, Section 4.4), by method and group of targets. Its overall
@@ -149,9 +150,10 @@ std::string summary_md(const std::vector<GroupSummary>& summaries, const std::ve
   fmt::memory_buffer b;
   auto out = std::back_inserter(b);
   fmt::format_to(out,
-                 "{} simulated participants, seed {}, Weber fraction {:.3f}, bound {:.2f}; 95 % CIs over "
-                 "participants.\n\n",
-                 design.participants, design.seed, design.observer.weber, design.observer.bound);
+                 "{} simulated participants, seed {}, Weber fraction {:.3f}, bound {:.2f}, speed-up weight {:.2f}; "
+                 "95 % CIs over participants.\n\n",
+                 design.participants, design.seed, design.observer.weber, design.observer.bound,
+                 design.observer.speedup_weight);
   fmt::format_to(out, "| technique | error % | paper | time s | paper | decided % |\n|---|---|---|---|---|---|\n");
   for (const GroupSummary& s : summaries) {
     if (s.grouping != "overall") continue;
@@ -221,6 +223,7 @@ int run_study_command(const StudyOptions& o) {
   design.seed = o.seed;
   if (o.weber) design.observer.weber = *o.weber;
   if (o.bound) design.observer.bound = *o.bound;
+  if (o.speedup_weight) design.observer.speedup_weight = *o.speedup_weight;
   if (!(design.observer.weber > 0.0) || !(design.observer.bound > 0.0)) {
     throw std::invalid_argument("--weber and --bound must be > 0");
   }
@@ -272,6 +275,9 @@ Run add_study_command(CLI::App& app) {
       ->allow_extra_args(false);
   app.add_option("--weber", o->weber, "The observer's Weber fraction for speed (default: the calibrated one)");
   app.add_option("--bound", o->bound, "The observer's decision bound (default 3)");
+  app.add_option("--speedup-weight", o->speedup_weight,
+                 "Weight of speed-ups as evidence (default 0: slowdowns only, as the paper's participants reported)")
+      ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--calibrate", o->calibrate,
                "Print the Weber fraction that gives the paper's pooled error over its two techniques; writes nothing");
   return [o] {

@@ -25,8 +25,8 @@ bool Observer::observe(const PerceptWindow& w) {
   // +1 in the first half of the area along the motion, -1 in the second.
   const double ahead = (w.cursor_mid.x - centre) * (w.hand.x > 0.0 ? 1.0 : -1.0);
   const double half = ahead < 0.0 ? 1.0 : (ahead > 0.0 ? -1.0 : 0.0);
-  const double slowdown = std::clamp(1.0 - seen_cursor / seen_hand, 0.0, 1.0);
-  evidence_ += half * slowdown;
+  const double slowdown = std::clamp(1.0 - seen_cursor / seen_hand, -1.0, 1.0);  // < 0: a speed-up
+  evidence_ += half * (slowdown > 0.0 ? slowdown : params_.speedup_weight * slowdown);
   decided_ = std::abs(evidence_) >= params_.bound;
   return decided_;
 }

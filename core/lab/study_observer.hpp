@@ -4,8 +4,9 @@
 // discrimination worsens at low speeds: De Bruyn and Orban 1988). It uses the strategy the curvature paper's
 // participants reported: a slowdown (cursor slower than the hand) in the first half of the area, in the
 // direction of motion, means bump, in the second half hole; speed-ups are ignored, as they said they attended to
-// the deceleration. The slowdowns accumulate as signed evidence until it reaches the bound (the answer and the
-// decision time) or the time limit (then the sign of the evidence, a coin toss on 0).
+// the deceleration (ObserverParams::speedup_weight counts them too, for a sensitivity check). The slowdowns accumulate
+// as signed evidence until it reaches the bound (the answer and the decision time) or the time limit (then the sign of
+// the evidence, a coin toss on 0).
 #pragma once
 
 #include "core/engine/geometry.hpp"
@@ -24,6 +25,9 @@ struct ObserverParams {
   double knee_px_s = 156.0;         // 4 deg/s at the paper's 39 px per degree: Weber's law holds above
   double min_hand_px_s = 39.0;      // 1 deg/s: a slower hand (a reversal) gives no usable percept
   double time_limit_s = 10.0;       // the paper's answer screen
+  // Weight of a speed-up (as evidence for the other shape) against a slowdown: 0 is the reported strategy;
+  // docs/STUDY.md uses 1 only to check that the conclusions do not hang on it.
+  double speedup_weight = 0.0;
 };
 
 // What one window showed: displacements of the hand (motor px) and of the displayed cursor (screen px), the
