@@ -273,7 +273,8 @@ Run add_study_command(CLI::App& app) {
                  "Run only this technique (repeatable), e.g. curvature:sign+1, curvature:sign-1, depth, none, "
                  "curvature+materials, curvature+wells")
       ->allow_extra_args(false);
-  app.add_option("--weber", o->weber, "The observer's Weber fraction for speed (default: the calibrated one)");
+  app.add_option("--weber", o->weber,
+                 "The observer's Weber fraction for speed (default 0.41, calibrated: docs/STUDY.md)");
   app.add_option("--bound", o->bound, "The observer's decision bound (default 3)");
   app.add_option("--speedup-weight", o->speedup_weight,
                  "Weight of speed-ups as evidence (default 0: slowdowns only, as the paper's participants reported)")
