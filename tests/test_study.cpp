@@ -54,7 +54,7 @@ TEST(StudyHand, StrokesGoBackAndForthAcrossTheArea) {
   StudyRng rng(7);
   const Rect area{710, 350, 500, 500};
   const Vec2 start{700, 600};
-  Hand hand(HandParams{}, HandTraits{350.0}, area, start, rng);
+  Hand hand(HandParams{}, HandTraits{350.0}, area, start, true, rng);
   double min_x = 1e9, max_x = -1e9;
   Vec2 cursor = start;
   for (int k = 0; k <= 1000; ++k) {  // 8 s at 125 Hz; the cursor follows the hand at C/D 1
@@ -127,7 +127,8 @@ TEST(StudyTrial, TheTextureDecidesTheAnswerAndTheSameSeedTheTrial) {
   while (targets[bump_index].name() != "bump-gaussian-h1-r200") ++bump_index;
   const StudyTechnique depth{"depth", std::make_shared<DepthMethod>(DepthParams{}), {}};
   const StudyTechnique flat{"none", std::make_shared<FlatMethod>(FlatMethod::Params{}), {}};
-  auto scene = std::make_shared<const Scene>(study_scene(design, targets[bump_index], depth));
+  const RegionFields fields = target_fields(targets[bump_index]);
+  auto scene = std::make_shared<const Scene>(study_scene(design, targets[bump_index], fields, depth));
   const TrialRecord r = run_trial(design, scene, bump_index, 0, 1, 0);
   EXPECT_TRUE(r.decided);
   EXPECT_TRUE(r.correct);
@@ -137,7 +138,7 @@ TEST(StudyTrial, TheTextureDecidesTheAnswerAndTheSameSeedTheTrial) {
   EXPECT_EQ(again.frames, r.frames);
   EXPECT_EQ(again.evidence, r.evidence);
   // The same hand over a flat region: the evidence is the noise's, far from the bump's.
-  auto flat_scene = std::make_shared<const Scene>(study_scene(design, targets[bump_index], flat));
+  auto flat_scene = std::make_shared<const Scene>(study_scene(design, targets[bump_index], fields, flat));
   const TrialRecord f = run_trial(design, flat_scene, bump_index, 0, 1, 0);
   EXPECT_LT(std::abs(f.evidence), r.evidence);
 }

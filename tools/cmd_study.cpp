@@ -144,7 +144,8 @@ std::string with_ci(const MeanCi& m, int decimals) {
   return fmt::format("{:.{}f} [{:.{}f}, {:.{}f}]", m.mean, decimals, m.lo, decimals, m.hi, decimals);
 }
 
-// The tables of docs/STUDY.md: overall per technique beside the paper, then error and time per height x radius.
+// The tables of docs/STUDY.md: overall per technique beside the paper, then error and time per height x radius,
+// per profile and per shape.
 std::string summary_md(const std::vector<GroupSummary>& summaries, const std::vector<StudyTechnique>& techniques,
                        const StudyDesign& design) {
   fmt::memory_buffer b;
@@ -161,27 +162,29 @@ std::string summary_md(const std::vector<GroupSummary>& summaries, const std::ve
     fmt::format_to(out, "| {} | {} | {} | {} | {} | {:.1f} |\n", techniques[s.technique].name, with_ci(s.error_pct, 2),
                    p ? cell(p->error_pct, 2) : "", with_ci(s.time_s, 2), p ? cell(p->time_s, 2) : "", s.decided_pct);
   }
-  for (const char* what : {"error %", "time s"}) {
-    const bool error = what[0] == 'e';
-    std::vector<std::string> groups;
-    for (const GroupSummary& s : summaries) {
-      if (s.grouping == "height_radius" && s.technique == 0) groups.push_back(s.group);
-    }
-    fmt::format_to(out, "\n| {} per height-radius |", what);
-    for (const std::string& g : groups) fmt::format_to(out, " {} |", g);
-    fmt::format_to(out, "\n|---|");
-    for (std::size_t i = 0; i < groups.size(); ++i) fmt::format_to(out, "---|");
-    fmt::format_to(out, "\n");
-    for (std::size_t ti = 0; ti < techniques.size(); ++ti) {
-      fmt::format_to(out, "| {} |", techniques[ti].name);
+  for (const char* grouping : {"height_radius", "profile", "shape"}) {
+    for (const char* what : {"error %", "time s"}) {
+      const bool error = what[0] == 'e';
+      std::vector<std::string> groups;
       for (const GroupSummary& s : summaries) {
-        if (s.grouping != "height_radius" || s.technique != ti) continue;
-        const PaperNumber* p = paper_number(techniques[ti].name, s);
-        const double paper = p ? (error ? p->error_pct : p->time_s) : kNone;
-        fmt::format_to(out, " {}{} |", with_ci(error ? s.error_pct : s.time_s, error ? 1 : 2),
-                       std::isfinite(paper) ? fmt::format(" (paper {})", cell(paper, 1)) : "");
+        if (s.grouping == grouping && s.technique == 0) groups.push_back(s.group);
       }
+      fmt::format_to(out, "\n| {} per {} |", what, grouping);
+      for (const std::string& g : groups) fmt::format_to(out, " {} |", g);
+      fmt::format_to(out, "\n|---|");
+      for (std::size_t i = 0; i < groups.size(); ++i) fmt::format_to(out, "---|");
       fmt::format_to(out, "\n");
+      for (std::size_t ti = 0; ti < techniques.size(); ++ti) {
+        fmt::format_to(out, "| {} |", techniques[ti].name);
+        for (const GroupSummary& s : summaries) {
+          if (s.grouping != grouping || s.technique != ti) continue;
+          const PaperNumber* p = paper_number(techniques[ti].name, s);
+          const double paper = p ? (error ? p->error_pct : p->time_s) : kNone;
+          fmt::format_to(out, " {}{} |", with_ci(error ? s.error_pct : s.time_s, error ? 1 : 2),
+                         std::isfinite(paper) ? fmt::format(" (paper {})", cell(paper, 1)) : "");
+        }
+        fmt::format_to(out, "\n");
+      }
     }
   }
   return fmt::to_string(b);
@@ -274,7 +277,7 @@ Run add_study_command(CLI::App& app) {
                  "curvature+materials, curvature+wells")
       ->allow_extra_args(false);
   app.add_option("--weber", o->weber,
-                 "The observer's Weber fraction for speed (default 0.41, calibrated: docs/STUDY.md)");
+                 "The observer's Weber fraction for speed (default 0.375, calibrated: docs/STUDY.md)");
   app.add_option("--bound", o->bound, "The observer's decision bound (default 3)");
   app.add_option("--speedup-weight", o->speedup_weight,
                  "Weight of speed-ups as evidence (default 0: slowdowns only, as the paper's participants reported)")

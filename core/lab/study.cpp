@@ -47,19 +47,24 @@ std::vector<std::size_t> block_order(const StudyDesign& design, int participant,
   return order;
 }
 
-Scene study_scene(const StudyDesign& design, const TargetSpec& target, const StudyTechnique& technique) {
+RegionFields target_fields(const TargetSpec& target) {
+  RegionFields all;
+  all.gradient = target_gradient_field(target);
+  all.depth = target_depth_field(target);
+  return all;
+}
+
+Scene study_scene(const StudyDesign& design, const TargetSpec& target, const RegionFields& fields,
+                  const StudyTechnique& technique) {
   if (!technique.method) throw std::invalid_argument("study technique " + technique.name + " has no method");
   const Rect area = study_area(design);
   Region region;
   region.name = target.name();
   region.rect = {area.x + (area.w - target.size) / 2, area.y + (area.h - target.size) / 2, target.size, target.size};
-  RegionFields all;
-  all.gradient = target_gradient_field(target);
-  all.depth = target_depth_field(target);
-  if (technique.effects) region.effects = technique.effects(all, target.size, target.size);
+  if (technique.effects) region.effects = technique.effects(fields, target.size, target.size);
   const FieldNeeds needs = technique.method->needs();
-  if (needs.gradient) region.fields.gradient = std::move(all.gradient);
-  if (needs.depth) region.fields.depth = std::move(all.depth);
+  if (needs.gradient) region.fields.gradient = fields.gradient;
+  if (needs.depth) region.fields.depth = fields.depth;
   region.method = technique.method;
   std::vector<Region> regions;
   regions.push_back(std::move(region));
@@ -75,17 +80,20 @@ TrialRecord run_trial(const StudyDesign& design, std::shared_ptr<const Scene> sc
   StudyRng noise(stream_seed({design.seed, p, b, o, kNoiseKey}));
   const Rect area = study_area(design);
 
-  // The previous answer leaves the cursor at either side of the square, on some row.
-  const bool from_left = hand_rng.uniform() < 0.5;
-  const double side_offset = hand_rng.uniform(0.0, 20.0);
+  // The paper does not say where a trial starts: the cursor anywhere across the square, on a row drawn as the
+  // strokes' are, and the first stroke toward either side. (Always starting at one side would put every
+  // trial's first, slow start of a stroke in the first half of the square: a bias toward "bump".)
+  const double across = hand_rng.uniform(0.0, area.w);
   const double row = std::clamp(hand_rng.normal(0.0, design.hand.row_sd_px), -area.h / 2.0 + 1.0, area.h / 2.0 - 1.0);
-  const Vec2 start{from_left ? area.x - side_offset : area.x + area.w + side_offset, area.y + area.h / 2.0 + row};
+  const bool rightward = hand_rng.uniform() < 0.5;
+  const Vec2 start{area.x + across, area.y + area.h / 2.0 + row};
 
   PipelineConfig config;  // relative output, flat acceleration at gain 1: the paper's "acceleration disabled"
   config.desktop = design.desktop;
   config.start = start;
+  config.pointer_gain = 1.0 / design.counts_per_px;  // a count moves the cursor 1 / counts_per_px px at C/D 1
   Pipeline pipeline(std::move(scene), config);
-  Hand hand(design.hand, participant_hand(design, participant), area, start, hand_rng);
+  Hand hand(design.hand, participant_hand(design, participant), area, start, rightward, hand_rng);
   Observer observer(design.observer, participant_weber(design, participant), area, noise);
 
   const double dt = 1.0 / design.report_hz;
@@ -150,10 +158,12 @@ std::vector<TrialRecord> run_study(const StudyDesign& design, const std::vector<
                  static_cast<std::size_t>(design.blocks) * targets.size());
   const std::size_t total = techniques.size() * static_cast<std::size_t>(design.participants);
   std::size_t done = 0;
+  std::vector<RegionFields> fields;
+  for (const TargetSpec& target : targets) fields.push_back(target_fields(target));
   for (std::size_t ti = 0; ti < techniques.size(); ++ti) {
     std::vector<std::shared_ptr<const Scene>> scenes;
-    for (const TargetSpec& target : targets) {
-      scenes.push_back(std::make_shared<const Scene>(study_scene(design, target, techniques[ti])));
+    for (std::size_t i = 0; i < targets.size(); ++i) {
+      scenes.push_back(std::make_shared<const Scene>(study_scene(design, targets[i], fields[i], techniques[ti])));
     }
     for (int p = 0; p < design.participants; ++p) {
       for (int b = 0; b < design.blocks; ++b) {

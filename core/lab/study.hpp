@@ -68,8 +68,13 @@ struct TrialRecord {
 // The Weber fraction of each participant (their spread around ObserverParams::weber), by participant index.
 double participant_weber(const StudyDesign& design, int participant);
 
-// The scene of one target under one technique: one region, the area, centred on the desktop.
-Scene study_scene(const StudyDesign& design, const TargetSpec& target, const StudyTechnique& technique);
+// Both fields of a target (gradient and depth), computed once and copied into each technique's scene.
+RegionFields target_fields(const TargetSpec& target);
+
+// The scene of one target under one technique: one region, the area, centred on the desktop, with the fields
+// the technique's method reads (copied from `fields`, target_fields of the target).
+Scene study_scene(const StudyDesign& design, const TargetSpec& target, const RegionFields& fields,
+                  const StudyTechnique& technique);
 
 // The square the participants explore, centred on the desktop.
 Rect study_area(const StudyDesign& design);

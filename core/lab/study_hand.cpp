@@ -16,9 +16,8 @@ HandTraits draw_hand_traits(const HandParams& params, StudyRng& rng) {
   return {rng.log_normal(params.speed_median_px_s, params.speed_participant_sigma)};
 }
 
-Hand::Hand(const HandParams& params, const HandTraits& traits, Rect area, Vec2 cursor, StudyRng& rng)
-    : params_(params), traits_(traits), area_(area), rng_(rng) {
-  rightward_ = cursor.x < area.x + area.w / 2.0;
+Hand::Hand(const HandParams& params, const HandTraits& traits, Rect area, Vec2 cursor, bool rightward, StudyRng& rng)
+    : params_(params), traits_(traits), area_(area), rng_(rng), rightward_(rightward) {
   plan(0.0, cursor);
 }
 

@@ -32,8 +32,8 @@ HandTraits draw_hand_traits(const HandParams& params, StudyRng& rng);
 
 class Hand {
  public:
-  // The first stroke starts at time 0 toward the side of `area` farther from `cursor`.
-  Hand(const HandParams& params, const HandTraits& traits, Rect area, Vec2 cursor, StudyRng& rng);
+  // The first stroke starts at time 0 from `cursor`, to the right side of `area` when `rightward`, else the left.
+  Hand(const HandParams& params, const HandTraits& traits, Rect area, Vec2 cursor, bool rightward, StudyRng& rng);
 
   // Where the hand is at time `t_s` (motor px from where it started; times must not decrease). When the
   // stroke under way and its rest have ended, the next stroke is planned from `cursor`, the cursor the

@@ -25,7 +25,13 @@ bool Observer::observe(const PerceptWindow& w) {
   // +1 in the first half of the area along the motion, -1 in the second.
   const double ahead = (w.cursor_mid.x - centre) * (w.hand.x > 0.0 ? 1.0 : -1.0);
   const double half = ahead < 0.0 ? 1.0 : (ahead > 0.0 ? -1.0 : 0.0);
-  const double slowdown = std::clamp(1.0 - seen_cursor / seen_hand, -1.0, 1.0);  // < 0: a speed-up
+  // The speed lost, as a fraction of the hand's (< 0: a speed-up). Below the knee the fraction is of the knee's
+  // speed, as the noise is: a hand just starting or stopping does not make every wobble a large slowdown.
+  const double slowdown = std::clamp((seen_hand - seen_cursor) / std::max(seen_hand, params_.knee_px_s), -1.0, 1.0);
+  // A change smaller than one Weber fraction goes unnoticed (the Weber fraction is the just-noticeable
+  // difference): without that, the noise's own wobbles would pile up as slowdowns in whichever half comes
+  // first in a stroke, a bias toward "bump".
+  if (std::abs(slowdown) <= weber_) return false;
   evidence_ += half * (slowdown > 0.0 ? slowdown : params_.speedup_weight * slowdown);
   decided_ = std::abs(evidence_) >= params_.bound;
   return decided_;

@@ -3,9 +3,10 @@
 // Weber fraction times the speed (Weber's law; below `knee_px_s` the noise stays at its value there, as speed
 // discrimination worsens at low speeds: De Bruyn and Orban 1988). It uses the strategy the curvature paper's
 // participants reported: a slowdown (cursor slower than the hand) in the first half of the area, in the
-// direction of motion, means bump, in the second half hole; speed-ups are ignored, as they said they attended to
-// the deceleration (ObserverParams::speedup_weight counts them too, for a sensitivity check). The slowdowns accumulate
-// as signed evidence until it reaches the bound (the answer and the decision time) or the time limit (then the sign of
+// direction of motion, means bump, in the second half hole; speed-ups are ignored, as they said they attended
+// to the deceleration (ObserverParams::speedup_weight counts them too, for a sensitivity check), and a change
+// within one Weber fraction (the just-noticeable difference) goes unnoticed. The slowdowns accumulate as signed
+// evidence until it reaches the bound (the answer and the decision time) or the time limit (then the sign of
 // the evidence, a coin toss on 0).
 #pragma once
 
@@ -18,7 +19,7 @@ namespace ph {
 struct ObserverParams {
   // The two free parameters: docs/STUDY.md, "Calibration", says how the Weber fraction was set (the bound is
   // fixed). 7 % is the literature's best case; a cursor against a felt hand does worse.
-  double weber = 0.41;
+  double weber = 0.375;
   double bound = 3.0;               // evidence (sum of slowdowns, fractions of the hand's speed) to answer
   double participant_sigma = 0.25;  // spread of the Weber fraction over participants (sd of its log)
   double window_s = 0.1;            // perceptual window (snapped to whole mouse reports)
