@@ -145,3 +145,62 @@ TEST(StudyTrial, TheTextureDecidesTheAnswerAndTheSameSeedTheTrial) {
 
 }  // namespace
 }  // namespace ph
+
+namespace ph {
+namespace {
+
+TEST(StudyTrial, OnAFlatRegionTheObserverIsAtChance) {
+  // The observer's own noise must not lean toward either answer: rectified noise that piles up in the half of
+  // the square where strokes start slowly would read as "bump".
+  StudyDesign design;
+  const StudyTechnique flat{"none", std::make_shared<FlatMethod>(FlatMethod::Params{}), {}};
+  const std::vector<TargetSpec> targets = all_targets();
+  auto scene = std::make_shared<const Scene>(study_scene(design, targets[0], target_fields(targets[0]), flat));
+  int bumps = 0, trials = 0;
+  for (int p = 0; p < 16; ++p) {
+    for (int o = 0; o < 24; ++o, ++trials) bumps += run_trial(design, scene, 0, p, 1, o).answer == TargetShape::bump;
+  }
+  // 384 trials: a fair coin lands within 0.43-0.57 with probability 0.99.
+  EXPECT_GT(static_cast<double>(bumps) / trials, 0.43);
+  EXPECT_LT(static_cast<double>(bumps) / trials, 0.57);
+}
+
+TEST(StudyStats, SummariesAreMeansOverParticipantsOfScoredTrials) {
+  const std::vector<TargetSpec> targets = all_targets();
+  std::size_t low_wide = 0, high_narrow = 0;
+  for (std::size_t i = 0; i < targets.size(); ++i) {
+    if (targets[i].name() == "bump-linear-h0.25-r200") low_wide = i;
+    if (targets[i].name() == "hole-gaussian-h1-r100") high_narrow = i;
+  }
+  auto trial = [](int participant, int block, std::size_t target, bool correct, double time) {
+    TrialRecord r;
+    r.participant = participant;
+    r.block = block;
+    r.target = target;
+    r.correct = correct;
+    r.time_s = time;
+    return r;
+  };
+  // Participant 0: one error in two low, wide trials; participant 1: none. The training trial does not count.
+  const std::vector<TrialRecord> trials = {trial(0, 1, low_wide, false, 4.0),  trial(0, 2, low_wide, true, 2.0),
+                                           trial(1, 1, low_wide, true, 6.0),   trial(1, 2, low_wide, true, 6.0),
+                                           trial(1, 0, low_wide, false, 10.0), trial(1, 1, high_narrow, true, 1.0)};
+  const Grouping by_cell = standard_groupings()[1];
+  ASSERT_EQ(by_cell.name, "height_radius");
+  for (const GroupSummary& s : summarise(trials, 1, 2, by_cell)) {
+    if (s.group == "h0.25-r200") {
+      EXPECT_EQ(s.trials, 4);
+      EXPECT_DOUBLE_EQ(s.error_pct.mean, 25.0);  // (50 % + 0 %) / 2
+      EXPECT_DOUBLE_EQ(s.time_s.mean, 4.5);      // (3 s + 6 s) / 2
+      EXPECT_EQ(s.error_pct.n, 2);
+    } else if (s.group == "h1-r100") {
+      EXPECT_EQ(s.trials, 1);
+      EXPECT_EQ(s.error_pct.n, 1);
+    } else {
+      EXPECT_EQ(s.trials, 0) << s.group;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace ph
