@@ -1,0 +1,195 @@
+#!/usr/bin/env python3
+"""Charts of the simulated user study (docs/STUDY.md) from the CSV files of `pseudohaptic study`.
+
+    study_charts.py CSVDIR OUTDIR     read CSVDIR/trials.csv and CSVDIR/summary.csv, write the PNGs into OUTDIR
+
+Writes study_errors.png (error rate per height x radius and technique, 95 % CIs over participants, the paper's
+overall rates marked), study_times.png (per-participant mean decision times per profile, radius and height for
+the paper's two techniques, as boxplots like the paper's Fig. 4) and study_techniques.png (every technique's
+overall error against its time). Reuses tools/charts.py's reader and style; the same input gives the same bytes.
+"""
+
+import argparse
+import math
+import sys
+from collections import defaultdict
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from charts import DPI, EXTRA_COLOURS, METHOD_COLOURS, SAVE_META, InputError, plt, read_table  # noqa: E402
+
+SUMMARY_REQUIRED = ["technique", "grouping", "group", "error_pct", "error_lo", "error_hi", "time_s", "time_lo",
+                    "time_hi"]
+SUMMARY_NUMERIC = ["error_pct", "error_lo", "error_hi", "time_s", "time_lo", "time_hi"]
+SUMMARY_OPTIONAL = ["paper_error_pct", "paper_time_s"]
+TRIALS_REQUIRED = ["participant", "technique", "scored", "profile", "height", "radius", "time_s"]
+PAPER_TECHNIQUES = ["curvature:sign+1", "depth"]  # the paper's two, as `pseudohaptic study` names them
+CHANCE = "none"  # the flat control: at chance, and off the scale of the others
+HEIGHT_RADIUS = ["h1-r100", "h1-r200", "h0.25-r100", "h0.25-r200"]
+
+
+def colour_of(technique, techniques):
+    base = technique.split(":")[0].split("+")[0]
+    if technique in PAPER_TECHNIQUES and base in METHOD_COLOURS:
+        return METHOD_COLOURS[base]
+    others = [t for t in techniques if t not in PAPER_TECHNIQUES]
+    return EXTRA_COLOURS[others.index(technique) % len(EXTRA_COLOURS)] if technique in others else "#333333"
+
+
+def finite(v):
+    return isinstance(v, float) and math.isfinite(v)
+
+
+def techniques_of(summary):
+    out = []
+    for r in summary:
+        if r["technique"] not in out:
+            out.append(r["technique"])
+    return out
+
+
+def chart_errors(summary, outdir):
+    every = techniques_of(summary)
+    techniques = [t for t in every if t != CHANCE]
+    rows = {(r["technique"], r["group"]): r for r in summary if r["grouping"] in ("overall", "height_radius")}
+    groups = ["all"] + [g for g in HEIGHT_RADIUS if any((t, g) in rows for t in techniques)]
+    fig, ax = plt.subplots(figsize=(9.5, 4.6))
+    width = 0.8 / max(1, len(techniques))
+    for i, t in enumerate(techniques):
+        xs, ys, lo, hi = [], [], [], []
+        for gi, g in enumerate(groups):
+            r = rows.get((t, g))
+            if r is None:
+                continue
+            xs.append(gi + (i - (len(techniques) - 1) / 2) * width)
+            ys.append(r["error_pct"])
+            lo.append(max(0.0, r["error_pct"] - r["error_lo"]))
+            hi.append(r["error_hi"] - r["error_pct"])
+        ax.bar(xs, ys, width * 0.92, color=colour_of(t, every), label=t, yerr=[lo, hi], capsize=2,
+               error_kw={"elinewidth": 0.8})
+        paper = rows.get((t, "all"), {}).get("paper_error_pct", math.nan)
+        if t in PAPER_TECHNIQUES and finite(paper):
+            ax.plot([xs[0]], [paper], marker="D", color="black", markersize=6, zorder=5,
+                    label="paper (overall)" if t == PAPER_TECHNIQUES[0] else None)
+    ax.set_xticks(range(len(groups)))
+    ax.set_xticklabels(["overall"] + [g.replace("h", "height ").replace("-r", ", radius ") for g in groups[1:]])
+    ax.set_ylabel("misclassified targets (%)")
+    ax.set_ylim(bottom=0)
+    ax.set_title("Simulated error rate per height and radius (95 % CI over participants; 'none' is at chance)",
+                 fontsize=10)
+    ax.legend(fontsize=8, ncol=2)
+    ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    path = outdir / "study_errors.png"
+    fig.savefig(path, dpi=DPI, metadata=SAVE_META)
+    plt.close(fig)
+    return path
+
+
+def chart_times(trials, summary, outdir):
+    techniques = [t for t in PAPER_TECHNIQUES if any(r["technique"] == t for r in trials)]
+    if not techniques:
+        raise InputError("trials.csv has neither of the paper's techniques (" + ", ".join(PAPER_TECHNIQUES) + ")")
+    cells = []
+    for profile in ("linear", "gaussian", "polynomial"):
+        for radius in ("100", "200"):
+            for height in ("1", "0.25"):
+                cells.append((profile, radius, height))
+    # Per participant, the mean time of its scored trials in each cell: what the paper's boxplots show.
+    sums = defaultdict(lambda: [0.0, 0])
+    for r in trials:
+        if r["scored"] != "1" or r["technique"] not in techniques:
+            continue
+        a = sums[(r["technique"], (r["profile"], r["radius"], r["height"]), r["participant"])]
+        a[0] += float(r["time_s"])
+        a[1] += 1
+    fig, ax = plt.subplots(figsize=(11, 4.8))
+    width = 0.8 / len(techniques)
+    for i, t in enumerate(techniques):
+        data, pos = [], []
+        for ci, c in enumerate(cells):
+            vals = [s / n for (tt, cc, _), (s, n) in sorted(sums.items()) if tt == t and cc == c and n > 0]
+            data.append(vals)
+            pos.append(ci + (i - (len(techniques) - 1) / 2) * width)
+        box = ax.boxplot(data, positions=pos, widths=width * 0.85, patch_artist=True, showfliers=True,
+                         flierprops={"markersize": 3})
+        for patch in box["boxes"]:
+            patch.set_facecolor(colour_of(t, techniques))
+            patch.set_alpha(0.6)
+        ax.plot([], [], color=colour_of(t, techniques), linewidth=6, alpha=0.6, label=t)
+    paper = {r["technique"]: r.get("paper_time_s", math.nan) for r in summary
+             if r["grouping"] == "height_radius" and r["group"] == "h0.25-r200"}
+    for i, t in enumerate(techniques):
+        p = paper.get(t, math.nan)
+        if finite(p):
+            xs = [ci + (i - (len(techniques) - 1) / 2) * width for ci, c in enumerate(cells)
+                  if c[1] == "200" and c[2] == "0.25"]
+            ax.plot(xs, [p] * len(xs), linestyle="none", marker="D", color="black", markersize=5,
+                    label="paper, height 0.25 radius 200 (mean over profiles)" if i == 0 else None)
+    ax.set_xticks(range(len(cells)))
+    ax.set_xticklabels([f"{p[:4]}\nr{r} h{h}" for p, r, h in cells], fontsize=8)
+    ax.set_ylabel("mean decision time per participant (s)")
+    ax.set_ylim(0, 10.5)
+    ax.set_title("Simulated decision times by profile, radius and height (like the paper's Fig. 4)", fontsize=10)
+    ax.legend(fontsize=8, loc="upper left")
+    ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    path = outdir / "study_times.png"
+    fig.savefig(path, dpi=DPI, metadata=SAVE_META)
+    plt.close(fig)
+    return path
+
+
+def chart_techniques(summary, outdir):
+    techniques = techniques_of(summary)
+    overall = {r["technique"]: r for r in summary if r["grouping"] == "overall"}
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    marked = set()
+    for t in techniques:
+        r = overall[t]
+        ax.errorbar([r["time_s"]], [r["error_pct"]],
+                    xerr=[[r["time_s"] - r["time_lo"]], [r["time_hi"] - r["time_s"]]],
+                    yerr=[[max(0.0, r["error_pct"] - r["error_lo"])], [r["error_hi"] - r["error_pct"]]],
+                    marker="o", color=colour_of(t, techniques), label=t, capsize=3)
+        method = t.split(":")[0]
+        if method not in marked and finite(r.get("paper_error_pct", math.nan)) and finite(
+                r.get("paper_time_s", math.nan)):
+            marked.add(method)
+            ax.plot([r["paper_time_s"]], [r["paper_error_pct"]], marker="D", color=colour_of(t, techniques),
+                    markeredgecolor="black", markersize=8, linestyle="none", label=f"paper: {method}")
+    ax.set_xlabel("mean decision time (s)")
+    ax.set_ylabel("misclassified targets (%)")
+    ax.set_ylim(bottom=0)
+    ax.set_title("Every technique: error against decision time (95 % CI over participants)", fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path = outdir / "study_techniques.png"
+    fig.savefig(path, dpi=DPI, metadata=SAVE_META)
+    plt.close(fig)
+    return path
+
+
+def main(argv):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter,
+                                epilog="\n".join(__doc__.split("\n")[1:]))
+    p.add_argument("csvdir", type=Path, help="folder with trials.csv and summary.csv")
+    p.add_argument("outdir", type=Path, help="folder to write the PNG files into (created if needed)")
+    args = p.parse_args(argv)
+    try:
+        summary, _ = read_table(args.csvdir / "summary.csv", SUMMARY_REQUIRED, SUMMARY_NUMERIC, SUMMARY_OPTIONAL)
+        trials, _ = read_table(args.csvdir / "trials.csv", TRIALS_REQUIRED, [])
+        args.outdir.mkdir(parents=True, exist_ok=True)
+        written = [chart_errors(summary, args.outdir), chart_times(trials, summary, args.outdir),
+                   chart_techniques(summary, args.outdir)]
+    except InputError as e:
+        print(f"study_charts.py: {e}", file=sys.stderr)
+        return 1
+    for path in written:
+        print(f"study_charts.py: wrote {path}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
