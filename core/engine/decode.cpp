@@ -249,6 +249,32 @@ NormalImage decode_normals(const RawImage& image, const NormalDecodeOptions& opt
   return normals;
 }
 
+GradientField decode_normals_to_gradient(const RawImage& image, const NormalDecodeOptions& options,
+                                         DecodeReport& report) {
+  require_normal_channels(image);
+  require_consistent(image);
+  const bool unorm = stores_unorm(image, options.encoding);
+  const double zero_band = image.code_max > 0 ? 1.0 / image.code_max + 1e-7 : 0.0;
+  GradientField gradient(image.width, image.height);
+  std::vector<std::uint8_t> valid(gradient.values.size(), 1);
+  std::size_t invalid = 0;
+  for (std::size_t i = 0; i < gradient.values.size(); ++i) {
+    const std::optional<Normal> n =
+        decode_normal_texel(&image.pixels[i * image.channels], unorm, zero_band, options.green);
+    if (n) {
+      gradient.values[i] = clamped_gradient(*n);
+    } else {
+      valid[i] = 0;
+      ++invalid;
+    }
+  }
+  // A texel's gradient depends on its normal alone, so repairing gradients equals repairing normals first;
+  // the fallback is a flat normal's gradient.
+  if (invalid > 0) repair_from_nearest_valid(gradient, std::move(valid), clamped_gradient(Normal{}));
+  report = {gradient.values.size(), invalid};
+  return gradient;
+}
+
 DepthField decode_depth(const RawImage& image, const DepthDecodeOptions& options, DecodeReport& report) {
   require_depth_channels(image);
   require_consistent(image);
