@@ -3,13 +3,16 @@
 // capabilities, and then only re-emits: one blocking read() of whatever the mouse queued, one write() of
 // it to uinput. No event loop, no frame assembly, no model.
 //
-//   bare_reemitter NODE NAME
+//   bare_reemitter NODE NAME [poll]
 //
-// NODE: the mouse's /dev/input/eventN; NAME: the virtual device's name. Runs until killed.
+// NODE: the mouse's /dev/input/eventN; NAME: the virtual device's name. With `poll` it waits in poll() and
+// then reads, as an event loop must (one system call more per frame), instead of blocking in read(): the
+// baseline for how much of a daemon's cost is that shape alone. Runs until killed.
 #include <fcntl.h>
 #include <libevdev/libevdev-uinput.h>
 #include <libevdev/libevdev.h>
 #include <linux/input.h>
+#include <poll.h>
 #include <sys/ioctl.h>
 #include <unistd.h>
 
@@ -28,8 +31,9 @@ int fail(const char* what) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 3) {
-    std::fprintf(stderr, "usage: bare_reemitter NODE NAME\n");
+  const bool wait_in_poll = argc == 4 && std::strcmp(argv[3], "poll") == 0;
+  if (argc != 3 && !wait_in_poll) {
+    std::fprintf(stderr, "usage: bare_reemitter NODE NAME [poll]\n");
     return 2;
   }
   const int in = ::open(argv[1], O_RDONLY | O_CLOEXEC);
@@ -49,6 +53,10 @@ int main(int argc, char** argv) {
   const int out_fd = libevdev_uinput_get_fd(out);
   std::array<input_event, 64> batch;
   for (;;) {
+    if (wait_in_poll) {
+      pollfd p{in, POLLIN, 0};
+      if (::poll(&p, 1, -1) < 0 && errno != EINTR) return fail("poll");
+    }
     const ssize_t n = ::read(in, batch.data(), sizeof batch);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) return fail("read");

@@ -7,14 +7,14 @@
 // status is 1 when any failed.
 //
 //   daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--rounds N]
-//              [--baseline BARE_REEMITTER] [-v]
+//              [--baseline BARE_REEMITTER] [--baseline-polls] [-v]
 //
 // --tool: the pseudohaptic tool for `pseudohaptic status` (default: ../tools/pseudohaptic next to the
 // daemon's folder, as in the build tree); --cycles: hotplug create/destroy cycles (100); --latency-frames:
 // frames per latency figure (500); --rounds: interleaved rounds of the daemon against the bare re-emitter,
 // half as many frames each per round (10); --baseline: the bare re-emitter (bare_reemitter beside this
-// program); -v passes -v to the daemon (its debug lines are printed when a case
-// fails) and traces the hotplug cycles.
+// program); --baseline-polls: the re-emitter waits in poll() before each read(), as an event loop does; -v passes -v to
+// the daemon (its debug lines are printed when a case fails) and traces the hotplug cycles.
 //
 // Three parts, each with a fresh daemon (or none): latency of the test mouse's own node; the daemon with a
 // flat config file (held button at start, identity, latency, the control socket, resync through a fake
@@ -56,9 +56,10 @@ struct Options {
   std::string tool;  // the pseudohaptic tool, for `pseudohaptic status` ("" when there is none)
   int cycles = 100;
   int latency_frames = 500;
-  int rounds = 10;       // interleaved rounds of the daemon against the bare re-emitter
-  std::string baseline;  // the bare re-emitter (bare_reemitter beside this program)
-  bool verbose = false;  // pass -v to the daemon
+  int rounds = 10;              // interleaved rounds of the daemon against the bare re-emitter
+  std::string baseline;         // the bare re-emitter (bare_reemitter beside this program)
+  bool baseline_polls = false;  // --baseline-polls: the re-emitter waits in poll() before each read()
+  bool verbose = false;         // pass -v to the daemon
   std::filesystem::path scratch;
 };
 
@@ -816,7 +817,9 @@ void flat_part(Report& report, const Options& options, Latency& latency, Latency
     // only watches that mouse, and the grab keeps the mouse's events from it.
     TestMouse bare_mouse("ph-bare mouse");
     const std::string bare_name = "pseudohaptic bare re-emitter";
-    ChildProcess bare({options.baseline, bare_mouse.node(), bare_name}, {}, (options.scratch / "bare.log").string());
+    std::vector<std::string> bare_argv{options.baseline, bare_mouse.node(), bare_name};
+    if (options.baseline_polls) bare_argv.emplace_back("poll");
+    ChildProcess bare(bare_argv, {}, (options.scratch / "bare.log").string());
     const std::string node = wait_for_device(bare_name, kDeviceTimeout, uevents);
     if (node.empty()) throw Fatal("no '" + bare_name + "' device within 10 s: " + bare.log());
     EventReader bare_out(node);
@@ -1512,7 +1515,7 @@ void default_scene_part(Report& report, const Options& options, Latency& latency
 int usage() {
   std::fprintf(stderr,
                "usage: daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--rounds N]\n"
-               "                  [--baseline BARE_REEMITTER] [-v]\n");
+               "                  [--baseline BARE_REEMITTER] [--baseline-polls] [-v]\n");
   return 2;
 }
 
@@ -1527,6 +1530,8 @@ int main(int argc, char** argv) {
       (arg == "--cycles"   ? options.cycles
        : arg == "--rounds" ? options.rounds
                            : options.latency_frames) = std::atoi(argv[++i]);
+    } else if (arg == "--baseline-polls") {
+      options.baseline_polls = true;
     } else if (arg == "--baseline" && i + 1 < argc) {
       options.baseline = argv[++i];
     } else if (arg == "--tool" && i + 1 < argc) {
@@ -1576,8 +1581,8 @@ int main(int argc, char** argv) {
   for (const Latency* l : {&passthrough, &flat, &texture, &ratio.daemon, &ratio.bare}) {
     std::printf("  %-52s %s\n", l->label.c_str(), l->us.empty() ? "not measured" : latency_text(*l).c_str());
   }
-  std::printf("daemon over a flat scene / bare re-emitter (%d interleaved rounds): %s\n", options.rounds,
-              ratio.text().c_str());
+  std::printf("daemon over a flat scene / bare re-emitter%s (%d interleaved rounds): %s\n",
+              options.baseline_polls ? " waiting in poll()" : "", options.rounds, ratio.text().c_str());
   std::printf("daemon e2e: %d passed, %d failed, %.1f s\n", report.passed(), report.failed(), seconds);
   return report.failed() == 0 ? 0 : 1;
 }
