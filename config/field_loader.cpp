@@ -32,13 +32,21 @@ void require_sources(const FieldSources& sources, FieldNeeds needs) {
 DepthField load_depth(const std::filesystem::path& path, const DepthDecodeOptions& options, std::int32_t width,
                       std::int32_t height, DecodeReport& report, const ImageLimits& limits) {
   const RawImage image = read_image(path, limits);
-  return naming_file(path, [&] { return resample_depth(decode_depth(image, options, report), width, height); });
+  return naming_file(path, [&] {
+    DepthField depth = decode_depth(image, options, report);
+    if (depth.width == width && depth.height == height) return depth;  // the region's size already: no copy
+    return resample_depth(depth, width, height);
+  });
 }
 
-NormalImage load_normals(const std::filesystem::path& path, const NormalDecodeOptions& options, std::int32_t width,
-                         std::int32_t height, DecodeReport& report, const ImageLimits& limits) {
+// A map of the region's size is decoded straight into gradients; any other is resampled as normals first.
+GradientField load_gradient(const std::filesystem::path& path, const NormalDecodeOptions& options, std::int32_t width,
+                            std::int32_t height, DecodeReport& report, const ImageLimits& limits) {
   const RawImage image = read_image(path, limits);
-  return naming_file(path, [&] { return resample_normals(decode_normals(image, options, report), width, height); });
+  return naming_file(path, [&] {
+    if (image.width == width && image.height == height) return decode_normals_to_gradient(image, options, report);
+    return gradient_from_normals(resample_normals(decode_normals(image, options, report), width, height));
+  });
 }
 
 }  // namespace
@@ -56,10 +64,9 @@ RegionFields load_region_fields(const FieldSources& sources, std::int32_t width,
 
   RegionFields fields;
   if (needs.gradient) {
-    fields.gradient = gradient_from_depth_map
-                          ? gradient_from_depth(*depth)
-                          : gradient_from_normals(load_normals(*sources.normal_map, sources.normal_options, width,
-                                                               height, report.normals, limits));
+    fields.gradient = gradient_from_depth_map ? gradient_from_depth(*depth)
+                                              : load_gradient(*sources.normal_map, sources.normal_options, width,
+                                                              height, report.normals, limits);
   }
   if (needs.depth) fields.depth = std::move(depth);
   return fields;

@@ -8,6 +8,8 @@
 #include <set>
 #include <sstream>
 
+#include "core/engine/variant_choice.hpp"
+
 namespace ph {
 
 namespace {
@@ -286,8 +288,42 @@ void parse_method_tables(const Reporter& rep, const toml::table& t, const std::s
   }
 }
 
+// traversal, sampling and lut_directions of a region, over the [daemon] table's; traversal = "auto" with its
+// accuracy_px.
+void parse_region_engine(const Reporter& rep, const toml::table& t, const std::string& where,
+                         const EngineOptions& scene_engine, RegionSpec& r) {
+  const bool any = t.get("traversal") != nullptr || t.get("sampling") != nullptr || t.get("lut_directions") != nullptr;
+  if (t.get("accuracy_px") != nullptr && get_string(rep, t, "traversal", where).value_or("") != "auto") {
+    rep.fail(t.get("accuracy_px"), where + "accuracy_px", "applies to traversal = \"auto\" only");
+  }
+  if (!any) return;
+  EngineOptions e = scene_engine;
+  r.engine_auto = get_string(rep, t, "traversal", where) == std::optional<std::string>("auto");
+  if (r.engine_auto) {
+    e.traversal = Traversal::exact;  // chosen at load (load_scene)
+    r.accuracy_px = get_number(rep, t, "accuracy_px", where, r.accuracy_px);
+    check_key(
+        rep, t, "accuracy_px", where, [&] { return std::isfinite(r.accuracy_px) && r.accuracy_px > 0.0; },
+        "must be a number > 0");
+  } else {
+    e.traversal = get_choice(rep, t, "traversal", where, e.traversal, parse_traversal,
+                             "exact, unit_steps, frame_midpoint, direction_lut, auto");
+  }
+  e.sampling = get_choice(rep, t, "sampling", where, e.sampling, parse_sampling, "nearest, bilinear");
+  e.lut_directions = get_int(rep, t, "lut_directions", where, e.lut_directions, 8, 16);
+  check_key(
+      rep, t, "lut_directions", where, [&] { return e.lut_directions == 8 || e.lut_directions == 16; },
+      "must be 8 or 16");
+  if (r.engine_auto && e.sampling == Sampling::bilinear) {
+    rep.fail(t.get("sampling"), where + "sampling", "traversal = \"auto\" chooses with nearest sampling");
+  }
+  if (const std::string problem = validate(e); !problem.empty()) rep.fail(&t, where + "traversal", problem);
+  r.engine = e;
+}
+
 RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t index,
-                        const std::filesystem::path& base_dir, const MethodRegistry& methods) {
+                        const std::filesystem::path& base_dir, const MethodRegistry& methods,
+                        const EngineOptions& scene_engine) {
   const std::string where = fmt::format("region[{}].", index);
   std::set<std::string_view> keys = {"name",
                                      "x",
@@ -302,7 +338,11 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
                                      "depth_zero",
                                      "relief_px",
                                      "materials",
-                                     "wells"};
+                                     "wells",
+                                     "traversal",
+                                     "sampling",
+                                     "lut_directions",
+                                     "accuracy_px"};
   for (const auto& entry : methods.entries()) {
     if (!entry->keys.empty()) keys.insert(entry->name);  // its parameter table
   }
@@ -355,6 +395,7 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
              fmt::format("the {} method needs a depth_map (a normal map alone is not enough)", r.method));
   }
   parse_method_tables(rep, t, where, methods, r);
+  parse_region_engine(rep, t, where, scene_engine, r);
   if (const toml::table* m = get_table(rep, t, "materials", where)) {
     r.materials = parse_materials(rep, *m, where + "materials.");
     const bool needs_depth = r.materials->source == ClassSource::depth;
@@ -495,7 +536,7 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
   if (arr == nullptr || !arr->is_array_of_tables()) rep.fail(regions, "region", "must be written as [[region]] tables");
   const std::filesystem::path base_dir = origin.parent_path();
   for (std::size_t i = 0; i < arr->size(); ++i)
-    spec.regions.push_back(parse_region(rep, *(*arr)[i].as_table(), i, base_dir, spec.methods));
+    spec.regions.push_back(parse_region(rep, *(*arr)[i].as_table(), i, base_dir, spec.methods, spec.daemon.engine));
   return spec;
 }
 
@@ -551,7 +592,21 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report) {
     }
     if (!method_needs.gradient) region.fields.gradient.reset();
     if (!method_needs.depth) region.fields.depth.reset();
-    if (report != nullptr) report->regions.push_back(field_report);
+    std::string variant = label_of(spec.daemon.engine) + " (the [daemon] table's)";
+    if (r.engine_auto) {
+      VariantChoice choice = choose_variant(region, {r.accuracy_px});
+      choice.options.sampling = r.engine->sampling;
+      choice.options.lut_directions = r.engine->lut_directions;
+      region.options = choice.options;
+      variant = "auto: " + choice.reason;
+    } else if (r.engine) {
+      region.options = r.engine;
+      variant = label_of(*r.engine) + " (set in the region)";
+    }
+    if (report != nullptr) {
+      report->regions.push_back(field_report);
+      report->variants.push_back(variant);
+    }
     regions.push_back(std::move(region));
   }
   Scene scene(std::move(regions));

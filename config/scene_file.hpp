@@ -42,7 +42,11 @@ struct RegionSpec {
   std::map<std::string, MethodParams, std::less<>> method_params;
   std::optional<MaterialsParams> materials;  // [region.materials]: curvature classes as materials
   std::optional<WellsParams> wells;          // [region.wells]: isophote or contour gravity wells
-  int line = 0;                              // where the region starts in the file
+  // The region's own traversal, sampling and lut_directions (over the [daemon] table's); none: the scene's.
+  std::optional<EngineOptions> engine;
+  bool engine_auto = false;   // traversal = "auto": the traversal is chosen at load (core/engine/variant_choice.hpp)
+  double accuracy_px = 0.25;  // auto's budget: the error a frame may add, px
+  int line = 0;               // where the region starts in the file
 };
 
 // The parameters of method class M in a region: its table's, else M's defaults (added to the region).
@@ -76,6 +80,7 @@ MethodPtr make_method(const RegionSpec& region, const MethodRegistry& methods = 
 
 struct SceneLoadReport {
   std::vector<FieldLoadReport> regions;
+  std::vector<std::string> variants;  // per region: its traversal variant and why
 };
 
 // Reads every region's images (only those its method needs). Throws ConfigError naming the scene file

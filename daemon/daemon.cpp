@@ -293,36 +293,39 @@ void Daemon::let_go_of_all(std::string_view why) {
   passed_over_.clear();
 }
 
+// The per-frame path: one read() of what the mouse queued, the frames through the pipeline, one write()
+// each; the time is the kernel's stamp on the events (CLOCK_MONOTONIC, steady_clock's), not a clock read.
 void Daemon::on_mouse_readable(int fd) {
-  for (auto& [node, mouse] : mice_) {
-    if (mouse->frames == nullptr || mouse->device->fd() != fd) continue;
-    const std::string name = node;  // let_go erases the map entry
-    const SteadyTime now = std::chrono::steady_clock::now();
-    // Motion after a pause: whatever happened meanwhile (a warp, another pointer), ask where the cursor is.
-    if (now - last_motion_ > kPauseBeforeQuery && control_ && control_->has_helper()) {
-      control_->query_helper();
-      last_query_ = now;
-      if (!holding_) start_holding();
+  const auto it = std::find_if(mice_.begin(), mice_.end(), [fd](const auto& m) {
+    return m.second->frames != nullptr && m.second->device->fd() == fd;
+  });
+  if (it == mice_.end()) return;
+  Mouse& mouse = *it->second;
+  try {
+    const ReadStatus status = mouse.device->read_batch(batch_);
+    if (!batch_.empty()) {
+      const SteadyTime now{std::chrono::microseconds(batch_.front().time)};
+      // Motion after a pause: whatever happened meanwhile (a warp, another pointer), ask where the cursor is.
+      if (now - last_motion_ > kPauseBeforeQuery && control_ && control_->has_helper()) {
+        control_->query_helper();
+        last_query_ = now;
+        if (!holding_) start_holding();
+      }
+      last_motion_ = now;
+      if (holding_) {
+        for (const InputEvent& e : batch_) held_events_.emplace_back(it->first, e);
+      } else {
+        for (const InputEvent& e : batch_) route(mouse, e);
+      }
+      remember_emitted(now);
     }
-    last_motion_ = now;
-    try {
-      const ReadStatus status = mouse->device->read_available([&](const InputEvent& e) {
-        if (holding_) {
-          held_events_.emplace_back(name, e);
-        } else {
-          route(*mouse, e);
-        }
-      });
-      remember_emitted();
-      if (status == ReadStatus::gone) let_go(name, "unplugged");
-    } catch (const DeviceError& e) {
-      log_.warning("{}", e.what());
-      let_go(name, "read error");
-    } catch (const UinputError& e) {
-      log_.error("{}", e.what());
-      let_go(name, "virtual device failed");
-    }
-    return;
+    if (status == ReadStatus::gone) let_go(std::string(it->first), "unplugged");
+  } catch (const DeviceError& e) {
+    log_.warning("{}", e.what());
+    let_go(std::string(it->first), "read error");
+  } catch (const UinputError& e) {
+    log_.error("{}", e.what());
+    let_go(std::string(it->first), "virtual device failed");
   }
 }
 
@@ -462,7 +465,7 @@ void Daemon::release_held() {
       let_go(node, "virtual device failed");
     }
   }
-  remember_emitted();
+  remember_emitted(std::chrono::steady_clock::now());
 }
 
 void Daemon::watch_untaken(const std::string& node, std::unique_ptr<EvdevDevice> device) {
@@ -513,8 +516,7 @@ void Daemon::on_resync_tick() {
 // still in the texel before it, and the helper would report the pixel itself.
 Texel Daemon::cursor_pixel() const { return texel_at(pipeline_->cursor().position); }
 
-void Daemon::remember_emitted() {
-  const SteadyTime now = std::chrono::steady_clock::now();
+void Daemon::remember_emitted(SteadyTime now) {
   const Texel pixel = cursor_pixel();
   if (emitted_.empty() || emitted_.back().second != pixel) emitted_.emplace_back(now, pixel);
   while (emitted_.size() > kEmittedAlwaysKept && now - emitted_.front().first > kEmittedMemory) emitted_.pop_front();
@@ -549,7 +551,7 @@ void Daemon::position(Vec2 position, bool from_helper) {
   const Vec2 was = pipeline_->cursor().position;
   pipeline_->move_cursor_to(position);
   emitted_.clear();
-  remember_emitted();
+  remember_emitted(std::chrono::steady_clock::now());
   log_.debug("resync: the cursor is at ({:.1f}, {:.1f}) ({}); the model was at ({:.1f}, {:.1f})", position.x,
              position.y, from_helper ? "session helper" : "set by a client", was.x, was.y);
   if (from_helper) release_held();

@@ -83,7 +83,7 @@ class Daemon final : private ControlHandler {
   Texel cursor_pixel() const;
   void start_holding();
   void release_held();
-  void remember_emitted();
+  void remember_emitted(SteadyTime now);
   bool emitted_recently(Texel pixel) const;
   void take_present_mice();
   void consider(const std::string& node);
@@ -121,6 +121,7 @@ class Daemon final : private ControlHandler {
   // Motion after a pause waits for the helper's answer (at most kHoldForHelperNs): events by node.
   bool holding_ = false;
   std::vector<std::pair<std::string, InputEvent>> held_events_;
+  std::vector<InputEvent> batch_;                       // what one read of a mouse gave, kept to reuse its memory
   std::map<std::string, std::unique_ptr<Mouse>> mice_;  // by node
   std::map<std::string, int> unopened_;                 // node -> tries left (not yet accessible)
   std::set<std::string> passed_over_;                   // not a pointer, not matched, ours, busy

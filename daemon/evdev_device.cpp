@@ -38,6 +38,7 @@ EvdevDevice::EvdevDevice(const std::string& node) : node_(node) {
   }
   dev_.reset(raw);
   libevdev_set_clock_id(dev_.get(), CLOCK_MONOTONIC);
+  keys_ = keys_down_now();
 }
 
 EvdevDevice::~EvdevDevice() {
@@ -124,36 +125,63 @@ void EvdevDevice::ungrab() {
   grabbed_ = false;
 }
 
-ReadStatus EvdevDevice::read_available(const std::function<void(const InputEvent&)>& on_event) {
-  unsigned flags = LIBEVDEV_READ_FLAG_NORMAL;
-  for (;;) {
-    input_event e;
-    const int rc = libevdev_next_event(dev_.get(), flags, &e);
-    if (rc == LIBEVDEV_READ_STATUS_SYNC) {
-      // SYN_DROPPED (in normal mode), or a state difference (in sync mode): read on in sync mode until
-      // libevdev says the resync is complete (-EAGAIN), then go back to normal reads.
-      if (flags == LIBEVDEV_READ_FLAG_NORMAL) {
-        on_event(to_event(e));  // the SYN_DROPPED itself: the frame processor passes the resync through
-        flags = LIBEVDEV_READ_FLAG_SYNC;
-        continue;
-      }
-      on_event(to_event(e));
-      continue;
-    }
-    if (rc == LIBEVDEV_READ_STATUS_SUCCESS) {
-      on_event(to_event(e));
-      continue;
-    }
-    if (rc == -EAGAIN) {
-      if (flags == LIBEVDEV_READ_FLAG_SYNC) {
-        flags = LIBEVDEV_READ_FLAG_NORMAL;  // resync done; there may be normal events behind it
-        continue;
-      }
-      return ReadStatus::ok;
-    }
-    if (rc == -ENODEV) return ReadStatus::gone;
-    throw DeviceError(fmt::format("{}: read failed: {}", node_, std::strerror(-rc)));
+EvdevDevice::KeyBits EvdevDevice::keys_down_now() const {
+  std::array<unsigned char, kKeyCount / 8> bytes{};
+  KeyBits down;
+  if (::ioctl(fd_, EVIOCGKEY(bytes.size()), bytes.data()) < 0) return down;
+  for (std::size_t code = 0; code < kKeyCount; ++code) {
+    if ((bytes[code / 8] >> (code % 8)) & 1U) down.set(code);
   }
+  return down;
+}
+
+// After SYN_DROPPED the kernel's buffer holds only part of the stream: everything still in it is dropped
+// (as libevdev does) and the keys whose state changed in the lost part are reported from EVIOCGKEY.
+void EvdevDevice::resync(std::vector<InputEvent>& events, TimeUs time) {
+  std::array<input_event, 64> discard;
+  // Bounded, like libevdev's drain: a device cannot fill the buffer faster than this empties it.
+  for (int i = 0; i < 16 && ::read(fd_, discard.data(), sizeof discard) > 0; ++i) {
+  }
+  const KeyBits now = keys_down_now();
+  const KeyBits changed = now ^ keys_;
+  for (std::size_t code = 0; code < kKeyCount; ++code) {
+    if (!changed.test(code)) continue;
+    events.push_back({time, ev::kKey, static_cast<std::uint16_t>(code), now.test(code) ? 1 : 0});
+  }
+  keys_ = now;
+  events.push_back({time, ev::kSyn, ev::kSynReport, 0});
+}
+
+ReadStatus EvdevDevice::read_batch(std::vector<InputEvent>& events) {
+  events.clear();
+  std::array<input_event, 64> batch;
+  for (;;) {
+    const ssize_t n = ::read(fd_, batch.data(), sizeof batch);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      if (errno == EAGAIN) return ReadStatus::ok;
+      if (errno == ENODEV) return ReadStatus::gone;
+      throw DeviceError(fmt::format("{}: read failed: {}", node_, std::strerror(errno)));
+    }
+    const std::size_t count = static_cast<std::size_t>(n) / sizeof(input_event);
+    for (std::size_t i = 0; i < count; ++i) {
+      const InputEvent e = to_event(batch[i]);
+      events.push_back(e);
+      if (e.type == ev::kKey && e.code < kKeyCount) keys_.set(e.code, e.value != 0);
+      if (e.type == ev::kSyn && e.code == ev::kSynDropped) {
+        resync(events, e.time);
+        return ReadStatus::ok;
+      }
+    }
+    // Less than a full batch: the kernel had no more, and a second read() would only say EAGAIN.
+    if (count < batch.size()) return ReadStatus::ok;
+  }
+}
+
+ReadStatus EvdevDevice::read_available(const std::function<void(const InputEvent&)>& on_event) {
+  const ReadStatus status = read_batch(scratch_);
+  for (const InputEvent& e : scratch_) on_event(e);
+  return status;
 }
 
 }  // namespace ph

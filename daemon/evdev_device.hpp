@@ -1,6 +1,7 @@
 // One physical input device read through libevdev: what the daemon grabs and reads its events from.
 #pragma once
 
+#include <bitset>
 #include <functional>
 #include <memory>
 #include <stdexcept>
@@ -54,17 +55,29 @@ class EvdevDevice {
   void ungrab();
   bool grabbed() const { return grabbed_; }
 
-  // Hands every event that can be read now to `on_event`, in order. A SYN_DROPPED is handed on, then
-  // libevdev's sync mode supplies the state differences as events, ending in SYN_REPORT: the same shape
-  // as a recording's dropped frame, which FrameProcessor passes through without applying its motion.
+  // Replaces `events` with every event that can be read now, in order, read straight from the node in
+  // batches (one read() when the kernel holds less than a batch: what a bare re-emitter does). A
+  // SYN_DROPPED is handed on, then what the kernel's buffer still held is discarded and the buttons whose
+  // state differs from the stream's (EVIOCGKEY) follow as events, ending in SYN_REPORT: the same shape as
+  // a recording's dropped frame, which FrameProcessor passes through without applying its motion.
   // Returns gone when the device was unplugged.
+  ReadStatus read_batch(std::vector<InputEvent>& events);
+  // The same, one event at a time.
   ReadStatus read_available(const std::function<void(const InputEvent&)>& on_event);
 
  private:
+  static constexpr std::size_t kKeyCount = 0x300;  // KEY_CNT
+  using KeyBits = std::bitset<kKeyCount>;
+
+  KeyBits keys_down_now() const;
+  void resync(std::vector<InputEvent>& events, TimeUs time);
+
   std::string node_;
   int fd_ = -1;
   LibevdevPtr dev_;
   bool grabbed_ = false;
+  KeyBits keys_;  // the keys and buttons down as the events read so far say
+  std::vector<InputEvent> scratch_;
 };
 
 }  // namespace ph

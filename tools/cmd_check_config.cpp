@@ -55,6 +55,7 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
     fmt::format_to(to, "  [{}] '{}': {},{} {}x{} px, {}{}, {} bytes, {} invalid texels repaired\n", i, r.name, r.rect.x,
                    r.rect.y, r.rect.w, r.rect.h, r.method, effects, bytes,
                    fr.normals.invalid_texels + fr.depth.invalid_texels);
+    if (i < report.variants.size()) fmt::format_to(to, "      traversal: {}\n", report.variants[i]);
   }
   return fmt::to_string(out);
 }

@@ -1,6 +1,7 @@
 #include "uinput/uinput_sink.hpp"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
@@ -82,13 +83,30 @@ UinputSink::~UinputSink() {
 }
 
 void UinputSink::write(const Frame& frame) {
+  batch_.clear();
   for (const InputEvent& e : frame.events) {
     // SYN_DROPPED describes the source's buffer, not an event of the stream: it is not written.
     if (e.type == ev::kSyn && e.code == ev::kSynDropped) continue;
-    // The kernel stamps the events itself; a write can only fail if the device is gone.
-    if (libevdev_uinput_write_event(uidev_.get(), e.type, e.code, e.value) < 0) {
-      throw UinputError(fmt::format("writing to the virtual pointer failed: {}", std::strerror(errno)));
-    }
+    // The kernel stamps the events itself: the time stays zero, as libevdev's writes leave it.
+    input_event out{};
+    out.type = e.type;
+    out.code = e.code;
+    out.value = e.value;
+    batch_.push_back(out);
+  }
+  // The whole frame in one write(): one system call per frame, as a bare re-emitter makes.
+  const char* data = reinterpret_cast<const char*>(batch_.data());
+  std::size_t left = batch_.size() * sizeof(input_event);
+  while (left > 0) {
+    const ssize_t n = ::write(libevdev_uinput_get_fd(uidev_.get()), data, left);
+    if (n < 0 && errno == EINTR) continue;
+    // A write can only fail if the device is gone.
+    if (n <= 0) throw UinputError(fmt::format("writing to the virtual pointer failed: {}", std::strerror(errno)));
+    data += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  for (const InputEvent& e : frame.events) {
+    if (e.type == ev::kSyn && e.code == ev::kSynDropped) continue;
     held_.observe(e);
     last_time_ = e.time;
   }

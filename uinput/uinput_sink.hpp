@@ -8,6 +8,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "core/engine/device.hpp"
 #include "core/engine/pipeline.hpp"
@@ -59,6 +60,7 @@ class UinputSink final : public EventSink {
   LibevdevUinputPtr uidev_;
   HeldKeys held_;
   TimeUs last_time_ = 0;
+  std::vector<input_event> batch_;  // the frame being written, kept to reuse its memory
 };
 
 }  // namespace ph

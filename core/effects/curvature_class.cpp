@@ -51,4 +51,29 @@ Grid<std::uint8_t> class_map(const CurvatureFields& fields, const ClassTolerance
   return out;
 }
 
+namespace {
+
+template <typename Field, typename Rows>
+Grid<std::uint8_t> classes_by_row(const Field& field, const DerivativeFilter& filter, const ClassTolerances& tolerances,
+                                  Rows rows) {
+  Grid<std::uint8_t> out(field.width, field.height);
+  rows(field, filter, [&](std::int32_t y, const float* k1, const float* k2) {
+    std::uint8_t* row = &out.values[static_cast<std::size_t>(y) * static_cast<std::size_t>(out.width)];
+    for (std::int32_t x = 0; x < out.width; ++x) row[x] = static_cast<std::uint8_t>(classify(k1[x], k2[x], tolerances));
+  });
+  return out;
+}
+
+}  // namespace
+
+Grid<std::uint8_t> class_map_from_depth(const DepthField& depth, const DerivativeFilter& filter,
+                                        const ClassTolerances& tolerances) {
+  return classes_by_row(depth, filter, tolerances, principal_rows_from_depth);
+}
+
+Grid<std::uint8_t> class_map_from_gradient(const GradientField& gradient, const DerivativeFilter& filter,
+                                           const ClassTolerances& tolerances) {
+  return classes_by_row(gradient, filter, tolerances, principal_rows_from_gradient);
+}
+
 }  // namespace ph

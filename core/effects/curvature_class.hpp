@@ -36,4 +36,11 @@ inline CurvatureClass classify(const Curvatures& c, const ClassTolerances& toler
 // present then); returns an empty grid when neither is.
 Grid<std::uint8_t> class_map(const CurvatureFields& fields, const ClassTolerances& tolerances);
 
+// The same map straight from a field, without the curvature grids: equal to class_map(curvature_from_...(
+// field, filter, {false, false, true}), tolerances), in less time and memory.
+Grid<std::uint8_t> class_map_from_depth(const DepthField& depth, const DerivativeFilter& filter,
+                                        const ClassTolerances& tolerances);
+Grid<std::uint8_t> class_map_from_gradient(const GradientField& gradient, const DerivativeFilter& filter,
+                                           const ClassTolerances& tolerances);
+
 }  // namespace ph

@@ -45,25 +45,71 @@ Kernels make_kernels(std::int32_t radius, std::int32_t size) {
 
 std::int32_t clamp_index(std::int32_t i, std::int32_t size) { return std::clamp<std::int32_t>(i, 0, size - 1); }
 
-// Correlation along rows (windows never leave the image where they are used; clamping is a safety net).
-Grid<double> filter_rows(const Grid<double>& in, const std::vector<double>& kernel, std::int32_t r) {
-  Grid<double> out(in.width, in.height);
-  for (std::int32_t y = 0; y < in.height; ++y) {
-    for (std::int32_t x = 0; x < in.width; ++x) {
-      double sum = 0.0;
-      for (std::int32_t t = -r; t <= r; ++t) sum += kernel[t + r] * in.at(clamp_index(x + t, in.width), y);
-      out.at(x, y) = sum;
-    }
+// Correlation of one row with a kernel. Windows never leave the image where they are used (the window's
+// centre is clamped inward, see window_for); the few border texels keep a clamped window as a safety net.
+void filter_row(const double* __restrict in, std::int32_t w, const std::vector<double>& kernel, std::int32_t r,
+                double* __restrict out) {
+  auto clamped = [&](std::int32_t x) {
+    double sum = 0.0;
+    for (std::int32_t t = -r; t <= r; ++t) sum += kernel[t + r] * in[clamp_index(x + t, w)];
+    return sum;
+  };
+  const std::int32_t inner_end = std::max(w - r, r);
+  for (std::int32_t x = 0; x < std::min(r, w); ++x) out[x] = clamped(x);
+  for (std::int32_t x = r; x < inner_end; ++x) {
+    double sum = 0.0;  // the same terms in the same order as `clamped`: identical results
+    for (std::int32_t t = -r; t <= r; ++t) sum += kernel[t + r] * in[x + t];
+    out[x] = sum;
   }
-  return out;
+  for (std::int32_t x = std::max(inner_end, std::min(r, w)); x < w; ++x) out[x] = clamped(x);
 }
 
-// Correlation along the column of one texel.
-double filter_column(const Grid<double>& in, const std::vector<double>& kernel, std::int32_t r, std::int32_t x,
-                     std::int32_t y) {
-  double sum = 0.0;
-  for (std::int32_t t = -r; t <= r; ++t) sum += kernel[t + r] * in.at(x, clamp_index(y + t, in.height));
-  return sum;
+// The row filters of one input, row by row: only the rows a column window spans (2 r_y + 1) are kept, in a
+// ring, so no whole grid of intermediates is ever allocated and the rows stay in cache.
+class RowRing {
+ public:
+  RowRing(std::int32_t width, std::int32_t r_y, std::vector<const std::vector<double>*> kernels, std::int32_t r_x)
+      : width_(width),
+        span_(2 * r_y + 1),
+        r_x_(r_x),
+        kernels_(std::move(kernels)),
+        input_(static_cast<std::size_t>(width)),
+        rows_(kernels_.size() * static_cast<std::size_t>(span_) * static_cast<std::size_t>(width)) {}
+
+  // Filters the input rows up to `last` that are not filtered yet; load(y, row) writes input row y.
+  template <typename Load>
+  void filter_up_to(std::int32_t last, Load&& load) {
+    for (; next_ <= last; ++next_) {
+      load(next_, input_.data());
+      for (std::size_t k = 0; k < kernels_.size(); ++k)
+        filter_row(input_.data(), width_, *kernels_[k], r_x_, slot(k, next_));
+    }
+  }
+  const double* row(std::size_t kernel, std::int32_t y) const {
+    return &rows_[(kernel * static_cast<std::size_t>(span_) + static_cast<std::size_t>(y % span_)) * width_];
+  }
+
+ private:
+  double* slot(std::size_t kernel, std::int32_t y) { return const_cast<double*>(row(kernel, y)); }
+
+  std::int32_t width_, span_, r_x_;
+  std::vector<const std::vector<double>*> kernels_;
+  std::vector<double> input_;
+  std::vector<double> rows_;
+  std::int32_t next_ = 0;
+};
+
+// Correlation along columns, centred on row cy, for a whole row at once: out[x] = sum_t k[t] in(x, cy + t),
+// summed in the order of t like a texel-by-texel loop (identical results), but row after row in memory.
+void filter_column_row(const RowRing& ring, std::size_t which, std::int32_t width, const std::vector<double>& kernel,
+                       std::int32_t r, std::int32_t cy, std::vector<double>& out_row) {
+  out_row.assign(static_cast<std::size_t>(width), 0.0);
+  double* __restrict out = out_row.data();
+  for (std::int32_t t = -r; t <= r; ++t) {
+    const double k = kernel[t + r];
+    const double* __restrict in = ring.row(which, cy + t);
+    for (std::int32_t x = 0; x < width; ++x) out[x] += k * in[x];
+  }
 }
 
 // A slope of 1e6 is already a wall; clamping keeps every product below in range.
@@ -92,22 +138,37 @@ Window window_for(std::int32_t x, std::int32_t y, const Kernels& kx, const Kerne
 
 template <typename F>
 void for_each_depth_derivatives(const DepthField& depth, const DerivativeFilter& filter, F&& visit) {
-  const Kernels kx = make_kernels(filter.radius, depth.width);
-  const Kernels ky = make_kernels(filter.radius, depth.height);
-  Grid<double> h(depth.width, depth.height);
-  for (std::size_t i = 0; i < h.values.size(); ++i) h.values[i] = tame(depth.values[i]);
-  const Grid<double> box_x = filter_rows(h, kx.box, kx.r);
-  const Grid<double> slope_x = filter_rows(h, kx.slope, kx.r);
-  const Grid<double> curve_x = filter_rows(h, kx.curve, kx.r);
-  for (std::int32_t y = 0; y < h.height; ++y) {
-    for (std::int32_t x = 0; x < h.width; ++x) {
-      const Window win = window_for(x, y, kx, ky, h.width, h.height);
+  const std::int32_t w = depth.width, h = depth.height;
+  const Kernels kx = make_kernels(filter.radius, w);
+  const Kernels ky = make_kernels(filter.radius, h);
+  enum : std::size_t { kBox, kSlope, kCurve };
+  RowRing ring(w, ky.r, {&kx.box, &kx.slope, &kx.curve}, kx.r);
+  auto load = [&](std::int32_t y, double* row) {
+    for (std::int32_t x = 0; x < w; ++x) row[x] = tame(depth.at(x, y));
+  };
+  // The column filters of the window centred on row cy; rows near the border share their window's centre.
+  std::vector<double> hxx_half, hyy_half, hxy, hx0, hy0;
+  std::int32_t filtered_cy = -1;
+  for (std::int32_t y = 0; y < h; ++y) {
+    const std::int32_t cy = window_for(0, y, kx, ky, w, h).cy;
+    if (cy != filtered_cy) {
+      ring.filter_up_to(cy + ky.r, load);
+      filter_column_row(ring, kCurve, w, ky.box, ky.r, cy, hxx_half);
+      filter_column_row(ring, kBox, w, ky.curve, ky.r, cy, hyy_half);
+      filter_column_row(ring, kSlope, w, ky.slope, ky.r, cy, hxy);
+      filter_column_row(ring, kSlope, w, ky.box, ky.r, cy, hx0);
+      filter_column_row(ring, kBox, w, ky.slope, ky.r, cy, hy0);
+      filtered_cy = cy;
+    }
+    for (std::int32_t x = 0; x < w; ++x) {
+      const Window win = window_for(x, y, kx, ky, w, h);
+      const auto c = static_cast<std::size_t>(win.cx);
       HeightDerivatives d;
-      d.hxx = 2.0 * filter_column(curve_x, ky.box, ky.r, win.cx, win.cy);
-      d.hyy = 2.0 * filter_column(box_x, ky.curve, ky.r, win.cx, win.cy);
-      d.hxy = filter_column(slope_x, ky.slope, ky.r, win.cx, win.cy);
-      d.hx = filter_column(slope_x, ky.box, ky.r, win.cx, win.cy) + d.hxx * win.dx + d.hxy * win.dy;
-      d.hy = filter_column(box_x, ky.slope, ky.r, win.cx, win.cy) + d.hxy * win.dx + d.hyy * win.dy;
+      d.hxx = 2.0 * hxx_half[c];
+      d.hyy = 2.0 * hyy_half[c];
+      d.hxy = hxy[c];
+      d.hx = hx0[c] + d.hxx * win.dx + d.hxy * win.dy;
+      d.hy = hy0[c] + d.hxy * win.dx + d.hyy * win.dy;
       visit(x, y, d);
     }
   }
@@ -115,28 +176,41 @@ void for_each_depth_derivatives(const DepthField& depth, const DerivativeFilter&
 
 template <typename F>
 void for_each_gradient_derivatives(const GradientField& gradient, const DerivativeFilter& filter, F&& visit) {
-  const Kernels kx = make_kernels(filter.radius, gradient.width);
-  const Kernels ky = make_kernels(filter.radius, gradient.height);
-  Grid<double> p(gradient.width, gradient.height);
-  Grid<double> q(gradient.width, gradient.height);
-  for (std::size_t i = 0; i < gradient.values.size(); ++i) {
-    p.values[i] = tame(gradient.values[i].x);
-    q.values[i] = tame(gradient.values[i].y);
-  }
-  const Grid<double> p_box = filter_rows(p, kx.box, kx.r);
-  const Grid<double> p_slope = filter_rows(p, kx.slope, kx.r);
-  const Grid<double> q_box = filter_rows(q, kx.box, kx.r);
-  const Grid<double> q_slope = filter_rows(q, kx.slope, kx.r);
-  for (std::int32_t y = 0; y < p.height; ++y) {
-    for (std::int32_t x = 0; x < p.width; ++x) {
-      const Window win = window_for(x, y, kx, ky, p.width, p.height);
-      const double px = filter_column(p_slope, ky.box, ky.r, win.cx, win.cy);
-      const double py = filter_column(p_box, ky.slope, ky.r, win.cx, win.cy);
-      const double qx = filter_column(q_slope, ky.box, ky.r, win.cx, win.cy);
-      const double qy = filter_column(q_box, ky.slope, ky.r, win.cx, win.cy);
+  const std::int32_t w = gradient.width, h = gradient.height;
+  const Kernels kx = make_kernels(filter.radius, w);
+  const Kernels ky = make_kernels(filter.radius, h);
+  enum : std::size_t { kBox, kSlope };
+  RowRing p_ring(w, ky.r, {&kx.box, &kx.slope}, kx.r);
+  RowRing q_ring(w, ky.r, {&kx.box, &kx.slope}, kx.r);
+  auto load_p = [&](std::int32_t y, double* row) {
+    for (std::int32_t x = 0; x < w; ++x) row[x] = tame(gradient.at(x, y).x);
+  };
+  auto load_q = [&](std::int32_t y, double* row) {
+    for (std::int32_t x = 0; x < w; ++x) row[x] = tame(gradient.at(x, y).y);
+  };
+  // The column filters of the window centred on row cy; rows near the border share their window's centre.
+  std::vector<double> px_row, py_row, qx_row, qy_row, p0_row, q0_row;
+  std::int32_t filtered_cy = -1;
+  for (std::int32_t y = 0; y < h; ++y) {
+    const std::int32_t cy = window_for(0, y, kx, ky, w, h).cy;
+    if (cy != filtered_cy) {
+      p_ring.filter_up_to(cy + ky.r, load_p);
+      q_ring.filter_up_to(cy + ky.r, load_q);
+      filter_column_row(p_ring, kSlope, w, ky.box, ky.r, cy, px_row);
+      filter_column_row(p_ring, kBox, w, ky.slope, ky.r, cy, py_row);
+      filter_column_row(q_ring, kSlope, w, ky.box, ky.r, cy, qx_row);
+      filter_column_row(q_ring, kBox, w, ky.slope, ky.r, cy, qy_row);
+      filter_column_row(p_ring, kBox, w, ky.box, ky.r, cy, p0_row);
+      filter_column_row(q_ring, kBox, w, ky.box, ky.r, cy, q0_row);
+      filtered_cy = cy;
+    }
+    for (std::int32_t x = 0; x < w; ++x) {
+      const Window win = window_for(x, y, kx, ky, w, h);
+      const auto c = static_cast<std::size_t>(win.cx);
+      const double px = px_row[c], py = py_row[c], qx = qx_row[c], qy = qy_row[c];
       HeightDerivatives d;
-      d.hx = filter_column(p_box, ky.box, ky.r, win.cx, win.cy) + px * win.dx + py * win.dy;
-      d.hy = filter_column(q_box, ky.box, ky.r, win.cx, win.cy) + qx * win.dx + qy * win.dy;
+      d.hx = p0_row[c] + px * win.dx + py * win.dy;
+      d.hy = q0_row[c] + qx * win.dx + qy * win.dy;
       d.hxx = px;
       d.hyy = qy;
       d.hxy = 0.5 * (py + qx);  // both mixed partials estimate h_xy; their mean uses all the data
@@ -170,6 +244,20 @@ CurvatureFields curvature_fields(const Input& input, const DerivativeFilter& fil
   return out;
 }
 
+// Hands k1 and k2 on row by row.
+template <typename ForEach, typename Input>
+void principal_rows(const Input& input, const DerivativeFilter& filter, const PrincipalRowVisitor& visit,
+                    ForEach for_each) {
+  std::vector<float> k1(static_cast<std::size_t>(input.width)), k2(k1.size());
+  const std::int32_t last = input.width - 1;
+  for_each(input, filter, [&](std::int32_t x, std::int32_t y, const HeightDerivatives& d) {
+    const Curvatures c = curvatures_from_derivatives(d);
+    k1[static_cast<std::size_t>(x)] = static_cast<float>(c.k1);
+    k2[static_cast<std::size_t>(x)] = static_cast<float>(c.k2);
+    if (x == last) visit(y, k1.data(), k2.data());
+  });
+}
+
 }  // namespace
 
 Curvatures curvatures_from_derivatives(const HeightDerivatives& d) {
@@ -199,6 +287,18 @@ Grid<HeightDerivatives> derivatives_from_gradient(const GradientField& gradient,
   for_each_gradient_derivatives(gradient, filter,
                                 [&](std::int32_t x, std::int32_t y, const HeightDerivatives& d) { out.at(x, y) = d; });
   return out;
+}
+
+void principal_rows_from_depth(const DepthField& depth, const DerivativeFilter& filter,
+                               const PrincipalRowVisitor& visit) {
+  principal_rows(depth, filter, visit,
+                 [](const auto& in, const auto& f, auto&& v) { for_each_depth_derivatives(in, f, v); });
+}
+
+void principal_rows_from_gradient(const GradientField& gradient, const DerivativeFilter& filter,
+                                  const PrincipalRowVisitor& visit) {
+  principal_rows(gradient, filter, visit,
+                 [](const auto& in, const auto& f, auto&& v) { for_each_gradient_derivatives(in, f, v); });
 }
 
 CurvatureFields curvature_from_depth(const DepthField& depth, const DerivativeFilter& filter,

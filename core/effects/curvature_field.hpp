@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 
 #include "core/engine/field.hpp"
 
@@ -66,6 +67,14 @@ Grid<HeightDerivatives> derivatives_from_depth(const DepthField& depth, const De
 // From a gradient field (p = h_x, q = h_y, e.g. decoded from a normal map): p and q are fitted with planes and
 // h_xy = (p_y + q_x) / 2. Slopes beyond +-1e6 (a vertical wall) are clamped to +-1e6 first.
 Grid<HeightDerivatives> derivatives_from_gradient(const GradientField& gradient, const DerivativeFilter& filter);
+
+// The principal curvatures k1 and k2 of every texel, one row at a time, rounded to float as the grids store
+// them: for callers that reduce them at once (class maps) and need no grid.
+using PrincipalRowVisitor = std::function<void(std::int32_t y, const float* k1, const float* k2)>;
+void principal_rows_from_depth(const DepthField& depth, const DerivativeFilter& filter,
+                               const PrincipalRowVisitor& visit);
+void principal_rows_from_gradient(const GradientField& gradient, const DerivativeFilter& filter,
+                                  const PrincipalRowVisitor& visit);
 
 CurvatureFields curvature_from_depth(const DepthField& depth, const DerivativeFilter& filter = {},
                                      const CurvatureRequest& request = {});

@@ -257,10 +257,8 @@ Grid<std::uint8_t> materials_class_map(const RegionFields& fields, std::int32_t 
   ClassTolerances tolerances = ClassTolerances::recommended(bit_depth);
   if (params.planar_curvedness) tolerances.planar_curvedness = *params.planar_curvedness;
   if (params.parabolic_ratio) tolerances.parabolic_ratio = *params.parabolic_ratio;
-  const CurvatureRequest request{false, false, true};  // k1 and k2 are all classify() reads
-  const CurvatureFields curvature = from_depth ? curvature_from_depth(*fields.depth, filter, request)
-                                               : curvature_from_gradient(*fields.gradient, filter, request);
-  return class_map(curvature, tolerances);
+  return from_depth ? class_map_from_depth(*fields.depth, filter, tolerances)
+                    : class_map_from_gradient(*fields.gradient, filter, tolerances);
 }
 
 EffectPtr make_materials_effect(const RegionFields& fields, std::int32_t width, std::int32_t height,

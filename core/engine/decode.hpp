@@ -53,6 +53,11 @@ struct DecodeReport {
 // of the nearest valid texel, or flat when there is none. Throws FieldError on a wrong channel count.
 NormalImage decode_normals(const RawImage& image, const NormalDecodeOptions& options, DecodeReport& report);
 
+// The same normals as height gradients, gradient_from_normals(decode_normals(...)) in one pass and without the
+// image of normals: what a region whose map already has its size needs.
+GradientField decode_normals_to_gradient(const RawImage& image, const NormalDecodeOptions& options,
+                                         DecodeReport& report);
+
 // Heights in screen px, h = (v - depth_zero) * relief_px. Non-finite texels are repaired like normals.
 DepthField decode_depth(const RawImage& image, const DepthDecodeOptions& options, DecodeReport& report);
 

@@ -12,12 +12,14 @@ Normal normal_from_gradient(Gradient g) {
   return {static_cast<float>(nx / len), static_cast<float>(ny / len), static_cast<float>(1.0 / len)};
 }
 
+Gradient clamped_gradient(Normal n) {
+  const Gradient g = gradient_from_normal(n);
+  return Gradient{std::clamp(g.x, -kMaxSlope, kMaxSlope), std::clamp(g.y, -kMaxSlope, kMaxSlope)};
+}
+
 GradientField gradient_from_normals(const NormalImage& normals) {
   GradientField gradient(normals.width, normals.height);
-  std::transform(normals.values.begin(), normals.values.end(), gradient.values.begin(), [](Normal n) {
-    const Gradient g = gradient_from_normal(n);
-    return Gradient{std::clamp(g.x, -kMaxSlope, kMaxSlope), std::clamp(g.y, -kMaxSlope, kMaxSlope)};
-  });
+  std::transform(normals.values.begin(), normals.values.end(), gradient.values.begin(), clamped_gradient);
   return gradient;
 }
 

@@ -67,6 +67,8 @@ inline Gradient gradient_from_normal(Normal n) { return {-n.x / n.z, -n.y / n.z}
 // its slope is clamped to +-kMaxSlope so that later arithmetic never sees inf.
 inline constexpr float kMaxSlope = 1.0e6f;
 GradientField gradient_from_normals(const NormalImage& normals);
+// One texel of it: the gradient with each slope clamped to +-kMaxSlope.
+Gradient clamped_gradient(Normal n);
 
 // Unit normal of a height gradient.
 Normal normal_from_gradient(Gradient g);

@@ -23,6 +23,9 @@ void check_region(const Region& region) {
   for (const EffectPtr& effect : region.effects) {
     if (!effect) throw std::invalid_argument(who + "an empty effect");
   }
+  if (region.options) {
+    if (const std::string error = validate(*region.options); !error.empty()) throw std::invalid_argument(who + error);
+  }
   if (region.effects.size() > kMaxEffectsPerRegion) {
     throw std::invalid_argument(who + "more than " + std::to_string(kMaxEffectsPerRegion) + " effects");
   }
@@ -56,7 +59,9 @@ Scene::Scene(std::vector<Region> regions) : regions_(std::move(regions)) {
     check_region(region);
     flatten_non_finite(region.fields);
     has_effects_ = has_effects_ || !region.effects.empty();
+    per_region_options_ = per_region_options_ || region.options.has_value();
   }
+  if (per_region_options_) set_options(options_);  // the tables the regions' own options need
 }
 
 std::size_t Scene::bytes() const {
@@ -70,17 +75,25 @@ std::size_t Scene::bytes() const {
 
 void Scene::set_options(const EngineOptions& options) {
   if (auto error = validate(options); !error.empty()) throw std::invalid_argument("engine options: " + error);
-  const bool keep_luts = options.traversal == Traversal::direction_lut && options_ == options && !luts_.empty();
-  options_ = options;
-  if (keep_luts) return;
-  luts_.clear();
-  luts_.shrink_to_fit();
-  if (options.traversal != Traversal::direction_lut) return;
-  luts_.resize(regions_.size());
+  std::vector<std::shared_ptr<const DirectionLut>> luts(regions_.size());
+  bool any = false;
   for (std::size_t i = 0; i < regions_.size(); ++i) {
+    const EngineOptions& own = regions_[i].options.value_or(options);
+    if (own.traversal != Traversal::direction_lut) continue;
     const Method& method = *regions_[i].method;
     if (method.cd_lower_bound() == 1.0 && method.cd_upper_bound() == 1.0) continue;  // C/D 1: nothing to look up
-    luts_[i] = std::make_shared<const DirectionLut>(build_direction_lut(*this, i, options.lut_directions));
+    // A table already built for the same number of directions is kept (the fields do not change).
+    const bool reuse = i < luts_.size() && luts_[i] && luts_[i]->directions() == own.lut_directions;
+    luts[i] =
+        reuse ? luts_[i] : std::make_shared<const DirectionLut>(build_direction_lut(*this, i, own.lut_directions));
+    any = true;
+  }
+  options_ = options;
+  if (any) {
+    luts_ = std::move(luts);
+  } else {
+    luts_.clear();
+    luts_.shrink_to_fit();
   }
 }
 

@@ -25,6 +25,9 @@ struct Region {
   MethodPtr method;
   std::vector<EffectPtr> effects;  // applied in order to each frame that starts in the region (at most
                                    // kMaxEffectsPerRegion), each to what the one before handed on
+  // The region's own traversal variant, for the frames that start in it (all of such a frame, wherever it
+  // goes); none: the scene's (Scene::set_options).
+  std::optional<EngineOptions> options;
 
   // Texel of the region's fields under a screen texel the region contains.
   Texel local(Texel screen) const { return {screen.x - rect.x, screen.y - rect.y}; }
@@ -51,11 +54,20 @@ class Scene {
 
   std::size_t bytes() const;  // fields, effects and direction tables
 
-  // How advance() walks this scene (core/engine/engine_options.hpp); default: exact, nearest. Selecting
-  // direction_lut builds the table of every region whose method is not C/D 1 throughout (memory: Scene::lut_bytes);
-  // any other traversal frees them. Throws std::invalid_argument if the options are invalid.
+  // How advance() walks this scene (core/engine/engine_options.hpp); default: exact, nearest. Regions with
+  // options of their own keep them. Every region that walks with direction_lut (its own options or these) and
+  // whose method is not C/D 1 throughout gets its table, with its own number of directions (memory:
+  // Scene::lut_bytes); the others have none. Throws std::invalid_argument if the options are invalid.
   void set_options(const EngineOptions& options);
   const EngineOptions& options() const { return options_; }
+
+  // The options of a frame that starts on texel `start`: its region's, else the scene's.
+  const EngineOptions& frame_options(Texel start) const {
+    if (!per_region_options_) [[likely]]
+      return options_;
+    const std::optional<std::size_t> i = owner(start);
+    return i && regions_[*i].options ? *regions_[*i].options : options_;
+  }
 
   // Direction table of region i, or null (direction_lut not selected, or a method that is C/D 1 throughout).
   const DirectionLut* direction_lut(std::size_t i) const { return i < luts_.size() ? luts_[i].get() : nullptr; }
@@ -64,8 +76,9 @@ class Scene {
  private:
   std::vector<Region> regions_;
   bool has_effects_ = false;
+  bool per_region_options_ = false;  // some region has options of its own
   EngineOptions options_;
-  std::vector<std::shared_ptr<const DirectionLut>> luts_;  // empty unless direction_lut is selected
+  std::vector<std::shared_ptr<const DirectionLut>> luts_;  // empty unless some region walks with direction_lut
 };
 
 }  // namespace ph

@@ -45,7 +45,6 @@ class Walker {
         tdy_(m.y != 0.0 ? 1.0 / std::abs(m.y) : kInf),
         texel_(cursor.texel),
         from_(cursor.came_from) {
-    if constexpr (Mode == WalkMode::lut) lut_k_ = DirectionLut::direction_index(m, scene.options().lut_directions);
     restart_at(cursor.position);
   }
 
@@ -172,6 +171,7 @@ class Walker {
 
   // The same with each texel's C/D from a direction table.
   void walk_region_lut(std::size_t index, const DirectionLut& lut, bool first_leg) {
+    lut_k_ = lut.direction_index(m_);  // per table: regions may quantise into different numbers of directions
     const Region& region = scene_.regions()[index];
     step_through(index, first_leg, [&](bool entered) PH_ALWAYS_INLINE { return lut_cd(region, lut, entered); });
   }
@@ -308,7 +308,7 @@ class Walker {
   double budget_ = 0.0;             // motor travel left in the frame
   bool all_unit_ = true;
   std::uint64_t steps_ = 0;
-  int lut_k_ = 0;         // lut: the frame's quantised direction
+  int lut_k_ = 0;         // lut: the frame's direction quantised for the current region's table
   double step_px_ = 1.0;  // bilinear: distance between the last two sample points
   Vec2 sample_point_;     // bilinear: where the last sample was taken (screen px)
 };
@@ -403,9 +403,9 @@ CursorState walk_texels(const Scene& scene, CursorState& cursor, Vec2 m, double 
   return end;
 }
 
-[[gnu::noinline]] CursorState walk_variant(const Scene& scene, CursorState& cursor, Vec2 m, double d,
-                                           StepObserver* observer, FrameResult& result, bool& all_unit) {
-  const EngineOptions& options = scene.options();
+[[gnu::noinline]] CursorState walk_variant(const Scene& scene, const EngineOptions& options, CursorState& cursor,
+                                           Vec2 m, double d, StepObserver* observer, FrameResult& result,
+                                           bool& all_unit) {
   switch (options.traversal) {
     case Traversal::exact:
       return options.sampling == Sampling::bilinear
@@ -437,12 +437,13 @@ FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserv
   const Vec2 start = cursor.position;
   bool all_unit = true;
   CursorState end;
-  if (scene.options().is_default()) [[likely]] {
+  const EngineOptions& options = scene.frame_options(cursor.texel);  // the region the frame starts in
+  if (options.is_default()) [[likely]] {
     Walker<WalkMode::nearest> walker(scene, cursor, m, observer, result);
     end = walker.run(d);
     all_unit = walker.all_unit();
   } else {
-    end = walk_variant(scene, cursor, m, d, observer, result, all_unit);  // one branch per frame, out of line
+    end = walk_variant(scene, options, cursor, m, d, observer, result, all_unit);  // one branch per frame, out of line
   }
   if (all_unit) {
     // C/D was 1 everywhere: the display moves by the motor displacement itself, with no rounding.

@@ -6,12 +6,15 @@
 // kernel's timestamps) within 1 px (AbsoluteFollower says why). One PASS or FAIL line per case; the exit
 // status is 1 when any failed.
 //
-//   daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [-v]
+//   daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--rounds N]
+//              [--baseline BARE_REEMITTER] [--baseline-polls] [-v]
 //
 // --tool: the pseudohaptic tool for `pseudohaptic status` (default: ../tools/pseudohaptic next to the
 // daemon's folder, as in the build tree); --cycles: hotplug create/destroy cycles (100); --latency-frames:
-// frames per latency figure (500); -v passes -v to the daemon (its debug lines are printed when a case
-// fails) and traces the hotplug cycles.
+// frames per latency figure (500); --rounds: interleaved rounds of the daemon against the bare re-emitter,
+// half as many frames each per round (10); --baseline: the bare re-emitter (bare_reemitter beside this
+// program); --baseline-polls: the re-emitter waits in poll() before each read(), as an event loop does; -v passes -v to
+// the daemon (its debug lines are printed when a case fails) and traces the hotplug cycles.
 //
 // Three parts, each with a fresh daemon (or none): latency of the test mouse's own node; the daemon with a
 // flat config file (held button at start, identity, latency, the control socket, resync through a fake
@@ -54,7 +57,10 @@ struct Options {
   std::string tool;  // the pseudohaptic tool, for `pseudohaptic status` ("" when there is none)
   int cycles = 100;
   int latency_frames = 500;
-  bool verbose = false;  // pass -v to the daemon
+  int rounds = 10;              // interleaved rounds of the daemon against the bare re-emitter
+  std::string baseline;         // the bare re-emitter (bare_reemitter beside this program)
+  bool baseline_polls = false;  // --baseline-polls: the re-emitter waits in poll() before each read()
+  bool verbose = false;         // pass -v to the daemon
   std::filesystem::path scratch;
 };
 
@@ -414,8 +420,7 @@ std::string latency_text(const Latency& l) {
 // One motion frame at a time (REL_X +4 and -4 in turn, so the cursor stays put): from just before
 // writing it into the test mouse to just after reading it from `out`. With a model, the output must be
 // what the model computes.
-void measure_latency(Check& check, TestMouse& mouse, EventReader& out, ph::Pipeline* model, int frames,
-                     Latency& result) {
+void time_frames(Check& check, TestMouse& mouse, EventReader& out, ph::Pipeline* model, int frames, Latency& result) {
   for (int i = 0; i < frames; ++i) {
     const Frame in = make_frame({rel(ev::kRelX, i % 2 == 0 ? 4 : -4)});
     const Frame expected = model != nullptr ? untimed(model->process(in)) : in;
@@ -434,7 +439,50 @@ void measure_latency(Check& check, TestMouse& mouse, EventReader& out, ph::Pipel
     }
     result.us.push_back(std::chrono::duration<double, std::micro>(end - start).count());
   }
+}
+
+void measure_latency(Check& check, TestMouse& mouse, EventReader& out, ph::Pipeline* model, int frames,
+                     Latency& result) {
+  time_frames(check, mouse, out, model, frames, result);
   check.note(latency_text(result));
+}
+
+// The daemon's latency as ratios to the bare re-emitter's (tests/vm/bare_reemitter.cpp), both running
+// in this boot, in rounds that alternate which goes first, so that the host's load falls on both alike.
+struct LatencyRatio {
+  Latency daemon{"daemon, flat scene (interleaved rounds)", {}, 0};
+  Latency bare{"bare re-emitter (interleaved rounds)", {}, 0};
+  std::vector<double> round_ratios;  // median over median, per round
+
+  double median_ratio() const { return percentile(daemon.us, 0.5) / percentile(bare.us, 0.5); }
+  double p99_ratio() const { return percentile(daemon.us, 0.99) / percentile(bare.us, 0.99); }
+  std::string text() const {
+    if (daemon.us.empty() || bare.us.empty()) return "not measured";
+    const auto [lo, hi] = std::minmax_element(round_ratios.begin(), round_ratios.end());
+    return fmt::format(
+        "median ratio {:.3f}, p99 ratio {:.3f} (daemon: {}; bare: {}); per-round median ratios "
+        "{:.2f}..{:.2f} over {} rounds",
+        median_ratio(), p99_ratio(), latency_text(daemon), latency_text(bare), *lo, *hi, round_ratios.size());
+  }
+};
+
+void measure_against_bare(Check& check, TestMouse& mouse, EventReader& out, ph::Pipeline& model, TestMouse& bare_mouse,
+                          EventReader& bare_out, const Options& options, LatencyRatio& result) {
+  const int frames = std::max(2, options.latency_frames / 2);
+  for (int round = 0; round < options.rounds; ++round) {
+    Latency daemon, bare;
+    for (int side = 0; side < 2; ++side) {
+      if ((side + round) % 2 == 0) {
+        time_frames(check, mouse, out, &model, frames, daemon);
+      } else {
+        time_frames(check, bare_mouse, bare_out, nullptr, frames, bare);
+      }
+    }
+    result.round_ratios.push_back(percentile(daemon.us, 0.5) / percentile(bare.us, 0.5));
+    result.daemon.us.insert(result.daemon.us.end(), daemon.us.begin(), daemon.us.end());
+    result.bare.us.insert(result.bare.us.end(), bare.us.begin(), bare.us.end());
+  }
+  check.note(result.text());
 }
 
 // The same through a daemon with absolute output: frames whose output was not waited for at once (the
@@ -466,7 +514,7 @@ void passthrough_part(Report& report, const Options& options, Latency& latency) 
 
 // ---- part 2: a config file with a flat scene ---------------------------------------------------------------
 
-void flat_part(Report& report, const Options& options, Latency& latency) {
+void flat_part(Report& report, const Options& options, Latency& latency, LatencyRatio& ratio) {
   Session session(report, "daemon with a flat config file (-c)");
   const UeventMonitor uevents;
   const std::filesystem::path config = options.scratch / "daemon.toml";
@@ -558,6 +606,21 @@ void flat_part(Report& report, const Options& options, Latency& latency) {
 
   session.run("[10b] latency, daemon over a flat scene",
               [&](Check& check) { measure_latency(check, *mouse, *out, &model, options.latency_frames, latency); });
+
+  session.run("[10d] latency, daemon over a flat scene against a bare re-emitter", [&](Check& check) {
+    // Its mouse is not one the daemon takes, and the daemon passes over its own name prefix: the daemon
+    // only watches that mouse, and the grab keeps the mouse's events from it.
+    TestMouse bare_mouse("ph-bare mouse");
+    const std::string bare_name = "pseudohaptic bare re-emitter";
+    std::vector<std::string> bare_argv{options.baseline, bare_mouse.node(), bare_name};
+    if (options.baseline_polls) bare_argv.emplace_back("poll");
+    ChildProcess bare(bare_argv, {}, (options.scratch / "bare.log").string());
+    const std::string node = wait_for_device(bare_name, kDeviceTimeout, uevents);
+    if (node.empty()) throw Fatal("no '" + bare_name + "' device within 10 s: " + bare.log());
+    EventReader bare_out(node);
+    if (!wait_taken(bare_mouse, bare_out, kDeviceTimeout)) throw Fatal("nothing came out of the bare re-emitter");
+    measure_against_bare(check, *mouse, *out, model, bare_mouse, bare_out, options, ratio);
+  });
 
   session.run("[11] control socket: `pseudohaptic status` reports the mouse taken and the output", [&](Check& check) {
     control.emplace(control_path);
@@ -1245,7 +1308,9 @@ void default_scene_part(Report& report, const Options& options, Latency& latency
 }
 
 int usage() {
-  std::fprintf(stderr, "usage: daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [-v]\n");
+  std::fprintf(stderr,
+               "usage: daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--rounds N]\n"
+               "                  [--baseline BARE_REEMITTER] [--baseline-polls] [-v]\n");
   return 2;
 }
 
@@ -1256,8 +1321,14 @@ int main(int argc, char** argv) {
   Options options;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if ((arg == "--cycles" || arg == "--latency-frames") && i + 1 < argc) {
-      (arg == "--cycles" ? options.cycles : options.latency_frames) = std::atoi(argv[++i]);
+    if ((arg == "--cycles" || arg == "--latency-frames" || arg == "--rounds") && i + 1 < argc) {
+      (arg == "--cycles"   ? options.cycles
+       : arg == "--rounds" ? options.rounds
+                           : options.latency_frames) = std::atoi(argv[++i]);
+    } else if (arg == "--baseline-polls") {
+      options.baseline_polls = true;
+    } else if (arg == "--baseline" && i + 1 < argc) {
+      options.baseline = argv[++i];
     } else if (arg == "--tool" && i + 1 < argc) {
       options.tool = argv[++i];
     } else if (arg == "-v" || arg == "--verbose") {
@@ -1268,7 +1339,10 @@ int main(int argc, char** argv) {
       return usage();
     }
   }
-  if (options.daemon.empty() || options.cycles < 1 || options.latency_frames < 1) return usage();
+  if (options.daemon.empty() || options.cycles < 1 || options.latency_frames < 1 || options.rounds < 1) return usage();
+  if (options.baseline.empty())
+    options.baseline = (std::filesystem::path(argv[0]).parent_path() / "bare_reemitter").string();
+  options.baseline = std::filesystem::absolute(options.baseline).string();
   options.daemon = std::filesystem::absolute(options.daemon).string();
   if (options.tool.empty()) {  // the build tree's: build/ci/daemon/pseudohapticd -> build/ci/tools/pseudohaptic
     const std::filesystem::path sibling =
@@ -1286,10 +1360,11 @@ int main(int argc, char** argv) {
   Report report;
   Latency passthrough{"passthrough (the test mouse's own node, no daemon)", {}, 0};
   Latency flat{"daemon, flat scene", {}, 0};
+  LatencyRatio ratio;
   Latency texture{"daemon, default scene's texture", {}, 0};
   try {
     passthrough_part(report, options, passthrough);
-    flat_part(report, options, flat);
+    flat_part(report, options, flat, ratio);
     default_scene_part(report, options, texture);
   } catch (const std::exception& e) {
     report.not_run("the rest", e.what());
@@ -1298,9 +1373,11 @@ int main(int argc, char** argv) {
   std::printf(
       "latency, write into the test mouse -> read from the output node (guest clock under TCG: emulated "
       "times, compare only within one run):\n");
-  for (const Latency* l : {&passthrough, &flat, &texture}) {
+  for (const Latency* l : {&passthrough, &flat, &texture, &ratio.daemon, &ratio.bare}) {
     std::printf("  %-52s %s\n", l->label.c_str(), l->us.empty() ? "not measured" : latency_text(*l).c_str());
   }
+  std::printf("daemon over a flat scene / bare re-emitter%s (%d interleaved rounds): %s\n",
+              options.baseline_polls ? " waiting in poll()" : "", options.rounds, ratio.text().c_str());
   std::printf("daemon e2e: %d passed, %d failed, %.1f s\n", report.passed(), report.failed(), seconds);
   return report.failed() == 0 ? 0 : 1;
 }
