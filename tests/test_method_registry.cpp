@@ -134,7 +134,8 @@ TEST(MethodRegistry, SceneFileReadsTheNewMethodAndItsTable) {
       error_of("[[region]]\nwidth = 4\nheight = 4\nnormal_map = \"n.png\"\nmethod = \"blend\"\n", methods);
   EXPECT_NE(nodepth.find("the blend method needs a depth_map"), std::string::npos) << nodepth;
   const std::string builtin = error_of(region, builtin_methods());
-  EXPECT_NE(builtin.find("unknown method 'blend' (allowed: curvature, depth, none, hybrid)"), std::string::npos) << builtin;
+  EXPECT_NE(builtin.find("unknown method 'blend' (allowed: curvature, depth, none, hybrid)"), std::string::npos)
+      << builtin;
 }
 
 // A stroke across the centre row, as trace runs it: the C/D of every texel step, in order (the frames' first
