@@ -51,8 +51,8 @@ class BlendMethod final : public Method {
     return join(curvature_.sample_exact(point, m), depth_.sample_exact(point, m));
   }
   double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
-    const double c = curvature_.cd({from.v0, from.v1}, {to.v0, to.v1}, step_px, detail);
-    const double d = depth_.cd({from.v2, from.v3}, {to.v2, to.v3}, step_px, nullptr);
+    const double c = curvature_.cd(from, to, step_px, detail);
+    const double d = depth_.cd({from.v4, from.v5}, {to.v4, to.v5}, step_px, nullptr);
     return weight_ * c + (1.0 - weight_) * d;
   }
   double cd_lower_bound() const override {
@@ -63,7 +63,7 @@ class BlendMethod final : public Method {
   }
 
  private:
-  static TexelSample join(const TexelSample& a, const TexelSample& b) { return {a.v0, a.v1, b.v0, b.v1}; }
+  static TexelSample join(const TexelSample& a, const TexelSample& b) { return {a.v0, a.v1, a.v2, a.v3, b.v0, b.v1}; }
 
   double weight_;
   CurvatureMethod curvature_{CurvatureParams{}};
@@ -104,7 +104,7 @@ std::string error_of(const std::string& text, const MethodRegistry& methods) {
 
 TEST(MethodRegistry, AddsAMethodByItsEntryOnly) {
   MethodRegistry methods = with_blend();
-  EXPECT_EQ(methods.names(), "curvature, depth, none, blend");
+  EXPECT_EQ(methods.names(), "curvature, depth, none, hybrid, blend");
   EXPECT_THROW(methods.add(method_entry<BlendMethod>()), std::invalid_argument);
   const MethodPtr blend = make_default_method(methods, "blend");
   EXPECT_EQ(blend->name(), "blend");
@@ -134,7 +134,8 @@ TEST(MethodRegistry, SceneFileReadsTheNewMethodAndItsTable) {
       error_of("[[region]]\nwidth = 4\nheight = 4\nnormal_map = \"n.png\"\nmethod = \"blend\"\n", methods);
   EXPECT_NE(nodepth.find("the blend method needs a depth_map"), std::string::npos) << nodepth;
   const std::string builtin = error_of(region, builtin_methods());
-  EXPECT_NE(builtin.find("unknown method 'blend' (allowed: curvature, depth, none)"), std::string::npos) << builtin;
+  EXPECT_NE(builtin.find("unknown method 'blend' (allowed: curvature, depth, none, hybrid)"), std::string::npos)
+      << builtin;
 }
 
 // A stroke across the centre row, as trace runs it: the C/D of every texel step, in order (the frames' first
