@@ -34,6 +34,8 @@ int main(int argc, char** argv) {
       ph::tools::add_demo_command);
   add("accuracy", "Measure speed and accuracy of every engine variant against the exact ground truth (CSV for charts)",
       ph::tools::add_accuracy_command);
+  add("stability", "Run the failure-mode suite: where each method breaks and how badly (CSV for charts)",
+      ph::tools::add_stability_command);
   add("check-config", "Check a scene file (the daemon's config): its [daemon] table, regions and images",
       ph::tools::add_check_config_command);
   add("status", "Ask the running daemon what it does (output, mice, scene, desktop, cursor model, session helper)",
