@@ -69,7 +69,6 @@
 
 #include "core/engine/decode.hpp"
 #include "core/engine/engine_options.hpp"
-#include "core/engine/grid_walk.hpp"
 #include "core/engine/methods.hpp"
 #include "core/engine/scene.hpp"
 #include "core/engine/targets.hpp"
