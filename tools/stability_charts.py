@@ -162,6 +162,46 @@ def summary_table(rows, modes, methods, variant):
     return "\n".join(lines)
 
 
+BOUNDED = ["cd_err_rms", "jitter_rms", "travel_err_pct", "travel_sens_pct", "iso_pct"]
+FLOOR = 1e-3  # no bound below this: values under it are rounding, and may differ between builds
+
+
+def round_up(v):
+    """v rounded up to two significant digits, at least FLOOR."""
+    if not finite(v) or v <= FLOOR:
+        return FLOOR
+    scale = 10 ** (math.floor(math.log10(v)) - 1)
+    return math.ceil(v / scale - 1e-9) * scale
+
+
+def bounds_of(rows, modes, methods, variant):
+    """[(mode, method, [bound per BOUNDED metric])]: each metric's worst value over the mode's severities plus a
+    quarter, rounded up."""
+    out = []
+    for mode in modes:
+        for method in methods:
+            sel = [r for r in rows if r["mode"] == mode["mode"] and r["method"] == method and r["variant"] == variant]
+            if sel:
+                out.append((mode["mode"], method,
+                            [round_up(1.25 * max(r[c] for r in sel if finite(r[c]))) for c in BOUNDED]))
+    return out
+
+
+def bounds_table(bounds, variant):
+    lines = [f"Bounds (variant `{variant}`): per mode and method, each metric's worst value over the severities "
+             f"x 1.25, rounded up (at least {FLOOR:g}).", "",
+             "| mode | method | " + " | ".join(BOUNDED) + " |", "|---|---|" + "---:|" * len(BOUNDED)]
+    for mode, method, values in bounds:
+        lines.append(f"| {mode} | {method} | " + " | ".join(f"{v:.2g}" for v in values) + " |")
+    return "\n".join(lines)
+
+
+def bounds_cpp(bounds):
+    """The same as the initialiser list tests/test_tool_stability.cpp holds."""
+    return "\n".join(f'{{"{mode}", "{method}", {{' + ", ".join(f"{v:.2g}" for v in values) + "}},"
+                     for mode, method, values in bounds)
+
+
 def main(argv):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -170,6 +210,8 @@ def main(argv):
     p.add_argument("outdir", type=Path, help="folder to write the PNG files into (created if needed)")
     p.add_argument("--variants", default=",".join(DEFAULT_VARIANTS),
                    help=f"engine variants to draw, comma-separated (default: {','.join(DEFAULT_VARIANTS)})")
+    p.add_argument("--bounds-cpp", type=Path, metavar="FILE",
+                   help="also write the bounds as the C++ initialiser list of tests/test_tool_stability.cpp")
     args = p.parse_args(argv)
     try:
         rows, modes = read_inputs(args.csvdir)
@@ -184,6 +226,11 @@ def main(argv):
         print(f"stability_charts.py: {e}", file=sys.stderr)
         return 1
     print(summary_table(rows, modes, methods, variants[0]))
+    bounds = bounds_of(rows, modes, methods, variants[0])
+    print()
+    print(bounds_table(bounds, variants[0]))
+    if args.bounds_cpp:
+        args.bounds_cpp.write_text(bounds_cpp(bounds) + "\n")
     for path in written:
         print(f"stability_charts.py: wrote {path}", file=sys.stderr)
     return 0
