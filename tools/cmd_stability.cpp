@@ -152,7 +152,8 @@ Run add_stability_command(CLI::App& app) {
       "Exits 1 if any stroke met a NaN, a C/D out of its method's bounds or never ended.");
   app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)")->required();
   app.add_flag("--small", o->small, "Small canvas, two severities a mode, two variants (seconds; for CI)");
-  app.add_option("--mode", o->modes, "Run only this failure mode (repeatable; default: all)");
+  app.add_option("--mode", o->modes, "Run only this failure mode (repeatable; default: all)")
+      ->allow_extra_args(false);  // one name per --mode: OUTDIR after it stays OUTDIR
   return [o] { return run_stability(*o); };
 }
 
