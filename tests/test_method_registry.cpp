@@ -51,8 +51,8 @@ class BlendMethod final : public Method {
     return join(curvature_.sample_exact(point, m), depth_.sample_exact(point, m));
   }
   double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
-    const double c = curvature_.cd({from.v0, from.v1}, {to.v0, to.v1}, step_px, detail);
-    const double d = depth_.cd({from.v2, from.v3}, {to.v2, to.v3}, step_px, nullptr);
+    const double c = curvature_.cd(from, to, step_px, detail);
+    const double d = depth_.cd({from.v4, from.v5}, {to.v4, to.v5}, step_px, nullptr);
     return weight_ * c + (1.0 - weight_) * d;
   }
   double cd_lower_bound() const override {
@@ -63,7 +63,7 @@ class BlendMethod final : public Method {
   }
 
  private:
-  static TexelSample join(const TexelSample& a, const TexelSample& b) { return {a.v0, a.v1, b.v0, b.v1}; }
+  static TexelSample join(const TexelSample& a, const TexelSample& b) { return {a.v0, a.v1, a.v2, a.v3, b.v0, b.v1}; }
 
   double weight_;
   CurvatureMethod curvature_{CurvatureParams{}};

@@ -43,7 +43,7 @@ TEST(Projection, EqualsMinusSineOfSlopeAngleOnRandomNormalsAndDirections) {
     const Gradient g = fields.gradient->at(0, 0);
     const double tolerance = 1e-6 * (1.0 + std::hypot(g.x, g.y));
     ASSERT_NEAR(s.v0, -std::sin(theta), tolerance);
-    ASSERT_NEAR(s.v1, theta, tolerance);
+    ASSERT_NEAR(s.v1, dh_dm, tolerance);  // the slope along m, tan(theta)
   }
 }
 

@@ -182,10 +182,10 @@ struct Bound {
   double curvature_worst, curvature_mean, depth_worst, depth_mean;
 };
 const std::map<std::string, Bound> kEndBounds = {
-    {"exact", {1e-9, 1e-9, 1e-9, 1e-9}},          {"exact+bilinear", {40.0, 1.5, 6.6, 0.35}},
-    {"unit_steps", {50.0, 2.2, 4.5, 0.28}},       {"unit_steps+bilinear", {30.0, 2.0, 7.7, 0.42}},
-    {"frame_midpoint", {75.0, 3.8, 17.0, 1.4}},   {"frame_midpoint+bilinear", {65.0, 3.3, 19.0, 1.4}},
-    {"direction_lut8", {135.0, 9.6, 136.0, 9.6}}, {"direction_lut16", {115.0, 6.3, 71.0, 5.6}},
+    {"exact", {1e-9, 1e-9, 1e-9, 1e-9}},         {"exact+bilinear", {69.0, 2.7, 6.6, 0.35}},
+    {"unit_steps", {11.5, 0.55, 4.5, 0.28}},     {"unit_steps+bilinear", {36.0, 1.6, 7.7, 0.42}},
+    {"frame_midpoint", {26.0, 1.9, 17.0, 1.4}},  {"frame_midpoint+bilinear", {34.0, 2.1, 19.0, 1.4}},
+    {"direction_lut8", {97.0, 7.4, 136.0, 9.6}}, {"direction_lut16", {67.0, 4.5, 71.0, 5.6}},
 };
 
 TEST(TraversalVariants, EndPositionsStayNearTheExactTraversalOnAllTargets) {

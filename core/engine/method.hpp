@@ -11,14 +11,17 @@
 namespace ph {
 
 // What a method reads from one texel for one motion direction; the meaning of the numbers is private to
-// the method (curvature: a = n''_x and the slope angle; depth: the height, and its change per px along the
-// motion). Four, so that a method reading normals and heights together keeps both methods' pairs; the
-// walkers call the listed methods inline (core/engine/methods.hpp), so numbers a method leaves unused cost nothing.
+// the method (curvature: a = n''_x and the slope angle, here and 1 px behind; depth: the height, and its change
+// per px along the motion). Six, so that a method reading normals and heights together keeps both methods'
+// readings; the walkers call the listed methods inline (core/engine/methods.hpp), so numbers a method leaves
+// unused cost nothing.
 struct TexelSample {
   double v0 = 0.0;
   double v1 = 0.0;
   double v2 = 0.0;
   double v3 = 0.0;
+  double v4 = 0.0;
+  double v5 = 0.0;
 };
 
 // A surface's exact values at one point, in double precision: what the ground truth's analytic surfaces

@@ -34,13 +34,13 @@ double projected_normal_x(Normal n, Vec2 direction);
 // Slope angle along a direction, positive uphill: atan(g . m).
 double slope_angle(Gradient g, Vec2 direction);
 
-// Eq. 1-3 from the two projected values a1 = n''_x(p1), a2 = n''_x(p2) and the slope angles
-// theta = asin(-a) of the same texels (passed to avoid recomputing acos). detail may be null.
-inline double curvature_cd(const CurvatureParams& p, double a1, double theta1, double a2, double theta2,
-                           StepDetail* detail) {
+// Eq. 1-3 from the two projected values a1 = n''_x(p1), a2 = n''_x(p2) and the difference of the slope angles
+// theta1 - theta2, theta = asin(-a) (passed to avoid recomputing acos). detail may be null.
+inline double curvature_cd_of_change(const CurvatureParams& p, double a1, double a2, double theta1_minus_theta2,
+                                     StepDetail* detail) {
   // Eq. 1: cos(alpha) is the mean of the projected normals; delta-beta = acos(a1) - acos(a2) = theta1 - theta2.
   const double cos_alpha = 0.5 * (a1 + a2);
-  const double delta_beta = p.delta_beta_sign * (theta1 - theta2) * (180.0 / std::numbers::pi);
+  const double delta_beta = p.delta_beta_sign * theta1_minus_theta2 * (180.0 / std::numbers::pi);
   // Eq. 3 with the limits that keep Eq. 2 meaningful (k >= 1).
   const double kmax = std::clamp(p.kmax_prime * (1.0 + delta_beta), p.kmax_lo, p.kmax_hi);
   const double kmin = std::clamp(p.kmin_prime * (1.0 - delta_beta), p.kmin_lo, p.kmin_hi);
@@ -53,6 +53,23 @@ inline double curvature_cd(const CurvatureParams& p, double a1, double theta1, d
   }
   if (detail != nullptr) *detail = {cos_alpha, delta_beta, kmax, kmin, std::numeric_limits<double>::quiet_NaN()};
   return cd;
+}
+
+// The same from the two slope angles theta1, theta2.
+inline double curvature_cd(const CurvatureParams& p, double a1, double theta1, double a2, double theta2,
+                           StepDetail* detail) {
+  return curvature_cd_of_change(p, a1, a2, theta1 - theta2, detail);
+}
+
+// atan(t1) - atan(t2) with one arctangent: atan((t1 - t2) / (1 + t1 t2)), plus or minus pi where the denominator
+// is negative (slopes of opposite sign, both steeper than 45 degrees: an apex or a gully), to fast_atan's
+// accuracy. Equal slopes give exactly 0.
+inline double slope_angle_change(double t1, double t2) {
+  const double num = t1 - t2, den = 1.0 + t1 * t2;
+  if (den > 0.0) [[likely]]
+    return fast_atan(num / den);
+  if (den < 0.0) return fast_atan(num / den) + std::copysign(std::numbers::pi, num);
+  return std::copysign(std::numbers::pi / 2, num);
 }
 
 class CurvatureMethod final : public Method {
@@ -69,33 +86,81 @@ class CurvatureMethod final : public Method {
   std::string_view name() const override { return kName; }
   FieldNeeds needs() const override { return {.gradient = true, .depth = false}; }
   // Inline: the traversal calls these directly on the final class (core/engine/traversal.cpp).
-  TexelSample sample(const RegionFields* fields, Texel local, Vec2 m) const override {
-    if (fields == nullptr || !fields->gradient) return {0.0, 0.0};
-    const Gradient g = fields->gradient->at(local.x, local.y);
-    // With n = (-g, 1)/|.|, n''_x = -t / sqrt(1 + t^2) and theta = atan(t), t = g . m the slope along m.
-    const double t = static_cast<double>(g.x) * m.x + static_cast<double>(g.y) * m.y;
-    return {-t / std::sqrt(1.0 + t * t), fast_atan(t)};
+  //
+  // The nearest reading of a texel for motion along m is a pair of projected normals 1 px apart along the
+  // motion: the texel's own and that of the point 1 px behind its centre, the gradient there interpolated
+  // bilinearly from the texel and its neighbours behind along x, along y and diagonally (weights from |m_x|
+  // and |m_y|). Pairing a texel with the 4-neighbour the walk came from instead alternates, on a diagonal,
+  // between an x and a y neighbour, and the C/D swings texel by texel on a smooth surface (docs/METHODS.md,
+  // "Which two normals"). The sample: v0 = a and v1 = t (the slope along m) of the texel, v2 = a behind and
+  // v3 = theta behind - theta here. Where a neighbour needed lies outside the region, v2 is kNoBehind and
+  // cd() pairs the texel the walk came from, which keeps the step at a region's border.
+#if defined(__GNUC__)
+  [[gnu::always_inline]]  // once per texel step in the walk; GCC otherwise leaves it out of line
+#endif
+  TexelSample
+  sample(const RegionFields* fields, Texel local, Vec2 m) const override {
+    if (fields == nullptr || !fields->gradient) return {0.0, 0.0, 0.0, 0.0};
+    const GradientField& f = *fields->gradient;
+    const std::int32_t ox = m.x > 0.0 ? -1 : (m.x < 0.0 ? 1 : 0);
+    const std::int32_t oy = m.y > 0.0 ? -1 : (m.y < 0.0 ? 1 : 0);
+    const Gradient* texel = &f.values[static_cast<std::size_t>(local.y) * f.width + local.x];
+    const double t = slope_along(texel[0], m);
+    const double a = projected(t);
+    const std::int32_t nx = local.x + ox, ny = local.y + oy;
+    if (nx < 0 || ny < 0 || nx >= f.width || ny >= f.height) [[unlikely]]
+      return {a, t, kNoBehind, kNoBehind};
+    const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(oy) * f.width;
+    const double wx = std::abs(m.x), wy = std::abs(m.y);
+    // Differences first: a constant field gives exactly t behind, so a plane keeps delta-beta exactly 0.
+    const double tb = t + wx * (1.0 - wy) * (slope_along(texel[ox], m) - t) +
+                      (1.0 - wx) * wy * (slope_along(texel[row], m) - t) +
+                      wx * wy * (slope_along(texel[row + ox], m) - t);
+    return {a, t, projected(tb), slope_angle_change(tb, t)};
   }
-  // The same from the gradient interpolated at `at` (Sampling::bilinear).
+  // The same from the gradient interpolated at `at` (Sampling::bilinear); the walk pairs it with the previous
+  // sample point.
   TexelSample sample_at(const RegionFields* fields, Texel /*local*/, Vec2 at, Vec2 m) const override {
-    if (fields == nullptr || !fields->gradient) return {0.0, 0.0};
+    if (fields == nullptr || !fields->gradient) return {0.0, 0.0, 0.0, 0.0};
     const Vec2 g = bilinear(*fields->gradient, at);
     const double t = g.x * m.x + g.y * m.y;
-    return {-t / std::sqrt(1.0 + t * t), fast_atan(t)};
+    return {projected(t), t, kNoBehind, kNoBehind};
   }
-  // The same from the exact gradient, with the exact atan (the ground truth must not share fast_atan).
+  // The same from the exact gradient; cd() pairs it with the point the ground truth puts 1 px behind, with the
+  // exact atan (the ground truth must not share fast_atan), which v3 = kExactAngles asks for.
   TexelSample sample_exact(const SurfacePoint& point, Vec2 m) const override {
     const double t = point.gradient.x * m.x + point.gradient.y * m.y;
-    return {-t / std::sqrt(1.0 + t * t), std::atan(t)};
+    return {projected(t), t, kNoBehind, kExactAngles};
   }
-  double cd(const TexelSample& from, const TexelSample& to, double /*step_px*/, StepDetail* detail) const override {
-    return curvature_cd(params_, from.v0, from.v1, to.v0, to.v1, detail);
+#if defined(__GNUC__)
+  [[gnu::always_inline]]  // once per texel step in the walk, like sample()
+#endif
+  double
+  cd(const TexelSample& from, const TexelSample& to, double /*step_px*/, StepDetail* detail) const override {
+    if (!std::isnan(to.v2)) [[likely]]
+      return curvature_cd_of_change(params_, to.v2, to.v0, to.v3, detail);
+    // The pair of the texel the walk came from and this one (a region's border, bilinear sampling, the truth).
+    const double change =
+        std::isinf(to.v3) ? std::atan(from.v1) - std::atan(to.v1) : slope_angle_change(from.v1, to.v1);
+    return curvature_cd_of_change(params_, from.v0, to.v0, change, detail);
   }
   double cd_lower_bound() const override { return 1.0 / params_.kmin_hi; }
   double cd_upper_bound() const override { return params_.kmax_hi; }
   const CurvatureParams& params() const { return params_; }
 
  private:
+  // v2 of a sample with no point behind of its own (a marker, never a projected normal: those are finite).
+  static constexpr double kNoBehind = std::numeric_limits<double>::quiet_NaN();
+
+  // v3 of a sample_exact(): cd() takes the angles with the exact atan.
+  static constexpr double kExactAngles = std::numeric_limits<double>::infinity();
+
+  static double slope_along(Gradient g, Vec2 m) {
+    return static_cast<double>(g.x) * m.x + static_cast<double>(g.y) * m.y;
+  }
+  // n''_x of the slope t along the motion (docs/METHODS.md, "Projection into the plane of motion").
+  static double projected(double t) { return -t / std::sqrt(1.0 + t * t); }
+
   CurvatureParams params_;
 };
 

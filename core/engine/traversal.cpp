@@ -96,9 +96,11 @@ class Walker {
     return {box.x + 0.5, box.y + 0.5};
   }
 
-  // Sample of the texel the walk is in (nearest: its value; bilinear: at its chord's midpoint).
+  // Sample of the texel the walk is in (nearest: its value; bilinear: at its chord's midpoint). Once per step,
+  // forced inline: out of line, the sample goes through memory (the curvature method's pair of normals made
+  // GCC leave it out).
   template <typename M>
-  TexelSample sample_here(const Region& region, const M& method) {
+  PH_ALWAYS_INLINE TexelSample sample_here(const Region& region, const M& method, Vec2 m) {
     if constexpr (Mode == WalkMode::bilinear) {
       // The current texel's chord from the walk's own boundary distances: no division.
       const double t_in = std::max(sx_ != 0 ? tmx_ - tdx_ : -kInf, sy_ != 0 ? tmy_ - tdy_ : -kInf);
@@ -108,7 +110,7 @@ class Walker {
       sample_point_ = at;
       return method.sample_at(&region.fields, region.local(texel_), at - corner(region), m_);
     } else {
-      return method.sample(&region.fields, region.local(texel_), m_);
+      return method.sample(&region.fields, region.local(texel_), m);
     }
   }
 
@@ -124,7 +126,8 @@ class Walker {
   }
 
   template <typename M>
-  double step_cd(const Region& region, const M& method, const TexelSample& from, const TexelSample& to, bool entered) {
+  PH_ALWAYS_INLINE double step_cd(const Region& region, const M& method, const TexelSample& from, const TexelSample& to,
+                                  bool entered) {
     const double step_px = Mode == WalkMode::bilinear ? step_px_ : 1.0;
     if (observer_ == nullptr) return count_step(method.cd(from, to, step_px, nullptr), entered);
     StepDetail detail;
@@ -160,10 +163,13 @@ class Walker {
   void walk_region(std::size_t index, const M& method, bool first_leg) {
     const Region& region = scene_.regions()[index];
     TexelSample previous = sample_from(method);
+    // A copy the compiler can keep in registers: what a method derives from the direction is then computed
+    // once per leg, not per step (m_ could alias the walk's stores).
+    const Vec2 m = m_;
     // Inlined, so that the samples stay in registers: an out-of-line call per step cost the depth method a
     // fifth of its typical frame.
-    step_through(index, first_leg, [&](bool entered) PH_ALWAYS_INLINE {
-      const TexelSample here = sample_here(region, method);
+    step_through(index, first_leg, [&, m](bool entered) PH_ALWAYS_INLINE {
+      const TexelSample here = sample_here(region, method, m);
       const double cd = step_cd(region, method, previous, here, entered);
       previous = here;
       return cd;

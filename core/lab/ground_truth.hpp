@@ -4,7 +4,8 @@
 // traversal, the storage and the sampling of the engine from outside (docs/SPEED_VS_ACCURACY.md, "Ground truth").
 //
 // The continuous C/D (our analogue of the engine's step, docs/METHODS.md). The engine gives the segment
-// inside texel p2 the C/D of the pair (p1, p2), p1 the texel it came from, their centres 1 px apart. The continuous
+// inside texel p2 the C/D of a pair read along the motion: p2's centre and the point 1 px behind it (the
+// curvature method interpolates the normal there; the depth method takes upwind differences). The continuous
 // analogue at a point p moving along the unit direction m takes the pair (p - m, p): the point itself and the point
 // one px behind it along the motion, both at exact positions, with exact values:
 //   the method's cd() with its sample_exact() at p - m as the first sample and at p as the second, and a step of
