@@ -50,7 +50,8 @@ RegionFields load_region_fields(const FieldSources& sources, std::int32_t width,
   // Depth is read once, for the depth itself or for normals when there is no normal map; nothing else is read.
   const bool gradient_from_depth_map = needs.gradient && !sources.normal_map;
   std::optional<DepthField> depth;
-  if (needs.depth || gradient_from_depth_map) {
+  const bool wants_depth = needs.depth || (needs.depth_if_given && sources.depth_map);
+  if (wants_depth || gradient_from_depth_map) {
     depth = load_depth(*sources.depth_map, sources.depth_options, width, height, report.depth, limits);
   }
 
@@ -61,7 +62,7 @@ RegionFields load_region_fields(const FieldSources& sources, std::int32_t width,
                           : gradient_from_normals(load_normals(*sources.normal_map, sources.normal_options, width,
                                                                height, report.normals, limits));
   }
-  if (needs.depth) fields.depth = std::move(depth);
+  if (wants_depth) fields.depth = std::move(depth);
   return fields;
 }
 

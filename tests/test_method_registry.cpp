@@ -104,7 +104,7 @@ std::string error_of(const std::string& text, const MethodRegistry& methods) {
 
 TEST(MethodRegistry, AddsAMethodByItsEntryOnly) {
   MethodRegistry methods = with_blend();
-  EXPECT_EQ(methods.names(), "curvature, depth, none, blend");
+  EXPECT_EQ(methods.names(), "curvature, depth, none, hybrid, blend");
   EXPECT_THROW(methods.add(method_entry<BlendMethod>()), std::invalid_argument);
   const MethodPtr blend = make_default_method(methods, "blend");
   EXPECT_EQ(blend->name(), "blend");
@@ -134,7 +134,8 @@ TEST(MethodRegistry, SceneFileReadsTheNewMethodAndItsTable) {
       error_of("[[region]]\nwidth = 4\nheight = 4\nnormal_map = \"n.png\"\nmethod = \"blend\"\n", methods);
   EXPECT_NE(nodepth.find("the blend method needs a depth_map"), std::string::npos) << nodepth;
   const std::string builtin = error_of(region, builtin_methods());
-  EXPECT_NE(builtin.find("unknown method 'blend' (allowed: curvature, depth, none)"), std::string::npos) << builtin;
+  EXPECT_NE(builtin.find("unknown method 'blend' (allowed: curvature, depth, none, hybrid)"), std::string::npos)
+      << builtin;
 }
 
 // A stroke across the centre row, as trace runs it: the C/D of every texel step, in order (the frames' first

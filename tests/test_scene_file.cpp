@@ -187,7 +187,7 @@ TEST(SceneFileParse, PathsOfASceneWithoutFolderStayAsWritten) {
 
 TEST(SceneFileParse, MethodNamesAndMethods) {
   const MethodRegistry methods = builtin_methods();
-  EXPECT_EQ(methods.names(), "curvature, depth, none");
+  EXPECT_EQ(methods.names(), "curvature, depth, none, hybrid");
   EXPECT_NE(methods.find("curvature"), nullptr);
   EXPECT_NE(methods.find("depth"), nullptr);
   EXPECT_EQ(methods.find("Depth"), nullptr);

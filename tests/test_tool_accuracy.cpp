@@ -76,6 +76,9 @@ TEST(ToolAccuracy, SmallRunWritesTheThreeCsvFiles) {
   EXPECT_LT(value("curvature/exact/f32/nearest", kCdRms), value("curvature/exact/n8/nearest", kCdRms));
   EXPECT_LT(value("depth/exact/f32/nearest", kCdRms), value("depth/exact/d8/nearest", kCdRms));
   EXPECT_LT(value("curvature/exact/f32/nearest", kEndRms), value("curvature/exact/d8/nearest", kEndRms));
+  // The hybrid's smoothing within the map's noise: on 8-bit normal maps its C/D error is well below the curvature
+  // method's (measured 0.032 against 0.071).
+  EXPECT_LT(value("hybrid/exact/n8/nearest", kCdRms), 0.6 * value("curvature/exact/n8/nearest", kCdRms));
 
   // Each variant ends within its documented bound of the ground truth (docs/SPEED_VS_ACCURACY.md, "Error
   // bounds": the --small run's worst end error, plus a quarter, per method, traversal and sampling; 8-bit depth
@@ -86,14 +89,14 @@ TEST(ToolAccuracy, SmallRunWritesTheThreeCsvFiles) {
     double other_px, depth8_px;
   };
   const Bound bounds[] = {
-      {"curvature/exact/", "/nearest", 7, 149},
+      {"curvature/exact/", "/nearest", 3, 137},
       {"curvature/exact/", "/bilinear", 5, 140},
       {"curvature/unit_steps/", "/nearest", 5, 128},
-      {"curvature/unit_steps/", "/bilinear", 4, 124},
-      {"curvature/frame_midpoint/", "/nearest", 26, 244},
-      {"curvature/frame_midpoint/", "/bilinear", 6, 183},
-      {"curvature/direction_lut8/", "/nearest", 29, 137},
-      {"curvature/direction_lut16/", "/nearest", 7, 148},
+      {"curvature/unit_steps/", "/bilinear", 4, 119},
+      {"curvature/frame_midpoint/", "/nearest", 8, 217},
+      {"curvature/frame_midpoint/", "/bilinear", 6, 260},
+      {"curvature/direction_lut8/", "/nearest", 25, 128},
+      {"curvature/direction_lut16/", "/nearest", 7, 154},
       {"depth/exact/", "/nearest", 2, 28},
       {"depth/exact/", "/bilinear", 4, 16},
       {"depth/unit_steps/", "/nearest", 4, 99},
@@ -102,6 +105,14 @@ TEST(ToolAccuracy, SmallRunWritesTheThreeCsvFiles) {
       {"depth/frame_midpoint/", "/bilinear", 5, 72},
       {"depth/direction_lut8/", "/nearest", 56, 27},
       {"depth/direction_lut16/", "/nearest", 19, 28},
+      {"hybrid/exact/", "/nearest", 3, 137},
+      {"hybrid/exact/", "/bilinear", 5, 140},
+      {"hybrid/unit_steps/", "/nearest", 3, 129},
+      {"hybrid/unit_steps/", "/bilinear", 4, 128},
+      {"hybrid/frame_midpoint/", "/nearest", 6, 215},
+      {"hybrid/frame_midpoint/", "/bilinear", 6, 251},
+      {"hybrid/direction_lut8/", "/nearest", 26, 131},
+      {"hybrid/direction_lut16/", "/nearest", 7, 154},
   };
   constexpr std::size_t kEndMax = 13;
   std::size_t checked = 0;

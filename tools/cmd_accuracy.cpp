@@ -206,7 +206,7 @@ RegionFields build_fields(const Shape& shape, FieldNeeds needs, Storage storage,
   switch (storage) {
     case Storage::f32:
       if (needs.gradient) fields.gradient = shape.gradient_field();
-      if (needs.depth) fields.depth = shape.depth_field();
+      if (needs.depth || needs.depth_if_given) fields.depth = shape.depth_field();
       break;
     case Storage::n16:
     case Storage::n8:
@@ -216,7 +216,7 @@ RegionFields build_fields(const Shape& shape, FieldNeeds needs, Storage storage,
     case Storage::d8: {
       DepthField depth = decode_depth(source.image, {0.5, 2.0 * shape.relief_px()}, report);
       if (needs.gradient) fields.gradient = gradient_from_depth(depth);
-      if (needs.depth) fields.depth = std::move(depth);
+      if (needs.depth || needs.depth_if_given) fields.depth = std::move(depth);
       break;
     }
   }

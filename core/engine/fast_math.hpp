@@ -5,12 +5,20 @@
 #include <cstdint>
 #include <numbers>
 
+// For what the walk calls once per step (a lambda, a method's arithmetic): GCC otherwise may leave it out of
+// line once a translation unit has many walks, and the samples then go through memory.
+#if defined(__GNUC__)
+#define PH_ALWAYS_INLINE __attribute__((always_inline))
+#else
+#define PH_ALWAYS_INLINE
+#endif
+
 namespace ph {
 
 // atan to about 2e-7 rad (float accuracy) at a third of libm's cost: reduction to |r| <= tan(pi/8) and
 // the classic odd minimax polynomial of single-precision atan. The curvature method only needs the
 // angle difference of neighbouring texels in degrees to ~1e-5 (tests/test_methods.cpp checks the bound).
-inline double fast_atan(double x) {
+PH_ALWAYS_INLINE inline double fast_atan(double x) {
   constexpr double kTan3PiOver8 = 2.414213562373095;
   constexpr double kTanPiOver8 = 0.4142135623730950;
   const double ax = std::abs(x);

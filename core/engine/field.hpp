@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -50,14 +51,23 @@ using NormalImage = Grid<Normal>;      // decoded unit normals, only while loadi
 struct FieldNeeds {
   bool gradient = false;
   bool depth = false;
+  bool depth_if_given = false;  // reads the heights where the region has a depth map, works without them
 };
+
+// What a method derives from the fields when a scene is built (Method::prepare): the hybrid method's texels
+// where the height changes more than the normals explain (1) and the rest (0).
+using DiscontinuityField = Grid<std::uint8_t>;
 
 // The fields of one region, each present only when the region's method needs it.
 struct RegionFields {
   std::optional<GradientField> gradient;
   std::optional<DepthField> depth;
+  std::optional<DiscontinuityField> discontinuity;
 
-  std::size_t bytes() const { return (gradient ? gradient->bytes() : 0) + (depth ? depth->bytes() : 0); }
+  std::size_t bytes() const {
+    return (gradient ? gradient->bytes() : 0) + (depth ? depth->bytes() : 0) +
+           (discontinuity ? discontinuity->bytes() : 0);
+  }
 };
 
 // Gradient of a unit normal with n_z > 0: g = (-n_x / n_z, -n_y / n_z).

@@ -11,13 +11,6 @@
 #include "core/engine/geometry.hpp"
 #include "core/engine/scene.hpp"
 
-// For a lambda the walk calls once per step: GCC otherwise may leave it out of line.
-#if defined(__GNUC__)
-#define PH_ALWAYS_INLINE __attribute__((always_inline))
-#else
-#define PH_ALWAYS_INLINE
-#endif
-
 namespace ph {
 
 inline int sign_of(double v) { return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0); }

@@ -60,6 +60,10 @@ class Method {
   virtual std::string_view name() const = 0;
   virtual FieldNeeds needs() const = 0;
 
+  // Derives at load, once, what the method reads beyond the loaded fields (Scene's constructor calls it after
+  // checking them), so that a step costs no more than its reads. The default derives nothing.
+  virtual void prepare(RegionFields& fields) const { static_cast<void>(fields); }
+
   // Sample of texel `local` of a region's fields; a region whose fields lack what this method reads
   // (or a texel outside every region, `fields == nullptr`) gives the flat surface's sample.
   virtual TexelSample sample(const RegionFields* fields, Texel local, Vec2 direction) const = 0;

@@ -36,8 +36,8 @@ double slope_angle(Gradient g, Vec2 direction);
 
 // Eq. 1-3 from the two projected values a1 = n''_x(p1), a2 = n''_x(p2) and the difference of the slope angles
 // theta1 - theta2, theta = asin(-a) (passed to avoid recomputing acos). detail may be null.
-inline double curvature_cd_of_change(const CurvatureParams& p, double a1, double a2, double theta1_minus_theta2,
-                                     StepDetail* detail) {
+PH_ALWAYS_INLINE inline double curvature_cd_of_change(const CurvatureParams& p, double a1, double a2,
+                                                      double theta1_minus_theta2, StepDetail* detail) {
   // Eq. 1: cos(alpha) is the mean of the projected normals; delta-beta = acos(a1) - acos(a2) = theta1 - theta2.
   const double cos_alpha = 0.5 * (a1 + a2);
   const double delta_beta = p.delta_beta_sign * theta1_minus_theta2 * (180.0 / std::numbers::pi);
@@ -64,7 +64,7 @@ inline double curvature_cd(const CurvatureParams& p, double a1, double theta1, d
 // atan(t1) - atan(t2) with one arctangent: atan((t1 - t2) / (1 + t1 t2)), plus or minus pi where the denominator
 // is negative (slopes of opposite sign, both steeper than 45 degrees: an apex or a gully), to fast_atan's
 // accuracy. Equal slopes give exactly 0.
-inline double slope_angle_change(double t1, double t2) {
+PH_ALWAYS_INLINE inline double slope_angle_change(double t1, double t2) {
   const double num = t1 - t2, den = 1.0 + t1 * t2;
   if (den > 0.0) [[likely]]
     return fast_atan(num / den);
@@ -155,11 +155,11 @@ class CurvatureMethod final : public Method {
   // v3 of a sample_exact(): cd() takes the angles with the exact atan.
   static constexpr double kExactAngles = std::numeric_limits<double>::infinity();
 
-  static double slope_along(Gradient g, Vec2 m) {
+  PH_ALWAYS_INLINE static double slope_along(Gradient g, Vec2 m) {
     return static_cast<double>(g.x) * m.x + static_cast<double>(g.y) * m.y;
   }
   // n''_x of the slope t along the motion (docs/METHODS.md, "Projection into the plane of motion").
-  static double projected(double t) { return -t / std::sqrt(1.0 + t * t); }
+  PH_ALWAYS_INLINE static double projected(double t) { return -t / std::sqrt(1.0 + t * t); }
 
   CurvatureParams params_;
 };

@@ -8,6 +8,7 @@
 #include <limits>
 #include <string>
 
+#include "core/engine/fast_math.hpp"
 #include "core/engine/field_sampling.hpp"
 #include "core/engine/method.hpp"
 #include "core/engine/method_registry.hpp"
@@ -23,7 +24,8 @@ struct DepthParams {
 std::string validate(const DepthParams& params);
 
 // CD = clamp(1 + gain * dh / step, 1 / kmin, kmax). detail may be null.
-inline double depth_cd(const DepthParams& p, double h1, double h2, double step_px, StepDetail* detail) {
+PH_ALWAYS_INLINE inline double depth_cd(const DepthParams& p, double h1, double h2, double step_px,
+                                        StepDetail* detail) {
   const double dh = h2 - h1;
   const double slope = step_px > 0.0 ? dh / step_px : 0.0;
   double cd = std::clamp(1.0 + p.gain * slope, 1.0 / p.kmin, p.kmax);

@@ -8,6 +8,7 @@
 #include "core/engine/method_curvature.hpp"
 #include "core/engine/method_depth.hpp"
 #include "core/engine/method_flat.hpp"
+#include "core/engine/method_hybrid.hpp"
 #include "core/engine/method_registry.hpp"
 
 namespace ph {
@@ -15,7 +16,7 @@ namespace ph {
 template <typename... M>
 struct MethodList {};
 
-using Methods = MethodList<CurvatureMethod, DepthMethod, FlatMethod>;
+using Methods = MethodList<CurvatureMethod, DepthMethod, FlatMethod, HybridMethod>;
 
 namespace detail {
 

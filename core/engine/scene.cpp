@@ -55,6 +55,7 @@ Scene::Scene(std::vector<Region> regions) : regions_(std::move(regions)) {
   for (Region& region : regions_) {
     check_region(region);
     flatten_non_finite(region.fields);
+    region.method->prepare(region.fields);
     has_effects_ = has_effects_ || !region.effects.empty();
   }
 }

@@ -137,7 +137,7 @@ class Walker {
   }
 
   // The bookkeeping of every step: the frame's C/D range, the step count, whether C/D stayed 1.
-  double count_step(double cd, bool entered) {
+  PH_ALWAYS_INLINE double count_step(double cd, bool entered) {
     all_unit_ = all_unit_ && cd == 1.0;
     result_.cd_min = std::min(result_.cd_min, cd);
     result_.cd_max = std::max(result_.cd_max, cd);
@@ -193,7 +193,7 @@ class Walker {
   // each at the C/D that cd_here(entered) gives for the texel the walk is in (called once per texel, in
   // order, so it may keep the previous texel's sample).
   template <typename CdHere>
-  void step_through(std::size_t index, bool first_leg, CdHere&& cd_here) {
+  PH_ALWAYS_INLINE void step_through(std::size_t index, bool first_leg, CdHere&& cd_here) {
     const Region& region = scene_.regions()[index];
     double cd = cd_here(!first_leg);
     const bool topmost = index + 1 == scene_.regions().size();

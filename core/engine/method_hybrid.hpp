@@ -1,0 +1,98 @@
+// The hybrid of the curvature and depth methods that the curvature paper proposes for its method's two failure
+// modes (docs/METHODS.md, "Hybrid"): where the height changes across a texel edge by more than the normals
+// explain (a discontinuity, which a normal map cannot show), the depth method's C/D; elsewhere the curvature
+// method's, on normals smoothed where their differences are within the map's noise, more so further from the
+// viewer. Everything is derived once at load (prepare); a step costs the curvature method's plus one byte read.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+
+#include "core/engine/method.hpp"
+#include "core/engine/method_curvature.hpp"
+#include "core/engine/method_depth.hpp"
+#include "core/engine/method_registry.hpp"
+
+namespace ph {
+
+struct HybridParams {
+  // Height change across a texel edge, beyond what the normals on its two sides explain, that makes the edge a
+  // discontinuity (px).
+  double discontinuity_px = 0.5;
+  // A texel's gradient is replaced by the smoothed one where they differ by at most this (per component, px
+  // per px): about one code of an 8-bit normal map at a flat texel (2/255 = 0.0078). 0: no smoothing.
+  double noise_slope = 0.01;
+  // How much wider that band is at the region's lowest height than at its highest (the paper: smooth more
+  // further from the viewer); 0: the same everywhere.
+  double far_noise_gain = 1.0;
+};
+
+std::string validate(const HybridParams& params);
+
+// Smooths `fields.gradient` within the noise band and marks the discontinuities, as HybridMethod::prepare does
+// (exposed for tests). Without a depth field no texel is a discontinuity and the band is the same everywhere.
+void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields);
+
+class HybridMethod final : public Method {
+ public:
+  using Params = HybridParams;
+  static constexpr std::string_view kName = "hybrid";
+  static constexpr std::array<std::string_view, 3> kParamKeys = {"discontinuity_px", "noise_slope", "far_noise_gain"};
+  static HybridParams parse_params(const ParamReader& reader);
+
+  explicit HybridMethod(const HybridParams& params);  // throws std::invalid_argument if invalid
+
+  std::string_view name() const override { return kName; }
+  // Heights where a depth map is given (a normal map alone: no discontinuity can be found, since heights
+  // integrated from the normals would be explained by them everywhere).
+  FieldNeeds needs() const override { return {.gradient = true, .depth = false, .depth_if_given = true}; }
+  void prepare(RegionFields& fields) const override;
+
+  // Curvature's sample (v0-v3) of the smoothed normals; on a discontinuity texel, depth's (v4, v5) with v2 =
+  // kDepthStep. Inline: the traversal calls these directly on the final class.
+#if defined(__GNUC__)
+  [[gnu::always_inline]]
+#endif
+  TexelSample
+  sample(const RegionFields* fields, Texel local, Vec2 m) const override {
+    if (fields != nullptr && fields->discontinuity && fields->depth &&
+        fields->discontinuity->values[static_cast<std::size_t>(local.y) * fields->discontinuity->width + local.x])
+        [[unlikely]] {
+      const TexelSample d = depth_.sample(fields, local, m);
+      if (!std::isnan(d.v1)) return {0.0, 0.0, kDepthStep, 0.0, d.v0, d.v1};
+    }
+    return curvature_.sample(fields, local, m);
+  }
+  TexelSample sample_at(const RegionFields* fields, Texel local, Vec2 at, Vec2 m) const override {
+    return curvature_.sample_at(fields, local, at, m);
+  }
+  // The analytic surfaces of the ground truth are continuous: the curvature method's exact sample.
+  TexelSample sample_exact(const SurfacePoint& point, Vec2 m) const override {
+    return curvature_.sample_exact(point, m);
+  }
+#if defined(__GNUC__)
+  [[gnu::always_inline]]
+#endif
+  double
+  cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
+    if (to.v2 == kDepthStep) [[unlikely]]
+      return depth_cd(depth_.params(), 0.0, to.v5, 1.0, detail);
+    return curvature_.cd(from, to, step_px, detail);
+  }
+  double cd_lower_bound() const override { return std::min(curvature_.cd_lower_bound(), depth_.cd_lower_bound()); }
+  double cd_upper_bound() const override { return std::max(curvature_.cd_upper_bound(), depth_.cd_upper_bound()); }
+  const HybridParams& params() const { return params_; }
+
+ private:
+  // v2 of a discontinuity texel's sample (curvature's v2 is finite or NaN, never infinite).
+  static constexpr double kDepthStep = std::numeric_limits<double>::infinity();
+
+  HybridParams params_;
+  CurvatureMethod curvature_{CurvatureParams{}};
+  DepthMethod depth_{DepthParams{}};
+};
+
+}  // namespace ph

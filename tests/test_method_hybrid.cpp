@@ -1,0 +1,202 @@
+// The hybrid method (docs/METHODS.md, "Hybrid"): the depth method's C/D where the heights jump more than the
+// normals explain, the curvature method's elsewhere, on normals smoothed within the map's noise.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "config/scene_file.hpp"
+#include "core/engine/methods.hpp"
+#include "core/engine/targets.hpp"
+#include "core/engine/traversal.hpp"
+
+namespace ph {
+namespace {
+
+class Recorder final : public StepObserver {
+ public:
+  void on_step(const StepRecord& step) override { steps.push_back(step); }
+  std::vector<StepRecord> steps;
+};
+
+Scene one_region(RegionFields fields, Rect rect, MethodPtr method) {
+  Region region;
+  region.name = "r";
+  region.rect = rect;
+  region.fields = std::move(fields);
+  region.method = std::move(method);
+  std::vector<Region> regions;
+  regions.push_back(std::move(region));
+  return Scene(std::move(regions));
+}
+
+// A 64 x 16 region, flat normals everywhere, heights 0 left of x = 32 and 10 px from x = 32 on: a cliff that a
+// normal map cannot show.
+RegionFields cliff_fields() {
+  RegionFields fields;
+  fields.gradient = GradientField(64, 16, Gradient{});
+  fields.depth = DepthField(64, 16, 0.0f);
+  for (int y = 0; y < 16; ++y) {
+    for (int x = 32; x < 64; ++x) fields.depth->at(x, y) = 10.0f;
+  }
+  return fields;
+}
+
+// C/D of each texel entered along the row y = 8.5 from x0 to x1 (px), keyed by texel x.
+std::vector<std::pair<int, double>> row_cds(const Scene& scene, double x0, double x1) {
+  Recorder recorder;
+  CursorState cursor = cursor_at({x0, 8.5});
+  const Vec2 m{x1 > x0 ? 1.0 : -1.0, 0.0};
+  for (int i = 0; i < 1000 && (x1 - cursor.position.x) * m.x > 0.0; ++i) advance(scene, cursor, m * 0.5, &recorder);
+  std::vector<std::pair<int, double>> out;
+  for (const StepRecord& s : recorder.steps) {
+    if (s.entered) out.emplace_back(s.texel.x, s.cd);
+  }
+  return out;
+}
+
+TEST(HybridMethod, TakesTheDepthCdAtACliffTheNormalsDoNotShow) {
+  const auto hybrid = std::make_shared<HybridMethod>(HybridParams{});
+  const Scene scene = one_region(cliff_fields(), {0, 0, 64, 16}, hybrid);
+  const DiscontinuityField& marks = *scene.regions()[0].fields.discontinuity;
+  for (int x = 0; x < 64; ++x) EXPECT_EQ(marks.at(x, 8), x == 31 || x == 32 ? 1 : 0) << x;
+  const DepthParams depth;
+  // Uphill across the cliff: the texel after it has the depth method's C/D for a 10 px rise (its kmax).
+  for (const auto& [x, cd] : row_cds(scene, 5.0, 60.0)) {
+    if (x == 32) {
+      EXPECT_EQ(cd, depth.kmax) << x;
+    } else {
+      EXPECT_EQ(cd, 1.0) << x;  // flat on both sides: the curvature method's C/D 1
+    }
+  }
+  // Downhill: its smallest C/D.
+  for (const auto& [x, cd] : row_cds(scene, 60.0, 5.0)) {
+    if (x == 31) {
+      EXPECT_EQ(cd, 1.0 / depth.kmin) << x;
+    } else {
+      EXPECT_EQ(cd, 1.0) << x;
+    }
+  }
+  // The curvature method on the same fields never sees it.
+  const Scene curvature =
+      one_region(cliff_fields(), {0, 0, 64, 16}, std::make_shared<CurvatureMethod>(CurvatureParams{}));
+  for (const auto& [x, cd] : row_cds(curvature, 5.0, 60.0)) EXPECT_EQ(cd, 1.0) << x;
+}
+
+TEST(HybridMethod, ASlopeTheNormalsExplainIsNoDiscontinuity) {
+  // A ramp of 2 px per px along x with matching normals, and a 0.4 px step (below discontinuity_px).
+  RegionFields fields;
+  fields.gradient = GradientField(32, 8, Gradient{2.0f, 0.0f});
+  fields.depth = DepthField(32, 8);
+  for (int y = 0; y < 8; ++y) {
+    for (int x = 0; x < 32; ++x) fields.depth->at(x, y) = 2.0f * x + (x >= 16 ? 0.4f : 0.0f);
+  }
+  const Scene scene = one_region(std::move(fields), {0, 0, 32, 8}, std::make_shared<HybridMethod>(HybridParams{}));
+  for (std::uint8_t mark : scene.regions()[0].fields.discontinuity->values) EXPECT_EQ(mark, 0);
+}
+
+// On the 24 targets the only discontinuities are the Gaussian profile's rim, where the truncated Gaussian
+// steps down by about 1 px (docs/METHODS.md, "The 24 targets"); kinks (the linear apex, the rims of the linear and
+// polynomial profiles) are explained by the normals. Where nothing is marked, and with no smoothing asked for,
+// the hybrid is the curvature method, bit for bit, step by step.
+TEST(HybridMethod, IsTheCurvatureMethodOnContinuousMapsWithoutSmoothing) {
+  HybridParams no_smoothing;
+  no_smoothing.noise_slope = 0.0;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (const TargetSpec& spec : all_targets()) {
+    const Rect rect{0, 0, spec.size, spec.size};
+    RegionFields fields;
+    fields.gradient = target_gradient_field(spec);
+    fields.depth = target_depth_field(spec);
+    const Scene hybrid = one_region(fields, rect, std::make_shared<HybridMethod>(no_smoothing));
+    const DiscontinuityField& marks = *hybrid.regions()[0].fields.discontinuity;
+    int marked = 0;
+    for (int y = 0; y < spec.size; ++y) {
+      for (int x = 0; x < spec.size; ++x) {
+        if (marks.at(x, y) == 0) continue;
+        ++marked;
+        const double r = std::hypot(x + 0.5 - spec.size / 2.0, y + 0.5 - spec.size / 2.0);
+        ASSERT_LT(std::abs(r - spec.radius), 1.5) << spec.name() << " " << x << "," << y;
+      }
+    }
+    const bool gaussian_step = spec.profile == TargetProfile::gaussian && spec.height == 1.0;
+    EXPECT_EQ(marked > 0, gaussian_step) << spec.name();
+    if (marked > 0) continue;
+    const Scene curvature = one_region(fields, rect, std::make_shared<CurvatureMethod>(CurvatureParams{}));
+    for (int k = 0; k < 6; ++k) {
+      const double phi = 2.0 * std::numbers::pi * u(rng);
+      const Vec2 m{std::cos(phi), std::sin(phi)};
+      CursorState a = cursor_at({spec.size / 2.0 - 200.0 * m.x, spec.size / 2.0 - 200.0 * m.y}), b = a;
+      for (int f = 0; f < 100; ++f) {
+        const Vec2 motor = m * (0.3 + 6.0 * u(rng));
+        const FrameResult ra = advance(hybrid, a, motor), rb = advance(curvature, b, motor);
+        ASSERT_EQ(ra.display.x, rb.display.x) << spec.name();
+        ASSERT_EQ(ra.display.y, rb.display.y) << spec.name();
+        ASSERT_EQ(ra.cd_max, rb.cd_max) << spec.name();
+      }
+    }
+  }
+}
+
+// Smoothing within the noise band: an 8-bit-like rounding of a gentle slope (steps of 1/128 in the gradient)
+// becomes the slope again, and a rim (a jump of 0.5 in the gradient) stays sharp.
+TEST(HybridMethod, SmoothsNoiseAndKeepsFeatures) {
+  RegionFields fields;
+  fields.gradient = GradientField(64, 8);
+  for (int y = 0; y < 8; ++y) {
+    for (int x = 0; x < 64; ++x) {
+      const double exact = 0.002 * x;  // the slope of a gentle curve
+      const double rounded = std::round(exact * 128.0) / 128.0;
+      fields.gradient->at(x, y) = {static_cast<float>(x < 48 ? rounded : 0.5 + rounded), 0.0f};
+    }
+  }
+  const RegionFields before = fields;
+  prepare_hybrid_fields(HybridParams{}, fields);
+  double rounded_error = 0.0, smoothed_error = 0.0;
+  for (int x = 4; x < 44; ++x) {
+    rounded_error += std::abs(before.gradient->at(x, 4).x - 0.002 * x);
+    smoothed_error += std::abs(fields.gradient->at(x, 4).x - 0.002 * x);
+  }
+  EXPECT_LT(smoothed_error, 0.5 * rounded_error);
+  // Either side of the rim keeps its own value.
+  EXPECT_EQ(fields.gradient->at(47, 4).x, before.gradient->at(47, 4).x);
+  EXPECT_EQ(fields.gradient->at(48, 4).x, before.gradient->at(48, 4).x);
+}
+
+TEST(HybridMethod, NeverGivesNanOrLeavesItsBounds) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  RegionFields fields;
+  fields.gradient = GradientField(40, 40);
+  fields.depth = DepthField(40, 40);
+  for (Gradient& g : fields.gradient->values) g = {static_cast<float>(50.0 * u(rng)), static_cast<float>(1e5 * u(rng))};
+  for (float& h : fields.depth->values) h = static_cast<float>(1e4 * u(rng));
+  const auto method = std::make_shared<HybridMethod>(HybridParams{});
+  const Scene scene = one_region(std::move(fields), {10, 10, 40, 40}, method);
+  CursorState cursor = cursor_at({30.0, 30.0});
+  for (int i = 0; i < 20000; ++i) {
+    const FrameResult r = advance(scene, cursor, {7.0 * u(rng), 7.0 * u(rng)});
+    ASSERT_TRUE(std::isfinite(r.display.x) && std::isfinite(r.display.y));
+    ASSERT_GE(r.cd_min, method->cd_lower_bound());
+    ASSERT_LE(r.cd_max, method->cd_upper_bound());
+    if (std::abs(cursor.position.x - 30.0) > 25.0 || std::abs(cursor.position.y - 30.0) > 25.0)
+      cursor = cursor_at({30.0, 30.0});
+  }
+}
+
+TEST(HybridMethod, SceneFileNamesItWithItsTableAndANormalMapAlone) {
+  const std::string region = "[[region]]\nwidth = 4\nheight = 4\nnormal_map = \"n.png\"\nmethod = \"hybrid\"\n";
+  const SceneSpec spec = parse_scene_text(region + "[region.hybrid]\ndiscontinuity_px = 2\nnoise_slope = 0\n", "h.toml",
+                                          builtin_methods());
+  ASSERT_EQ(spec.regions.size(), 1u);
+  EXPECT_EQ(spec.regions[0].method, "hybrid");
+  EXPECT_THROW(parse_scene_text(region + "[region.hybrid]\nnoise_slope = -1\n", "h.toml", builtin_methods()),
+               ConfigError);
+}
+
+}  // namespace
+}  // namespace ph
