@@ -136,7 +136,7 @@ TEST(StabilityProperties, ReportRateMattersForUnitSteps) {
   EXPECT_GT(r.rate_px, 1e-3);
 }
 
-// The issue the paper names: a C-1 step whose normals are flat on both sides.
+// The failure the curvature paper names: a C-1 step whose normals are flat on both sides.
 TEST(StabilityProperties, AJumpWithFlatNormalsIsInvisibleToCurvatureAndSeenByDepth) {
   for (double height : {1.0, 8.0}) {
     const StabilityRow curvature = measure("jump", height, method_named("curvature"));
@@ -146,6 +146,8 @@ TEST(StabilityProperties, AJumpWithFlatNormalsIsInvisibleToCurvatureAndSeenByDep
     EXPECT_EQ(curvature.jitter_rms, 0.0);
     EXPECT_GT(depth.contrast, 3.0);  // C/D 4 (the depth method's kmax) at the step, 1 around it
     EXPECT_EQ(depth.contrast_truth, 4.0);
+    // The hybrid finds the jump in its depth map and takes depth's C/D there.
+    EXPECT_GT(measure("jump", height, method_named("hybrid")).contrast, 3.0);
   }
 }
 

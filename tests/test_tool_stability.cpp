@@ -101,7 +101,7 @@ TEST(ToolStability, SmallRunWritesEveryModeMethodAndVariantWithinItsBounds) {
     variants.insert(row.at("variant"));
     ++per_mode[row.at("mode")];
   }
-  EXPECT_TRUE(methods.count("curvature") == 1 && methods.count("depth") == 1);
+  EXPECT_TRUE(methods.count("curvature") == 1 && methods.count("depth") == 1 && methods.count("hybrid") == 1);
   EXPECT_EQ(variants, (std::set<std::string>{"exact", "exact+bilinear"}));
   // Every mode at both small severities for every method and variant.
   for (const auto& [mode, n] : per_mode) EXPECT_EQ(n, static_cast<int>(2 * methods.size() * variants.size())) << mode;
@@ -120,32 +120,46 @@ TEST(ToolStability, SmallRunWritesEveryModeMethodAndVariantWithinItsBounds) {
   const Bound bounds[] = {
       {"jump", "curvature", {0.001, 0.001, 0.001, 0.001, 0.001}},
       {"jump", "depth", {0.069, 0.4, 3.3, 0.09, 4.6}},
+      {"jump", "hybrid", {0.55, 0.4, 8, 0.09, 5}},
       {"terraces", "curvature", {8.3, 1.5, 3.4e+02, 0.001, 2.2e+02}},
       {"terraces", "depth", {0.3, 0.79, 6, 0.001, 8.5}},
+      {"terraces", "hybrid", {5.6, 1.4, 2.2e+02, 0.001, 59}},
       {"cliff", "curvature", {1.3, 0.77, 8.8, 0.025, 13}},
       {"cliff", "depth", {0.085, 0.4, 2.8, 0.052, 4.9}},
+      {"cliff", "hybrid", {1.3, 0.77, 8.8, 0.025, 13}},
       {"cone", "curvature", {0.25, 0.6, 12, 0.3, 23}},
       {"cone", "depth", {0.096, 0.37, 1.5, 0.011, 2.3}},
+      {"cone", "hybrid", {0.26, 0.61, 12, 0.3, 23}},
       {"ridge", "curvature", {0.26, 0.34, 0.73, 0.049, 1.3}},
       {"ridge", "depth", {0.098, 0.43, 1.4, 0.034, 2.6}},
+      {"ridge", "hybrid", {0.25, 0.34, 1.2, 0.043, 1.3}},
       {"grating-a0.5", "curvature", {0.51, 0.37, 8.2, 0.086, 12}},
       {"grating-a0.5", "depth", {0.85, 2.2, 28, 0.039, 29}},
+      {"grating-a0.5", "hybrid", {2, 1.7, 1.2e+02, 0.086, 1.6e+02}},
       {"grating-a4", "curvature", {2.6, 1.2, 44, 0.26, 62}},
       {"grating-a4", "depth", {1.4, 2.3, 2.5, 0.033, 4.6}},
+      {"grating-a4", "hybrid", {3.4, 2.2, 1.6e+02, 0.19, 35}},
       {"quantised", "curvature", {0.062, 0.2, 0.91, 0.0063, 1.1}},
       {"quantised", "depth", {0.029, 0.089, 1.6, 0.015, 2.2}},
+      {"quantised", "hybrid", {0.036, 0.19, 1.7, 0.0018, 1}},
       {"normal-noise", "curvature", {1.5, 1.1, 40, 0.035, 30}},
       {"normal-noise", "depth", {0.018, 0.085, 1.3, 0.014, 1.9}},
+      {"normal-noise", "hybrid", {1.5, 1.1, 40, 0.038, 30}},
       {"fbm", "curvature", {1.2, 0.99, 9.2, 0.32, 17}},
       {"fbm", "depth", {0.19, 0.47, 4.9, 0.03, 7.1}},
+      {"fbm", "hybrid", {1.2, 0.99, 9.2, 0.32, 17}},
       {"grazing", "curvature", {0.001, 0.001, 0.0055, 0.001, 0.011}},
       {"grazing", "depth", {0.02, 0.069, 0.36, 0.025, 0.49}},
+      {"grazing", "hybrid", {0.001, 0.0011, 0.0069, 0.001, 0.014}},
       {"thin", "curvature", {0.24, 0.32, 11, 0.046, 7.1}},
       {"thin", "depth", {0.78, 0.36, 4, 0.045, 1.5}},
+      {"thin", "hybrid", {0.24, 0.32, 11, 0.046, 7.1}},
       {"border", "curvature", {0.21, 0.22, 0.7, 0.027, 0.98}},
       {"border", "depth", {0.15, 0.29, 1.1, 0.048, 1.5}},
+      {"border", "hybrid", {0.21, 0.22, 0.7, 0.027, 0.98}},
       {"overlap", "curvature", {0.001, 0.001, 0.001, 0.001, 0.001}},
       {"overlap", "depth", {0.064, 0.31, 1.8, 0.065, 2.5}},
+      {"overlap", "hybrid", {0.001, 0.001, 0.001, 0.001, 0.001}},
   };
   std::size_t checked = 0;
   for (const auto& row : rows) {

@@ -477,7 +477,7 @@ StabilityCase make_case(const std::string& mode, double severity, double angle_d
 RegionFields case_fields(const CaseMap& map, FieldNeeds needs) {
   RegionFields fields;
   if (needs.gradient) fields.gradient = gradient_from_normals(map.normals);
-  if (needs.depth) fields.depth = map.depth;
+  if (needs.depth || needs.depth_if_given) fields.depth = map.depth;  // every case has a depth map
   return fields;
 }
 

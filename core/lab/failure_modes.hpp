@@ -73,7 +73,8 @@ struct CaseGeometry {
 StabilityCase make_case(const std::string& mode, double severity, double angle_deg, const CaseGeometry& geometry);
 
 // The fields a method with `needs` reads, as the loader builds them from a normal map and a depth map
-// (config/field_loader.cpp): the gradient from the normals, the depth as given.
+// (config/field_loader.cpp): the gradient from the normals, the depth as given (also to a method that reads it only
+// where it is given). What a method derives from them (Method::prepare) is derived when case_scene builds the Scene.
 RegionFields case_fields(const CaseMap& map, FieldNeeds needs);
 
 // The case's scene with one method in every region and the engine variant selected.
