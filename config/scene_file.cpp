@@ -550,7 +550,7 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report) {
       throw ConfigError(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, e.what()));
     }
     if (!method_needs.gradient) region.fields.gradient.reset();
-    if (!method_needs.depth) region.fields.depth.reset();
+    if (!method_needs.depth && !method_needs.depth_if_given) region.fields.depth.reset();
     if (report != nullptr) report->regions.push_back(field_report);
     regions.push_back(std::move(region));
   }

@@ -3,15 +3,21 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <numbers>
 #include <random>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "config/scene_file.hpp"
+#include "config/target_files.hpp"
 #include "core/engine/methods.hpp"
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace ph {
 namespace {
@@ -196,6 +202,38 @@ TEST(HybridMethod, SceneFileNamesItWithItsTableAndANormalMapAlone) {
   EXPECT_EQ(spec.regions[0].method, "hybrid");
   EXPECT_THROW(parse_scene_text(region + "[region.hybrid]\nnoise_slope = -1\n", "h.toml", builtin_methods()),
                ConfigError);
+}
+
+// A target's scene file as `pseudohaptic targets` writes it (normal and depth maps), its method made the hybrid;
+// `drop` removes that line (e.g. the depth map) from the region.
+SceneSpec hybrid_target_scene(const std::filesystem::path& dir, const TargetSpec& target, const std::string& drop) {
+  const std::filesystem::path file = write_target_files(dir, {target}).front();
+  std::ifstream in(file);
+  std::ostringstream text;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!drop.empty() && line.rfind(drop, 0) == 0) continue;
+    if (line == "method = \"curvature\"") line = "method = \"hybrid\"";
+    text << line << "\n";
+  }
+  return parse_scene_text(text.str(), file, builtin_methods());
+}
+
+TEST(HybridMethod, LoadsFromASceneFileWithBothMapsOrTheNormalMapAlone) {
+  const TargetSpec target = all_targets()[6];  // bump-gaussian-h1-r100: its rim steps by about 1 px
+  ScratchDir dir;
+  const Scene both = load_scene(hybrid_target_scene(dir.path(), target, ""));
+  const RegionFields& fields = both.regions()[0].fields;
+  EXPECT_EQ(both.regions()[0].method->name(), "hybrid");
+  ASSERT_TRUE(fields.gradient && fields.depth && fields.discontinuity);
+  int marked = 0;
+  for (std::uint8_t mark : fields.discontinuity->values) marked += mark;
+  EXPECT_GT(marked, 0);
+  const Scene normals_only = load_scene(hybrid_target_scene(dir.path(), target, "depth_map"));
+  const RegionFields& alone = normals_only.regions()[0].fields;
+  ASSERT_TRUE(alone.gradient && alone.discontinuity);
+  EXPECT_FALSE(alone.depth);
+  for (std::uint8_t mark : alone.discontinuity->values) EXPECT_EQ(mark, 0);
 }
 
 }  // namespace

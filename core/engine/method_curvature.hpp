@@ -107,8 +107,9 @@ class CurvatureMethod final : public Method {
     const Gradient* texel = &f.values[static_cast<std::size_t>(local.y) * f.width + local.x];
     const double t = slope_along(texel[0], m);
     const double a = projected(t);
-    const std::int32_t nx = local.x + ox, ny = local.y + oy;
-    if (nx < 0 || ny < 0 || nx >= f.width || ny >= f.height) [[unlikely]]
+    // One unsigned compare per axis: a neighbour at -1 wraps to above the width.
+    const auto nx = static_cast<std::uint32_t>(local.x + ox), ny = static_cast<std::uint32_t>(local.y + oy);
+    if (nx >= static_cast<std::uint32_t>(f.width) || ny >= static_cast<std::uint32_t>(f.height)) [[unlikely]]
       return {a, t, kNoBehind, kNoBehind};
     const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(oy) * f.width;
     const double wx = std::abs(m.x), wy = std::abs(m.y);
