@@ -75,6 +75,24 @@ TEST(Stroke, WhatLiesPastTheEndIsNotMet) {
   EXPECT_EQ(rows, 0u);  // no texel of the slope
 }
 
+// The motor travel a stroke took: its length on the flat, C/D times its length on a uniform slope, whatever the step.
+TEST(Stroke, MotorTravelIsTheIntegralOfTheCd) {
+  std::vector<Region> regions;
+  regions.push_back(slope(0, 100, 0.5f));
+  const Scene scene(std::move(regions));
+  CursorState probe = cursor_at({10.5, 5.5});
+  const double cd = advance(scene, probe, {1.0, 0.0}).cd_max;  // the slope's C/D, uniform inside it
+  ASSERT_GT(cd, 1.0);
+  for (const double step : {0.7, 3.0, 50.0}) {
+    SCOPED_TRACE(step);
+    const StrokeResult on_slope = run_stroke(scene, {{20.25, 5.5}, {80.25, 5.5}, step, 10'000});
+    // The stroke stops 1e-9 x its length short of `to` (see run_stroke), so the travel is short by as much x C/D.
+    EXPECT_NEAR(on_slope.motor_px, 60.0 * cd, 1e-6);
+    const StrokeResult flat = run_stroke(Scene{}, {{20.25, 5.5}, {80.25, 5.5}, step, 10'000});
+    EXPECT_NEAR(flat.motor_px, 60.0, 1e-6);
+  }
+}
+
 TEST(Stroke, BadStrokes) {
   const Scene scene;
   StrokeSpec spec;

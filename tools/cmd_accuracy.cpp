@@ -69,14 +69,16 @@
 
 #include "core/engine/decode.hpp"
 #include "core/engine/engine_options.hpp"
-#include "core/engine/grid_walk.hpp"
 #include "core/engine/methods.hpp"
 #include "core/engine/scene.hpp"
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
+#include "core/lab/cd_profile.hpp"
 #include "core/lab/ground_truth.hpp"
+#include "core/lab/map_storage.hpp"
 #include "core/lab/surfaces.hpp"
 #include "tools/commands.hpp"
+#include "tools/measured.hpp"
 
 namespace ph::tools {
 
@@ -106,18 +108,6 @@ const char* name_of(Storage s) {
       return "d8";
   }
   return "?";
-}
-
-// The methods measured: every method of the registry (core/engine/methods.hpp) that is not C/D 1 throughout, with
-// its default parameters, in the registry's order.
-std::vector<MethodPtr> measured_methods() {
-  std::vector<MethodPtr> out;
-  const MethodRegistry registry = builtin_methods();
-  for (const auto& entry : registry.entries()) {
-    MethodPtr method = entry->make(entry->defaults());
-    if (method->cd_lower_bound() != 1.0 || method->cd_upper_bound() != 1.0) out.push_back(std::move(method));
-  }
-  return out;
 }
 
 // Storage variants per method: adding one is one entry here and one case in build_fields. A method that reads
@@ -181,35 +171,7 @@ struct Shape {
   }
 };
 
-// A w x h x channels image of integer codes, as an 8- or 16-bit file would give it.
-RawImage quantised(std::int32_t w, std::int32_t h, int channels, const std::vector<double>& values,
-                   std::uint32_t code_max) {
-  RawImage image;
-  image.width = w;
-  image.height = h;
-  image.channels = channels;
-  image.code_max = code_max;
-  image.pixels.resize(values.size());
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    const double code = std::round(std::clamp(values[i], 0.0, 1.0) * code_max);
-    image.pixels[i] = static_cast<float>(code / code_max);
-  }
-  return image;
-}
-
-// The unorm values a normal map of the shape holds (OpenGL green), and those of its depth map.
-std::vector<double> normal_values(const Shape& shape) {
-  const NormalImage normals = shape.normal_image();
-  std::vector<double> v;
-  v.reserve(normals.values.size() * 3);
-  for (const Normal& n : normals.values) {
-    v.push_back((n.x + 1.0) / 2.0);
-    v.push_back((-n.y + 1.0) / 2.0);
-    v.push_back((n.z + 1.0) / 2.0);
-  }
-  return v;
-}
-
+// The unorm values a depth map of the shape holds: codes of (h / relief + 1) / 2.
 std::vector<double> depth_values(const Shape& shape) {
   const DepthField depth = shape.depth_field();
   std::vector<double> v(depth.values.size());
@@ -229,10 +191,10 @@ Source make_source(const Shape& shape, Storage storage) {
       return {};
     case Storage::n16:
     case Storage::n8:
-      return {quantised(size, size, 3, normal_values(shape), storage == Storage::n16 ? 65535 : 255)};
+      return {encode_normal_map(shape.normal_image(), storage == Storage::n16 ? 65535 : 255)};
     case Storage::d16:
     case Storage::d8:
-      return {quantised(size, size, 1, depth_values(shape), storage == Storage::d16 ? 65535 : 255)};
+      return {quantised_image(size, size, 1, depth_values(shape), storage == Storage::d16 ? 65535 : 255)};
   }
   return {};
 }
@@ -392,41 +354,15 @@ class StepLog final : public StepObserver {
   std::vector<StepRecord> steps;
 };
 
-struct CdError {
-  double sum_w = 0.0, sum_we2 = 0.0, max = 0.0;
-  void add(double rel, double w) {
-    sum_w += w;
-    sum_we2 += w * rel * rel;
-    if (w > 1e-6) max = std::max(max, std::abs(rel));
-  }
-  double rms() const { return sum_w > 0.0 ? std::sqrt(sum_we2 / sum_w) : 0.0; }
-};
-
-// Clips the segment a + m s, s in [0, len], to a rect; returns [s0, s1] (s0 >= s1 when it misses).
-std::pair<double, double> clip(Vec2 a, Vec2 m, double len, const Rect& r) {
-  const Vec2 lo{static_cast<double>(r.x), static_cast<double>(r.y)};
-  const Vec2 hi{static_cast<double>(r.x) + r.w, static_cast<double>(r.y) + r.h};
-  const RaySpan span = ray_box(a, m, lo, hi, 0.0, len);
-  return {span.t0, span.t1};
-}
-
 // Adds the frame's steps to the C/D error (definition at the top of the file).
 void score_frame(const TruthModel& model, const std::vector<StepRecord>& steps, Vec2 start, Vec2 end, Vec2 m,
                  CdError& err, const std::function<void(double x, double cd, double truth)>& trace = {}) {
-  for (std::size_t i = 0; i < steps.size(); ++i) {
-    const StepRecord& s = steps[i];
-    if (s.region == nullptr) continue;
-    const Vec2 a = i == 0 ? start : s.entry;
-    const Vec2 b = i + 1 < steps.size() ? steps[i + 1].entry : end;
-    const Vec2 ab = b - a;
-    const double len = ab.x * m.x + ab.y * m.y;
-    if (!(len > 0.0)) continue;
-    const auto [s0, s1] = clip(a, m, len, s.region->rect);
-    if (!(s1 > s0)) continue;
-    const Vec2 mid = a + m * (0.5 * (s0 + s1));
+  const Vec2 span = end - start;
+  for (const CdSegment& g : cd_segments(steps, start, m, span.x * m.x + span.y * m.y)) {
+    const Vec2 mid = start + m * (0.5 * (g.s0 + g.s1));
     const double truth = truth_cd(model, mid, m);
-    err.add((s.cd - truth) / truth, s1 - s0);
-    if (trace) trace(mid.x, s.cd, truth);
+    err.add((g.cd - truth) / truth, g.s1 - g.s0);
+    if (trace) trace(mid.x, g.cd, truth);
   }
 }
 
@@ -444,16 +380,6 @@ double percentile(std::vector<double> v, double q) {
 }
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-
-std::FILE* open_csv(const fs::path& path) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) throw std::runtime_error(fmt::format("{}: cannot open for writing", path.string()));
-  return f;
-}
-
-void close_csv(std::FILE* f, const fs::path& path) {
-  if (std::fclose(f) != 0) throw std::runtime_error(fmt::format("{}: write failed", path.string()));
-}
 
 // What every variant is measured on: the shapes, their exact surfaces, the strokes and the engine variants.
 struct Workload {

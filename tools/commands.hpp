@@ -18,6 +18,7 @@ Run add_replay_command(CLI::App& app);
 Run add_check_config_command(CLI::App& app);
 Run add_accuracy_command(CLI::App& app);
 Run add_study_command(CLI::App& app);
+Run add_stability_command(CLI::App& app);
 Run add_status_command(CLI::App& app);
 Run add_cursor_command(CLI::App& app);
 

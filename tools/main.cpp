@@ -36,6 +36,8 @@ int main(int argc, char** argv) {
       ph::tools::add_accuracy_command);
   add("study", "Run the curvature paper's user study in silico through the daemon's pipeline (CSV, summary tables)",
       ph::tools::add_study_command);
+  add("stability", "Run the failure-mode suite: where each method breaks and how badly (CSV for charts)",
+      ph::tools::add_stability_command);
   add("check-config", "Check a scene file (the daemon's config): its [daemon] table, regions and images",
       ph::tools::add_check_config_command);
   add("status", "Ask the running daemon what it does (output, mice, scene, desktop, cursor model, session helper)",

@@ -63,6 +63,9 @@ StrokeResult run_stroke(const Scene& scene, const StrokeSpec& spec, const Stroke
       steps.steps.clear();
       frame = advance(scene, result.end, m * hi, observer);
       result.reached = true;
+      result.motor_px += hi;
+    } else {
+      result.motor_px += spec.motor_step_px;
     }
     for (const StepRecord& s : steps.steps) on_step(result.frames, s);
     ++result.frames;

@@ -24,7 +24,8 @@ struct StrokeResult {
   CursorState end;
   double cd_min = 1.0;
   double cd_max = 1.0;
-  bool reached = false;  // the cursor got to `to` (projected on the stroke) within max_frames and stopped there
+  bool reached = false;   // the cursor got to `to` (projected on the stroke) within max_frames and stopped there
+  double motor_px = 0.0;  // the hand's motor travel: whole frames, then the last frame's share
 };
 
 using StrokeStepFn = std::function<void(std::size_t frame, const StepRecord& step)>;
