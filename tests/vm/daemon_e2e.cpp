@@ -6,18 +6,19 @@
 // kernel's timestamps) within 1 px (AbsoluteFollower says why). One PASS or FAIL line per case; the exit
 // status is 1 when any failed.
 //
-//   daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [-v]
+//   daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--parts pfdr] [-v]
 //
 // --tool: the pseudohaptic tool for `pseudohaptic status` (default: ../tools/pseudohaptic next to the
 // daemon's folder, as in the build tree); --cycles: hotplug create/destroy cycles (100); --latency-frames:
-// frames per latency figure (500); -v passes -v to the daemon (its debug lines are printed when a case
-// fails) and traces the hotplug cycles.
+// frames per latency figure (500); --parts: the parts to run, by letter (below; all four by default); -v passes -v to
+// the daemon (its debug lines are printed when a case fails) and traces the hotplug cycles.
 //
-// Three parts, each with a fresh daemon (or none): latency of the test mouse's own node; the daemon with a
+// Four parts, each with a fresh daemon (or none): (p) latency of the test mouse's own node; (f) the daemon with a
 // flat config file (held button at start, identity, latency, the control socket, resync through a fake
-// session helper and an untaken touchpad, SIGHUP reloads, SIGTERM with a held button); the daemon with the
+// session helper and an untaken touchpad, SIGHUP reloads, SIGTERM with a held button); (d) the daemon with the
 // embedded default scene (grab exclusivity, absolute output with adaptive acceleration over a texture
-// against the offline model, latency, hotplug, two mice, SYN_DROPPED, SIGTERM). Numbers in brackets number
+// against the offline model, latency, hotplug, two mice, SYN_DROPPED, SIGTERM); (r) latency while the daemon
+// reloads a full-HD region with materials and wells, against without a reload. Numbers in brackets number
 // the cases; tests/vm/README.md lists them.
 #include <fmt/format.h>
 
@@ -53,7 +54,8 @@ struct Options {
   std::string tool;  // the pseudohaptic tool, for `pseudohaptic status` ("" when there is none)
   int cycles = 100;
   int latency_frames = 500;
-  bool verbose = false;  // pass -v to the daemon
+  std::string parts = "pfdr";  // which parts run: passthrough, flat config, default scene, reload
+  bool verbose = false;        // pass -v to the daemon
   std::filesystem::path scratch;
 };
 
@@ -1449,8 +1451,193 @@ void default_scene_part(Report& report, const Options& options, Latency& latency
   });
 }
 
+// ---- part 4: images read by the daemon's child; a reload of a full-HD region while the mouse moves ---------
+
+// A line "NAME:   N kB" of /proc/PID/status, in KiB; -1 when absent.
+long status_kib(pid_t pid, const std::string& name) {
+  std::istringstream status(read_text_file("/proc/" + std::to_string(pid) + "/status"));
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind(name + ":", 0) == 0) return std::stol(line.substr(name.size() + 1));
+  }
+  return -1;
+}
+
+// The default scene's three targets at their places, from map files in `dir` (written there).
+std::string three_target_config(const std::filesystem::path& dir) {
+  struct At {
+    const char* name;
+    int x, y;
+  };
+  constexpr At kAt[] = {
+      {"bump-gaussian-h1-r200", 135, 290}, {"hole-polynomial-h1-r200", 710, 290}, {"bump-linear-h1-r100", 1285, 290}};
+  std::string text = daemon_table();
+  for (const At& at : kAt) {
+    for (const ph::TargetSpec& spec : ph::all_targets()) {
+      if (spec.name() != at.name) continue;
+      ph::write_target_files(dir, {spec});
+      std::string region = ph::target_scene_text(spec);
+      const std::string at_origin = "x = 0\ny = 0\n";
+      region.replace(region.find(at_origin), at_origin.size(), fmt::format("x = {}\ny = {}\n", at.x, at.y));
+      text += "\n" + region;
+    }
+  }
+  return text;
+}
+
+// A [daemon] table on a desktop twice full HD wide, and one region over its left half (1920 x 1080) from
+// the hole target's maps, with materials and gravity wells: what makes a load take seconds (the class
+// map, the wells' pattern field). `variant` changes the filter and the wells' levels, so that a reload
+// has a new scene to compute.
+std::string full_hd_config(const ph::TargetSpec& spec, int variant) {
+  const std::string name = spec.name();
+  return fmt::format(
+      "[daemon]\n"
+      "devices = [\"name:ph-e2e*\"]\n"
+      "output = \"relative\"\n"
+      "desktop = [0, 0, 3840, 1080]\n"
+      "pointer_speed = 1.0\n\n"
+      "[[region]]\n"
+      "name = \"full-hd\"\n"
+      "x = 0\ny = 0\nwidth = 1920\nheight = 1080\n"
+      "method = \"curvature\"\n"
+      "normal_map = \"{name}.normal.png\"\n"
+      "depth_map = \"{name}.depth.png\"\n"
+      "depth_zero = 0.5\n"
+      "relief_px = {relief}\n\n"
+      "[region.materials]\n"
+      "source = \"depth\"\n"
+      "filter_radius = {radius}\n"
+      "parabolic = \"damping\"\n"
+      "elliptic = \"friction\"\n"
+      "hyperbolic = \"stick_slip\"\n\n"
+      "[region.wells]\n"
+      "pattern = \"contours\"\n"
+      "levels = [{level}, 20.0]\n"
+      "radius_px = 16.0\n",
+      fmt::arg("name", name), fmt::arg("relief", 2.0 * spec.relief_px), fmt::arg("radius", 2 + variant),
+      fmt::arg("level", 10.0 + variant));
+}
+
+void reload_part(Report& report, const Options& options, Latency& steady, Latency& reloading) {
+  Session session(report, "daemon reloading a full-HD region with materials and wells (-c)");
+  const UeventMonitor uevents;
+  const std::filesystem::path config = options.scratch / "reload.toml";
+  const std::string virtual_name = "pseudohaptic ph-e2e reload mouse";
+  const std::string control_path = (options.scratch / "control-reload").string();
+  const ph::TargetSpec hole = hole_target();
+  std::optional<TestMouse> mouse;
+  std::optional<EventReader> out;
+  std::unique_ptr<NotifySocket>& notify = session.notify;
+  std::unique_ptr<ChildProcess>& daemon = session.daemon;
+  // The frames go over the flat right half, where relative output is the input unchanged: every frame's
+  // output is known exactly, whichever scene the daemon holds at that moment.
+  ph::PipelineConfig flat_right = pipeline_config();
+  flat_right.desktop = {0, 0, 3840, 1080};
+  flat_right.start = {2880.5, 540.5};
+  ph::Pipeline model(std::make_shared<const ph::Scene>(), flat_right);
+
+  session.run("[14] the default scene's three targets from image files: the daemon's memory", [&](Check& check) {
+    const std::filesystem::path three = options.scratch / "three.toml";
+    write_file_atomically(three, three_target_config(options.scratch));
+    const auto scene = ph::load_scene(ph::parse_scene_file(three));  // here, for the size of its fields
+    std::size_t field_bytes = 0;
+    for (const ph::Region& region : scene.regions()) field_bytes += region.fields.bytes();
+    NotifySocket three_notify((options.scratch / "notify-three.sock").string());
+    ChildProcess three_daemon(std::vector<std::string>{options.daemon, "-c", three.string(), "--control", ""},
+                              std::vector<std::string>{"NOTIFY_SOCKET=" + three_notify.path(), "LANG=C.UTF-8"},
+                              (options.scratch / "daemon-three.log").string());
+    if (!wait_ready(three_notify, three_daemon, 120s)) throw Fatal("no READY=1 within 120 s");
+    const std::string maps = read_text_file("/proc/" + std::to_string(three_daemon.pid()) + "/maps");
+    const long rss = status_kib(three_daemon.pid(), "VmRSS"), peak = status_kib(three_daemon.pid(), "VmHWM");
+    three_daemon.signal(SIGTERM);
+    three_daemon.wait_exit(30s);
+    check.expect(maps.find("OpenImageIO") == std::string::npos && maps.find("ph_image_oiio") == std::string::npos,
+                 "expected the daemon not to map OpenImageIO nor the image module; it does");
+    const long fields_kib = static_cast<long>(field_bytes / 1024);
+    check.expect(rss > 0 && rss <= 16 * 1024 + fields_kib,
+                 fmt::format("expected VmRSS at most 16 MiB + the fields ({} KiB), got {} KiB", fields_kib, rss));
+    check.note(fmt::format(
+        "daemon VmRSS {} KiB = 16 MiB + fields ({} KiB) {} {} KiB; peak (VmHWM) {} KiB; no "
+        "OpenImageIO mapped",
+        rss, fields_kib, rss <= 16 * 1024 + fields_kib ? "-" : "+", std::labs(rss - 16 * 1024 - fields_kib), peak));
+  });
+
+  session.run("[13] start on a full-HD region with materials and wells; latency without a reload", [&](Check& check) {
+    ph::write_target_files(options.scratch, {hole});
+    write_file_atomically(config, full_hd_config(hole, 0));
+    mouse.emplace("ph-e2e reload mouse");
+    notify = std::make_unique<NotifySocket>((options.scratch / "notify-reload.sock").string());
+    const auto start = Clock::now();
+    daemon = start_daemon(options, {"-c", config.string(), "--control", control_path}, *notify, "daemon-reload.log");
+    if (!wait_ready(*notify, *daemon, 180s)) throw Fatal("no READY=1 within 180 s");
+    const double start_s = std::chrono::duration<double>(Clock::now() - start).count();
+    const std::string node = wait_for_device(virtual_name, kDeviceTimeout, uevents);
+    if (node.empty()) throw Fatal("no virtual device '" + virtual_name + "'");
+    out.emplace(node);
+    if (!wait_taken(*mouse, *out, kDeviceTimeout)) throw Fatal("nothing came out of " + node);
+    ph::control::Client control(control_path);
+    const ph::control::Reply reply =
+        control.request(ph::control::format_request(ph::control::PositionRequest{*flat_right.start}), 10s);
+    if (!reply.ok) throw Fatal("'position' refused: " + reply.text);
+    measure_latency(check, *mouse, *out, &model, options.latency_frames / 2, steady);
+    check.note(fmt::format("READY=1 {:.1f} s after the start (the scene loaded before it)", start_s));
+  });
+
+  session.run("[13] SIGHUP: frames keep coming out while the new scene loads, within 2x the median", [&](Check& check) {
+    write_file_atomically(config, full_hd_config(hole, 1));
+    notify->clear();
+    const std::size_t log_before = daemon->log().size();
+    const double median = percentile(steady.us, 0.5);
+    const auto sent_hup = Clock::now();
+    daemon->signal(SIGHUP);
+    if (!notify->expect("RELOADING=1", 10s)) throw Fatal("no RELOADING=1 within 10 s of SIGHUP");
+    // One frame every 8 ms (a 125 Hz mouse) until the daemon says READY=1: the load runs meanwhile.
+    bool ready = false;
+    int i = 0;
+    const auto deadline = Clock::now() + 180s;
+    while (!ready && Clock::now() < deadline) {
+      const auto next = Clock::now() + 8ms;
+      const Frame in = make_frame({rel(ev::kRelX, i++ % 2 == 0 ? 4 : -4)});
+      const Frame expected = untimed(model.process(in));
+      const auto before = Clock::now();
+      mouse->send(in);
+      const std::optional<Frame> got = out->next_frame(kFrameTimeout);
+      const auto after = Clock::now();
+      if (!got) throw Fatal(fmt::format("reload frame {}: nothing came out within {} s", i, kFrameTimeout.count()));
+      if (check.expect(same_events(*got, expected),
+                       fmt::format("reload frame {}: expected [{}], got [{}]", i, describe(expected), describe(*got))))
+        reloading.us.push_back(std::chrono::duration<double, std::micro>(after - before).count());
+      ready = notify->expect("READY=1", std::max<Clock::duration>(next - Clock::now(), 0ms));
+    }
+    const double reload_s = std::chrono::duration<double>(Clock::now() - sent_hup).count();
+    if (!ready) throw Fatal("no READY=1 within 180 s of SIGHUP");
+    const std::string said = daemon->log().substr(std::min(log_before, daemon->log().size()));
+    check.expect(said.find("reloaded: " + config.string()) != std::string::npos,
+                 "expected 'reloaded: " + config.string() + "' in the daemon's log, got: " + said);
+    check.expect(reloading.us.size() >= 10,
+                 fmt::format("expected at least 10 frames during the reload, got {}", reloading.us.size()));
+    const double during = percentile(reloading.us, 0.5);
+    check.expect(during <= 2 * median,
+                 fmt::format("expected the median latency during the reload within 2x the steady median ({:.0f} us), "
+                             "got {:.0f} us",
+                             median, during));
+    check.note(
+        fmt::format("READY=1 {:.1f} s after SIGHUP; {} frames meanwhile, all unchanged as expected; during "
+                    "the reload {}; without a reload median {:.0f} us",
+                    reload_s, reloading.us.size(), latency_text(reloading), median));
+  });
+
+  session.run("[13] SIGTERM", [&](Check& check) {
+    daemon->signal(SIGTERM);
+    const std::optional<int> status = daemon->wait_exit(30s);
+    check.expect(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0,
+                 "expected exit status 0, got " + (status ? describe_wait_status(*status) : "still running"));
+  });
+}
+
 int usage() {
-  std::fprintf(stderr, "usage: daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [-v]\n");
+  std::fprintf(
+      stderr, "usage: daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--parts pfdr] [-v]\n");
   return 2;
 }
 
@@ -1463,6 +1650,8 @@ int main(int argc, char** argv) {
     const std::string arg = argv[i];
     if ((arg == "--cycles" || arg == "--latency-frames") && i + 1 < argc) {
       (arg == "--cycles" ? options.cycles : options.latency_frames) = std::atoi(argv[++i]);
+    } else if (arg == "--parts" && i + 1 < argc) {
+      options.parts = argv[++i];
     } else if (arg == "--tool" && i + 1 < argc) {
       options.tool = argv[++i];
     } else if (arg == "-v" || arg == "--verbose") {
@@ -1492,10 +1681,13 @@ int main(int argc, char** argv) {
   Latency passthrough{"passthrough (the test mouse's own node, no daemon)", {}, 0};
   Latency flat{"daemon, flat scene", {}, 0};
   Latency texture{"daemon, default scene's texture", {}, 0};
+  Latency steady{"daemon, full-HD region (frames beside it), no reload", {}, 0};
+  Latency reloading{"daemon, the same while it reloads the region", {}, 0};
   try {
-    passthrough_part(report, options, passthrough);
-    flat_part(report, options, flat);
-    default_scene_part(report, options, texture);
+    if (options.parts.find('p') != std::string::npos) passthrough_part(report, options, passthrough);
+    if (options.parts.find('f') != std::string::npos) flat_part(report, options, flat);
+    if (options.parts.find('d') != std::string::npos) default_scene_part(report, options, texture);
+    if (options.parts.find('r') != std::string::npos) reload_part(report, options, steady, reloading);
   } catch (const std::exception& e) {
     report.not_run("the rest", e.what());
   }
@@ -1503,7 +1695,7 @@ int main(int argc, char** argv) {
   std::printf(
       "latency, write into the test mouse -> read from the output node (guest clock under TCG: emulated "
       "times, compare only within one run):\n");
-  for (const Latency* l : {&passthrough, &flat, &texture}) {
+  for (const Latency* l : {&passthrough, &flat, &texture, &steady, &reloading}) {
     std::printf("  %-52s %s\n", l->label.c_str(), l->us.empty() ? "not measured" : latency_text(*l).c_str());
   }
   std::printf("daemon e2e: %d passed, %d failed, %.1f s\n", report.passed(), report.failed(), seconds);
