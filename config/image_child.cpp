@@ -144,23 +144,26 @@ void ImageChild::stop() {
   pid_ = -1;
 }
 
-void ImageChild::fail(const std::string& files, const std::string& what) {
-  // The child is of no further use: end it (and learn how it ended, if it did).
+void ImageChild::fail(const std::string& files, const std::string& what, bool kill_now) {
+  // The child is of no further use: end it (and learn how it ended, if it ended by itself).
   std::string how;
   if (pid_ >= 0) {
+    if (kill_now) ::kill(pid_, SIGKILL);
     ::close(to_child_);
     ::close(from_child_);
     to_child_ = from_child_ = -1;
+    // A crash is reported a moment after the pipe closes: a process with the image library's mappings
+    // takes a while to go, under emulation more so.
     int status = 0;
-    pid_t done = ::waitpid(pid_, &status, WNOHANG);
-    if (done == 0) {
-      ::usleep(50'000);  // a crash is reported a moment after the pipe closes
+    pid_t done = 0;
+    for (int i = 0; i < 200 && done == 0; ++i) {
       done = ::waitpid(pid_, &status, WNOHANG);
+      if (done == 0) ::usleep(10'000);
     }
     if (done == 0) {
       ::kill(pid_, SIGKILL);
       ::waitpid(pid_, &status, 0);
-    } else if (done == pid_) {
+    } else if (done == pid_ && !kill_now) {
       how = " (" + describe_exit(status) + ")";
     }
     pid_ = -1;
@@ -172,18 +175,20 @@ image_wire::Answer ImageChild::ask(const image_wire::Request& request, const std
   if (pid_ < 0) start();
   std::vector<std::byte> bytes;
   try {
-    {
+    try {
       const SigpipeHeld held;
       image_wire::write_message(to_child_, image_wire::encode(request));
+    } catch (const image_wire::WireError&) {
+      fail(files, "ended before it took the request", false);  // a broken pipe: the child is gone
     }
     if (!wait_readable(from_child_, std::chrono::steady_clock::now() + timeout_))
-      fail(files, "gave no answer within " + std::to_string(timeout_.count() / 1000) + " s");
-    if (!image_wire::read_message(from_child_, bytes)) fail(files, "ended without an answer while reading it");
+      fail(files, "gave no answer within " + std::to_string(timeout_.count() / 1000) + " s", true);
+    if (!image_wire::read_message(from_child_, bytes)) fail(files, "ended without an answer while reading it", false);
     image_wire::Answer answer = image_wire::decode_answer(bytes, request);
     if (const auto* failure = std::get_if<image_wire::Failure>(&answer)) throw FieldError(failure->message);
     return answer;
   } catch (const image_wire::WireError& e) {
-    fail(files, std::string("sent a wrong answer: ") + e.what());
+    fail(files, std::string("sent a wrong answer: ") + e.what(), true);
   }
 }
 

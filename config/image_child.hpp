@@ -39,7 +39,7 @@ class ImageChild final : public FieldReader {
   image_wire::Answer ask(const image_wire::Request& request, const std::string& files);
   void start();
   void stop();
-  [[noreturn]] void fail(const std::string& files, const std::string& what);
+  [[noreturn]] void fail(const std::string& files, const std::string& what, bool kill_now);
 
   std::filesystem::path program_;
   std::chrono::milliseconds timeout_;

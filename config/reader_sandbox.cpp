@@ -204,10 +204,11 @@ std::vector<std::string> enter_reader_sandbox() {
     std::memset(data, 0, sizeof data);
     if (::syscall(SYS_capset, &header, data) < 0) missed.push_back(failed("dropping capabilities"));
   }
-  // No core file, no file written, a bounded run; memory bounded where no sanitizer maps its shadow.
+  // No core file, a bounded run; memory bounded where no sanitizer maps its shadow. Not RLIMIT_FSIZE:
+  // stderr may be a regular file (the daemon's log, run by hand), and a decoder's warning there would
+  // kill the reader with SIGXFSZ; the filter below already refuses opening any file for writing.
   const std::pair<int, rlim_t> limits[] = {
     {RLIMIT_CORE, 0},
-    {RLIMIT_FSIZE, 0},
     {RLIMIT_NOFILE, 64},
     {RLIMIT_CPU, 300},
 #if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)

@@ -6,11 +6,13 @@
 // kernel's timestamps) within 1 px (AbsoluteFollower says why). One PASS or FAIL line per case; the exit
 // status is 1 when any failed.
 //
-//   daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--parts pfdr] [-v]
+//   daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--parts pfdr] [--scene-dir DIR] [-v]
 //
 // --tool: the pseudohaptic tool for `pseudohaptic status` (default: ../tools/pseudohaptic next to the
 // daemon's folder, as in the build tree); --cycles: hotplug create/destroy cycles (100); --latency-frames:
-// frames per latency figure (500); --parts: the parts to run, by letter (below; all four by default); -v passes -v to
+// frames per latency figure (500); --parts: the parts to run, by letter (below; all four by default);
+// --scene-dir: where the default scene's target maps are (x11_cursor_e2e --write-scene writes them on the
+// host, faster than here; missing ones are written in the scratch folder); -v passes -v to
 // the daemon (its debug lines are printed when a case fails) and traces the hotplug cycles.
 //
 // Four parts, each with a fresh daemon (or none): (p) latency of the test mouse's own node; (f) the daemon with a
@@ -57,6 +59,7 @@ struct Options {
   std::string parts = "pfdr";  // which parts run: passthrough, flat config, default scene, reload
   bool verbose = false;        // pass -v to the daemon
   std::filesystem::path scratch;
+  std::filesystem::path scene_dir;  // the default scene's target maps, if written on the host (faster)
 };
 
 // The daemon with the flat config file: relative output, gain 1, no acceleration (relative output's
@@ -1462,8 +1465,29 @@ long status_kib(pid_t pid, const std::string& name) {
   return -1;
 }
 
-// The default scene's three targets at their places, from map files in `dir` (written there).
-std::string three_target_config(const std::filesystem::path& dir) {
+// The maps of `spec`: those in `maps` when present there (written on the host), else written into `dir`.
+ph::TargetFilePaths target_maps(const ph::TargetSpec& spec, const std::filesystem::path& maps,
+                                const std::filesystem::path& dir) {
+  if (ph::target_files_present(maps, {spec})) return ph::target_file_paths(maps, spec);
+  if (!ph::target_files_present(dir, {spec})) ph::write_target_files(dir, {spec});
+  return ph::target_file_paths(dir, spec);
+}
+
+// A region of `spec` at (x, y) from its maps, named by absolute path.
+std::string target_region(const ph::TargetSpec& spec, const ph::TargetFilePaths& maps, int x, int y) {
+  std::string region = ph::target_scene_text(spec);
+  for (const auto& [key, path] :
+       {std::pair{"normal_map = \"", maps.normal_map}, std::pair{"depth_map = \"", maps.depth_map}}) {
+    const auto from = region.find(key) + std::strlen(key);
+    region.replace(from, region.find('"', from) - from, std::filesystem::absolute(path).string());
+  }
+  const std::string at_origin = "x = 0\ny = 0\n";
+  region.replace(region.find(at_origin), at_origin.size(), fmt::format("x = {}\ny = {}\n", x, y));
+  return region;
+}
+
+// The default scene's three targets at their places, from map files.
+std::string three_target_config(const Options& options) {
   struct At {
     const char* name;
     int x, y;
@@ -1473,12 +1497,8 @@ std::string three_target_config(const std::filesystem::path& dir) {
   std::string text = daemon_table();
   for (const At& at : kAt) {
     for (const ph::TargetSpec& spec : ph::all_targets()) {
-      if (spec.name() != at.name) continue;
-      ph::write_target_files(dir, {spec});
-      std::string region = ph::target_scene_text(spec);
-      const std::string at_origin = "x = 0\ny = 0\n";
-      region.replace(region.find(at_origin), at_origin.size(), fmt::format("x = {}\ny = {}\n", at.x, at.y));
-      text += "\n" + region;
+      if (spec.name() == at.name)
+        text += "\n" + target_region(spec, target_maps(spec, options.scene_dir, options.scratch), at.x, at.y);
     }
   }
   return text;
@@ -1488,8 +1508,7 @@ std::string three_target_config(const std::filesystem::path& dir) {
 // the hole target's maps, with materials and gravity wells: what makes a load take seconds (the class
 // map, the wells' pattern field). `variant` changes the filter and the wells' levels, so that a reload
 // has a new scene to compute.
-std::string full_hd_config(const ph::TargetSpec& spec, int variant) {
-  const std::string name = spec.name();
+std::string full_hd_config(const ph::TargetSpec& spec, const ph::TargetFilePaths& maps, int variant) {
   return fmt::format(
       "[daemon]\n"
       "devices = [\"name:ph-e2e*\"]\n"
@@ -1500,8 +1519,8 @@ std::string full_hd_config(const ph::TargetSpec& spec, int variant) {
       "name = \"full-hd\"\n"
       "x = 0\ny = 0\nwidth = 1920\nheight = 1080\n"
       "method = \"curvature\"\n"
-      "normal_map = \"{name}.normal.png\"\n"
-      "depth_map = \"{name}.depth.png\"\n"
+      "normal_map = \"{normal}\"\n"
+      "depth_map = \"{depth}\"\n"
       "depth_zero = 0.5\n"
       "relief_px = {relief}\n\n"
       "[region.materials]\n"
@@ -1514,8 +1533,31 @@ std::string full_hd_config(const ph::TargetSpec& spec, int variant) {
       "pattern = \"contours\"\n"
       "levels = [{level}, 20.0]\n"
       "radius_px = 16.0\n",
-      fmt::arg("name", name), fmt::arg("relief", 2.0 * spec.relief_px), fmt::arg("radius", 2 + variant),
-      fmt::arg("level", 10.0 + variant));
+      fmt::arg("normal", std::filesystem::absolute(maps.normal_map).string()),
+      fmt::arg("depth", std::filesystem::absolute(maps.depth_map).string()), fmt::arg("relief", 2.0 * spec.relief_px),
+      fmt::arg("radius", 2 + variant), fmt::arg("level", 10.0 + variant));
+}
+
+// One motion frame every 8 ms (a 125 Hz mouse; REL_X +4 and -4 in turn over the flat part, so the
+// output is the input) until `done`: the latency of each, from just before the write into the test mouse
+// to just after the read from `out`. Paced alike with and without a reload, so that both medians see a
+// daemon that waited 8 ms between frames.
+template <typename Done>
+void paced_latency(Check& check, TestMouse& mouse, EventReader& out, ph::Pipeline& model, Latency& result, Done done) {
+  for (int i = 0; !done(); ++i) {
+    const auto next = Clock::now() + 8ms;
+    const Frame in = make_frame({rel(ev::kRelX, i % 2 == 0 ? 4 : -4)});
+    const Frame expected = untimed(model.process(in));
+    const auto before = Clock::now();
+    mouse.send(in);
+    const std::optional<Frame> got = out.next_frame(kFrameTimeout);
+    const auto after = Clock::now();
+    if (!got) throw Fatal(fmt::format("frame {}: nothing came out within {} s", i, kFrameTimeout.count()));
+    if (check.expect(same_events(*got, expected),
+                     fmt::format("frame {}: expected [{}], got [{}]", i, describe(expected), describe(*got))))
+      result.us.push_back(std::chrono::duration<double, std::micro>(after - before).count());
+    std::this_thread::sleep_until(next);
+  }
 }
 
 void reload_part(Report& report, const Options& options, Latency& steady, Latency& reloading) {
@@ -1535,10 +1577,11 @@ void reload_part(Report& report, const Options& options, Latency& steady, Latenc
   flat_right.desktop = {0, 0, 3840, 1080};
   flat_right.start = {2880.5, 540.5};
   ph::Pipeline model(std::make_shared<const ph::Scene>(), flat_right);
+  ph::TargetFilePaths hole_maps;
 
   session.run("[14] the default scene's three targets from image files: the daemon's memory", [&](Check& check) {
     const std::filesystem::path three = options.scratch / "three.toml";
-    write_file_atomically(three, three_target_config(options.scratch));
+    write_file_atomically(three, three_target_config(options));
     const auto scene = ph::load_scene(ph::parse_scene_file(three));  // here, for the size of its fields
     std::size_t field_bytes = 0;
     for (const ph::Region& region : scene.regions()) field_bytes += region.fields.bytes();
@@ -1556,15 +1599,13 @@ void reload_part(Report& report, const Options& options, Latency& steady, Latenc
     const long fields_kib = static_cast<long>(field_bytes / 1024);
     check.expect(rss > 0 && rss <= 16 * 1024 + fields_kib,
                  fmt::format("expected VmRSS at most 16 MiB + the fields ({} KiB), got {} KiB", fields_kib, rss));
-    check.note(fmt::format(
-        "daemon VmRSS {} KiB = 16 MiB + fields ({} KiB) {} {} KiB; peak (VmHWM) {} KiB; no "
-        "OpenImageIO mapped",
-        rss, fields_kib, rss <= 16 * 1024 + fields_kib ? "-" : "+", std::labs(rss - 16 * 1024 - fields_kib), peak));
+    check.note(fmt::format("daemon VmRSS {} KiB, of which fields {} KiB; peak (VmHWM) {} KiB; no OpenImageIO mapped",
+                           rss, fields_kib, peak));
   });
 
   session.run("[13] start on a full-HD region with materials and wells; latency without a reload", [&](Check& check) {
-    ph::write_target_files(options.scratch, {hole});
-    write_file_atomically(config, full_hd_config(hole, 0));
+    hole_maps = target_maps(hole, options.scene_dir, options.scratch);
+    write_file_atomically(config, full_hd_config(hole, hole_maps, 0));
     mouse.emplace("ph-e2e reload mouse");
     notify = std::make_unique<NotifySocket>((options.scratch / "notify-reload.sock").string());
     const auto start = Clock::now();
@@ -1579,36 +1620,27 @@ void reload_part(Report& report, const Options& options, Latency& steady, Latenc
     const ph::control::Reply reply =
         control.request(ph::control::format_request(ph::control::PositionRequest{*flat_right.start}), 10s);
     if (!reply.ok) throw Fatal("'position' refused: " + reply.text);
-    measure_latency(check, *mouse, *out, &model, options.latency_frames / 2, steady);
-    check.note(fmt::format("READY=1 {:.1f} s after the start (the scene loaded before it)", start_s));
+    const std::size_t frames = static_cast<std::size_t>(options.latency_frames) / 2;
+    paced_latency(check, *mouse, *out, model, steady, [&] { return steady.us.size() >= frames; });
+    check.note(fmt::format("READY=1 {:.1f} s after the start (the scene loaded before it); {}", start_s,
+                           latency_text(steady)));
   });
 
   session.run("[13] SIGHUP: frames keep coming out while the new scene loads, within 2x the median", [&](Check& check) {
-    write_file_atomically(config, full_hd_config(hole, 1));
+    write_file_atomically(config, full_hd_config(hole, hole_maps, 1));
     notify->clear();
     const std::size_t log_before = daemon->log().size();
     const double median = percentile(steady.us, 0.5);
     const auto sent_hup = Clock::now();
     daemon->signal(SIGHUP);
     if (!notify->expect("RELOADING=1", 10s)) throw Fatal("no RELOADING=1 within 10 s of SIGHUP");
-    // One frame every 8 ms (a 125 Hz mouse) until the daemon says READY=1: the load runs meanwhile.
+    // The frames go on until the daemon says READY=1: the load runs meanwhile.
     bool ready = false;
-    int i = 0;
     const auto deadline = Clock::now() + 180s;
-    while (!ready && Clock::now() < deadline) {
-      const auto next = Clock::now() + 8ms;
-      const Frame in = make_frame({rel(ev::kRelX, i++ % 2 == 0 ? 4 : -4)});
-      const Frame expected = untimed(model.process(in));
-      const auto before = Clock::now();
-      mouse->send(in);
-      const std::optional<Frame> got = out->next_frame(kFrameTimeout);
-      const auto after = Clock::now();
-      if (!got) throw Fatal(fmt::format("reload frame {}: nothing came out within {} s", i, kFrameTimeout.count()));
-      if (check.expect(same_events(*got, expected),
-                       fmt::format("reload frame {}: expected [{}], got [{}]", i, describe(expected), describe(*got))))
-        reloading.us.push_back(std::chrono::duration<double, std::micro>(after - before).count());
-      ready = notify->expect("READY=1", std::max<Clock::duration>(next - Clock::now(), 0ms));
-    }
+    paced_latency(check, *mouse, *out, model, reloading, [&] {
+      ready = ready || notify->expect("READY=1", 0ms);
+      return ready || Clock::now() > deadline;
+    });
     const double reload_s = std::chrono::duration<double>(Clock::now() - sent_hup).count();
     if (!ready) throw Fatal("no READY=1 within 180 s of SIGHUP");
     const std::string said = daemon->log().substr(std::min(log_before, daemon->log().size()));
@@ -1627,6 +1659,38 @@ void reload_part(Report& report, const Options& options, Latency& steady, Latenc
                     reload_s, reloading.us.size(), latency_text(reloading), median));
   });
 
+  session.run("[15] SIGHUP with a truncated PNG: the reload fails naming it, the daemon keeps its scene",
+              [&](Check& check) {
+                // A copy of the depth map cut to a third (the maps may be on the host, read-only).
+                ph::TargetFilePaths maps = hole_maps;
+                const std::string bytes = read_text_file(maps.depth_map);
+                maps.depth_map = options.scratch / "truncated.depth.png";
+                write_file_atomically(maps.depth_map, bytes.substr(0, bytes.size() / 3));
+                write_file_atomically(config, full_hd_config(hole, maps, 2));
+                notify->clear();
+                const std::size_t log_before = daemon->log().size();
+                daemon->signal(SIGHUP);
+                check.expect(notify->expect("READY=1", 120s), "expected READY=1 after the failed reload, got none");
+                if (!daemon->running())
+                  throw Fatal("the daemon exited: " + describe_wait_status(*daemon->wait_exit(0s)));
+                std::string said;
+                wait_until(
+                    [&] {
+                      said = daemon->log().substr(std::min(log_before, daemon->log().size()));
+                      return said.find("keeping the previous scene") != std::string::npos;
+                    },
+                    5s);
+                const std::string png = maps.depth_map.string();
+                check.expect(said.find("reload failed: ") != std::string::npos && said.find(png) != std::string::npos &&
+                                 said.find("keeping the previous scene") != std::string::npos,
+                             "expected 'reload failed: ... " + png + " ... keeping the previous scene', got: " + said);
+                Latency after{"after the failed reload", {}, 0};
+                measure_latency(check, *mouse, *out, &model, 20, after);
+                const std::size_t at = said.find("reload failed: ");
+                if (at != std::string::npos) said = said.substr(at, said.find('\n', at) - at);
+                check.note("said \"" + said + "\"; 20 frames after it as before");
+              });
+
   session.run("[13] SIGTERM", [&](Check& check) {
     daemon->signal(SIGTERM);
     const std::optional<int> status = daemon->wait_exit(30s);
@@ -1636,8 +1700,9 @@ void reload_part(Report& report, const Options& options, Latency& steady, Latenc
 }
 
 int usage() {
-  std::fprintf(
-      stderr, "usage: daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--parts pfdr] [-v]\n");
+  std::fprintf(stderr,
+               "usage: daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--parts pfdr] "
+               "[--scene-dir DIR] [-v]\n");
   return 2;
 }
 
@@ -1650,6 +1715,8 @@ int main(int argc, char** argv) {
     const std::string arg = argv[i];
     if ((arg == "--cycles" || arg == "--latency-frames") && i + 1 < argc) {
       (arg == "--cycles" ? options.cycles : options.latency_frames) = std::atoi(argv[++i]);
+    } else if (arg == "--scene-dir" && i + 1 < argc) {
+      options.scene_dir = std::filesystem::absolute(argv[++i]);
     } else if (arg == "--parts" && i + 1 < argc) {
       options.parts = argv[++i];
     } else if (arg == "--tool" && i + 1 < argc) {
@@ -1672,6 +1739,7 @@ int main(int argc, char** argv) {
   const char* tmpdir = std::getenv("TMPDIR");
   options.scratch = std::filesystem::path(tmpdir != nullptr && *tmpdir != '\0' ? tmpdir : "/tmp") / "ph-e2e";
   std::filesystem::create_directories(options.scratch);
+  if (options.scene_dir.empty()) options.scene_dir = options.scratch;
   ::signal(SIGPIPE, SIG_IGN);
 
   std::printf("daemon e2e: %s, %d hotplug cycles, %d frames per latency figure\n", options.daemon.c_str(),
