@@ -628,6 +628,7 @@ void Daemon::on_reload_ended() {
 void Daemon::apply(Configuration next) {
   if (helper_desktop_ && !next.settings.desktop) next.pipeline.desktop = *helper_desktop_;
   log_notes(next);
+  std::shared_ptr<const Scene> replaced = config_.scene;
   if (only_scene_differs(config_, next)) {
     pipeline_->set_scene(next.scene);
     config_ = std::move(next);
@@ -637,6 +638,7 @@ void Daemon::apply(Configuration next) {
     config_ = std::move(next);
     restart_devices("settings changed");
   }
+  reloader_.dispose(std::move(replaced));  // the last reference: freed off the event loop
 }
 
 std::string Daemon::status_line() const {

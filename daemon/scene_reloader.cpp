@@ -18,6 +18,16 @@ SceneReloader::SceneReloader(Load load) : load_(std::move(load)), done_(::eventf
 
 SceneReloader::~SceneReloader() {
   if (worker_.joinable()) worker_.join();
+  if (disposer_.joinable()) disposer_.join();
+}
+
+void SceneReloader::dispose(std::shared_ptr<const Scene> scene) {
+  if (disposer_.joinable()) disposer_.join();  // the scene before: freed long since (a reload apart)
+  disposer_ = std::thread([scene = std::move(scene)]() mutable {
+    const sched_param no_priority{};
+    pthread_setschedparam(pthread_self(), SCHED_IDLE, &no_priority);
+    scene.reset();
+  });
 }
 
 bool SceneReloader::request() {

@@ -7,6 +7,7 @@
 
 #include <exception>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -47,6 +48,10 @@ class SceneReloader {
   // meanwhile, if any.
   std::optional<Outcome> collect();
 
+  // Drops `scene` on a thread of its own: the last reference to a replaced scene frees its fields and
+  // effects (tens of MB for full HD), which is not the event loop's business.
+  void dispose(std::shared_ptr<const Scene> scene);
+
  private:
   void start();
 
@@ -54,6 +59,7 @@ class SceneReloader {
   UniqueFd done_;
   ReloadQueue queue_;
   std::thread worker_;
+  std::thread disposer_;
   std::mutex mutex_;  // guards result_ and error_ between the worker and collect()
   std::optional<Configuration> result_;
   std::string error_;

@@ -8,6 +8,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "daemon/reload_queue.hpp"
 #include "daemon/scene_reloader.hpp"
@@ -124,6 +125,19 @@ TEST(SceneReloader, AFailedLoadIsReportedWithItsMessage) {
   outcome = reloader.collect();
   ASSERT_TRUE(outcome.has_value() && outcome->configuration.has_value());
   EXPECT_EQ(outcome->configuration->source, "version 4");
+}
+
+TEST(SceneReloader, AReplacedSceneIsFreedOffTheCallingThread) {
+  std::thread::id freed_on;
+  {
+    SceneReloader reloader([] { return Configuration{}; });
+    reloader.dispose(std::shared_ptr<const Scene>(new Scene(), [&](const Scene* scene) {
+      freed_on = std::this_thread::get_id();
+      delete scene;
+    }));
+  }  // the reloader waits for its threads
+  EXPECT_NE(freed_on, std::thread::id());
+  EXPECT_NE(freed_on, std::this_thread::get_id());
 }
 
 }  // namespace
