@@ -99,6 +99,36 @@ TEST(ImageChild, FieldsEqualThoseReadInProcessAndTheModuleIsNeverMappedHere) {
   EXPECT_EQ(from_child.regions()[0].effects.size(), here.regions()[0].effects.size());
 }
 
+// PNG, TIFF and OpenEXR, 8-bit, 16-bit and float, as normal and depth maps: the sandboxed reader reads
+// each as this process would (the sandbox leaves every decoder what it needs).
+TEST(ImageChild, ReadsEveryFormatInItsSandboxAsInProcess) {
+  ImageChild child;
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(PH_IMAGE_SEEDS_DIR)) {
+    const std::filesystem::path path = entry.path();
+    FieldSources sources;
+    FieldNeeds needs{true, false};
+    if (path.filename().string().rfind("normal", 0) == 0) {
+      sources.normal_map = path;
+    } else {
+      sources.depth_map = path;
+      needs.depth = true;
+    }
+    FieldLoadReport from_child_report, here_report;
+    const RegionFields a = child.load_fields(sources, 16, 12, needs, from_child_report);
+    const RegionFields b = load_region_fields(sources, 16, 12, needs, here_report);
+    ASSERT_TRUE(a.gradient && b.gradient) << path;
+    EXPECT_EQ(a.gradient->values.size(), 16u * 12u) << path;
+    for (std::size_t i = 0; i < a.gradient->values.size(); ++i) {
+      ASSERT_EQ(a.gradient->values[i].x, b.gradient->values[i].x) << path << " texel " << i;
+      ASSERT_EQ(a.gradient->values[i].y, b.gradient->values[i].y) << path << " texel " << i;
+    }
+    EXPECT_EQ(child.image_size(path).code_max, read_image_size(path).code_max) << path;
+    ++files;
+  }
+  EXPECT_GE(files, 6);
+}
+
 TEST(ImageChild, CorruptImagesAreErrorsThatNameTheFile) {
   const ScratchDir dir("image-child-corrupt");
   const std::filesystem::path scene_file = write_scene(dir.path(), small_target());
