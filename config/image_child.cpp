@@ -181,9 +181,11 @@ image_wire::Answer ImageChild::ask(const image_wire::Request& request, const std
     } catch (const image_wire::WireError&) {
       fail(files, "ended before it took the request", false);  // a broken pipe: the child is gone
     }
-    if (!wait_readable(from_child_, std::chrono::steady_clock::now() + timeout_))
+    const auto deadline = std::chrono::steady_clock::now() + timeout_;
+    if (!wait_readable(from_child_, deadline))
       fail(files, "gave no answer within " + std::to_string(timeout_.count() / 1000) + " s", true);
-    if (!image_wire::read_message(from_child_, bytes)) fail(files, "ended without an answer while reading it", false);
+    if (!image_wire::read_message(from_child_, bytes, deadline))
+      fail(files, "ended without an answer while reading it", false);
     image_wire::Answer answer = image_wire::decode_answer(bytes, request);
     if (const auto* failure = std::get_if<image_wire::Failure>(&answer)) throw FieldError(failure->message);
     return answer;

@@ -1,7 +1,9 @@
 #include "config/image_wire.hpp"
 
+#include <poll.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -226,12 +228,27 @@ void write_message(int fd, const std::vector<std::byte>& bytes) {
   write_all(bytes.data(), bytes.size());
 }
 
-bool read_message(int fd, std::vector<std::byte>& bytes) {
+bool read_message(int fd, std::vector<std::byte>& bytes,
+                  std::optional<std::chrono::steady_clock::time_point> deadline) {
+  // Waits until fd is readable, or throws once the deadline has passed.
+  auto wait = [&] {
+    if (!deadline) return;
+    for (;;) {
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(*deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0) throw WireError("a message not complete in time");
+      pollfd p{fd, POLLIN, 0};
+      const int n = ::poll(&p, 1, static_cast<int>(std::min<long long>(left.count(), 60'000)));
+      if (n > 0) return;
+      if (n < 0 && errno != EINTR) throw WireError(std::string("cannot wait for the pipe: ") + std::strerror(errno));
+    }
+  };
   // Reads n bytes; returns how many came before end of file.
-  auto read_all = [fd](void* data, std::size_t n) {
+  auto read_all = [&](void* data, std::size_t n) {
     auto* p = static_cast<char*>(data);
     std::size_t got = 0;
     while (got < n) {
+      wait();
       const ssize_t done = ::read(fd, p + got, n - got);
       if (done < 0 && errno == EINTR) continue;
       if (done < 0) throw WireError(std::string("cannot read the image reader's pipe: ") + std::strerror(errno));

@@ -5,9 +5,11 @@
 // is not right is an error (WireError), never a crash or a NaN in a field.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <variant>
@@ -55,8 +57,9 @@ Answer decode_answer(const std::vector<std::byte>& bytes, const Request& request
 
 // A message on a pipe: its length (8 bytes) then its bytes. write_message throws WireError on a failed
 // write; read_message returns false at end of file before the first byte, throws WireError on a short
-// or oversized message.
+// or oversized message, or one that is not all there by `deadline` (when given).
 void write_message(int fd, const std::vector<std::byte>& bytes);
-bool read_message(int fd, std::vector<std::byte>& bytes);
+bool read_message(int fd, std::vector<std::byte>& bytes,
+                  std::optional<std::chrono::steady_clock::time_point> deadline = std::nullopt);
 
 }  // namespace ph::image_wire

@@ -192,6 +192,16 @@ TEST(ImageChild, AReaderThatHangsIsKilledAfterTheTimeout) {
   EXPECT_NE(message.find("no answer within"), std::string::npos) << message;
 }
 
+TEST(ImageChild, AReaderThatStopsInTheMiddleOfAnAnswerIsKilledAfterTheTimeout) {
+  const ScratchDir dir("image-child-half");
+  ImageChild child(fake_reader(dir.path(), "printf '\\020\\0\\0\\0\\0\\0\\0\\0\\003abc'; exec sleep 60"),
+                   std::chrono::milliseconds(300));
+  const auto start = std::chrono::steady_clock::now();
+  const std::string message = thrown_message<FieldError>([&] { child.image_size("/x/half.png"); });
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+  EXPECT_NE(message.find("not complete in time"), std::string::npos) << message;
+}
+
 TEST(ImageWire, AnswersWithNonFiniteOrMisshapenFieldsAreRefused) {
   image_wire::FieldsRequest request;
   request.width = 2;
