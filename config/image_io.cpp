@@ -32,7 +32,8 @@ class ModuleError : public std::runtime_error {
 
 // Where the image module may be, in the order tried: PH_IMAGE_MODULE alone when set (tests); otherwise
 // beside the installed program (PH_IMAGE_MODULE_INSTALLED is relative to the program's folder, e.g.
-// ../lib/pseudohaptic/ph_image_oiio.so), then where the build tree made it.
+// ../lib/pseudohaptic/ph_image_oiio.so), in the program's own folder (the image reader, installed in
+// lib/pseudohaptic/), then where the build tree made it.
 const char* module_from_environment() {
   const char* env = std::getenv("PH_IMAGE_MODULE");
   return env != nullptr && *env != '\0' ? env : nullptr;
@@ -43,7 +44,10 @@ std::vector<fs::path> module_candidates() {
   std::vector<fs::path> candidates;
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) candidates.push_back((self.parent_path() / PH_IMAGE_MODULE_INSTALLED).lexically_normal());
+  if (!ec) {
+    candidates.push_back((self.parent_path() / PH_IMAGE_MODULE_INSTALLED).lexically_normal());
+    candidates.push_back(self.parent_path() / image_backend::kModuleFile);
+  }
   candidates.emplace_back(PH_IMAGE_MODULE_BUILT);
   return candidates;
 }

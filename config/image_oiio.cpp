@@ -130,6 +130,10 @@ constexpr image_backend::Table kTable{image_backend::kVersion, &read_size, &read
 }  // namespace ph
 
 // The module's one exported symbol (image_backend::kEntryPoint; the version script keeps it so).
+// Only the reader the file's extension names may open it (.png, .tif, .exr, ...): by default OpenImageIO
+// tries every format it knows on a file its reader refused, each a parser an image file could attack
+// (docs/SERVICE.md, "Images").
 extern "C" __attribute__((visibility("default"))) const ph::image_backend::Table* ph_image_backend_v1() {
+  OIIO::attribute("try_all_readers", 0);
   return &ph::kTable;
 }

@@ -143,11 +143,11 @@ void check_params(const Reporter& rep, const toml::table& t, std::string_view wh
 }
 
 // Bit depth of the map a region's classes come from: 8-bit maps get the wider filter and tolerances.
-int class_map_bit_depth(const FieldSources& sources, const MaterialsParams& params) {
+int class_map_bit_depth(const FieldSources& sources, const MaterialsParams& params, FieldReader& reader) {
   const bool from_depth = params.source == ClassSource::depth || !sources.normal_map;
   const std::optional<std::filesystem::path>& map = from_depth ? sources.depth_map : sources.normal_map;
   if (!map) return 16;
-  return read_image_size(*map).code_max == 255 ? 8 : 16;
+  return reader.image_size(*map).code_max == 255 ? 8 : 16;
 }
 
 MaterialsParams parse_materials(const Reporter& rep, const toml::table& t, std::string_view where) {
@@ -558,7 +558,9 @@ MethodPtr make_method(const RegionSpec& region, const MethodRegistry& methods) {
   return entry->make(params != region.method_params.end() ? params->second : entry->defaults());
 }
 
-Scene load_scene(const SceneSpec& spec, SceneLoadReport* report) {
+Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* reader) {
+  InProcessFieldReader here;
+  FieldReader& fields_from = reader != nullptr ? *reader : here;
   std::vector<Region> regions;
   for (const RegionSpec& r : spec.regions) {
     Region region;
@@ -578,11 +580,11 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report) {
     }
     FieldLoadReport field_report;
     try {
-      region.fields = load_region_fields(r.sources, r.rect.w, r.rect.h, needs, field_report);
+      region.fields = fields_from.load_fields(r.sources, r.rect.w, r.rect.h, needs, field_report);
       // Effects keep what they precompute (a class map, a nearest-pattern field), not the fields.
       if (r.materials) {
         region.effects.push_back(make_materials_effect(region.fields, r.rect.w, r.rect.h, *r.materials,
-                                                       class_map_bit_depth(r.sources, *r.materials)));
+                                                       class_map_bit_depth(r.sources, *r.materials, fields_from)));
       }
       if (r.wells) region.effects.push_back(make_wells_effect(region.fields, r.rect.w, r.rect.h, *r.wells));
     } catch (const FieldError& e) {

@@ -15,6 +15,7 @@
 
 #include "config/daemon_config.hpp"
 #include "config/field_loader.hpp"
+#include "config/field_reader.hpp"
 #include "core/effects/effect_materials.hpp"
 #include "core/effects/effect_wells.hpp"
 #include "core/engine/methods.hpp"
@@ -83,9 +84,9 @@ struct SceneLoadReport {
   std::vector<std::string> variants;  // per region: its traversal variant and why
 };
 
-// Reads every region's images (only those its method needs). Throws ConfigError naming the scene file
-// and the region for an image that cannot be used.
-Scene load_scene(const SceneSpec& spec, SceneLoadReport* report = nullptr);
+// Reads every region's images (only those its method needs) through `reader` (nullptr: in this
+// process). Throws ConfigError naming the scene file and the region for an image that cannot be used.
+Scene load_scene(const SceneSpec& spec, SceneLoadReport* report = nullptr, FieldReader* reader = nullptr);
 
 // One line per region and map with invalid texels (counted, repaired and reported at load: docs/METHODS.md,
 // "Screen, regions and fields"), "FILE:LINE: region 'NAME': " and invalid_texel_notes' text; none for a clean scene.

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "config/desktop_geometry.hpp"
+#include "config/image_child.hpp"
 #include "config/scene_file.hpp"
 #include "core/engine/default_scene.hpp"
 
@@ -39,7 +40,10 @@ Configuration load_configuration(const ConfigChoice& choice) {
   if (file && !choice.default_scene) {
     const SceneSpec spec = parse_scene_file(*file);
     SceneLoadReport report;
-    c.scene = std::make_shared<const Scene>(load_scene(spec, &report));
+    // The images are read in a child process that ends with the load (config/image_child.hpp): the
+    // daemon never maps the image library nor parses an image file.
+    ImageChild images;
+    c.scene = std::make_shared<const Scene>(load_scene(spec, &report, &images));
     // Invalid texels are counted, repaired and reported at load (docs/METHODS.md, "Screen, regions and fields").
     for (std::string& warning : invalid_texel_warnings(spec, report)) c.warnings.push_back(std::move(warning));
     c.settings = spec.daemon;

@@ -83,7 +83,11 @@ void block_daemon_signals() {
 }
 
 Daemon::Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& notifier, const std::string& control_path)
-    : choice_(std::move(choice)), log_(log), notifier_(notifier), config_(load_configuration(choice_)) {
+    : choice_(std::move(choice)),
+      log_(log),
+      notifier_(notifier),
+      config_(load_configuration(choice_)),
+      reloader_([choice = choice_] { return load_configuration(choice); }) {
   log_notes(config_);
   // Without /dev/uinput there is nothing to emit through: say so now rather than at the first mouse.
   if (::access("/dev/uinput", R_OK | W_OK) != 0) throw StartupError(uinput_error_message(-errno));
@@ -97,8 +101,8 @@ Daemon::Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& no
   hold_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
   if (!signals_ || !epoll_ || !retry_timer_ || !watchdog_timer_ || !resync_timer_ || !hold_timer_)
     fail_system("cannot set up the event loop");
-  for (int fd :
-       {signals_.get(), udev_.fd(), retry_timer_.get(), watchdog_timer_.get(), resync_timer_.get(), hold_timer_.get()})
+  for (int fd : {signals_.get(), udev_.fd(), retry_timer_.get(), watchdog_timer_.get(), resync_timer_.get(),
+                 hold_timer_.get(), reloader_.fd()})
     watch(epoll_.get(), fd);
   if (const auto interval = ServiceNotifier::watchdog_interval()) {
     set_timer(watchdog_timer_.get(), static_cast<long>(interval->count()) * 1000);
@@ -164,6 +168,8 @@ int Daemon::run() {
         log_.debug("resync: no answer from the session helper within {} ms; going on from the model",
                    kHoldForHelperNs / 1'000'000);
         release_held();
+      } else if (fd == reloader_.fd()) {
+        on_reload_ended();
       } else if (fd == resync_timer_.get()) {
         drain_timer(fd);
         on_resync_tick();
@@ -589,19 +595,46 @@ void Daemon::restart_devices(std::string_view why) {
   take_present_mice();
 }
 
+// SIGHUP: the scene is loaded on the reloader's thread while frames go on through the old one
+// (docs/SERVICE.md, "Reloads"); on_reload_ended swaps it in.
 void Daemon::reload() {
-  notifier_.reloading();
-  log_.info("SIGHUP received; reloading {}", choice_.file ? choice_.file->string() : config_.source);
-  Configuration next;
-  try {
-    next = load_configuration(choice_);
-    if (helper_desktop_ && !next.settings.desktop) next.pipeline.desktop = *helper_desktop_;
-  } catch (const std::exception& e) {
-    log_.warning("reload failed: {}; keeping the previous scene", e.what());
-    notifier_.ready(status_line());
+  const std::string what = choice_.file ? choice_.file->string() : config_.source;
+  if (!reloader_.request()) {
+    log_.info("SIGHUP received during a reload; {} will be read again once the load under way ends", what);
     return;
   }
+  reload_started_ = std::chrono::steady_clock::now();
+  notifier_.reloading();
+  log_.info("SIGHUP received; reloading {}", what);
+}
+
+void Daemon::on_reload_ended() {
+  std::optional<SceneReloader::Outcome> outcome = reloader_.collect();
+  if (!outcome) return;
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - reload_started_).count();
+  log_.debug("the load ran {}", outcome->idle_priority ? "at idle priority (SCHED_IDLE)"
+                                                       : "at the event loop's priority (SCHED_IDLE refused)");
+  if (outcome->configuration) {
+    apply(std::move(*outcome->configuration));
+    log_.info("reloaded: {} ({} regions), loaded in {:.2f} s while the cursor moved on", config_.source,
+              config_.scene->regions().size(), seconds);
+  } else {
+    log_.warning("reload failed: {}; keeping the previous scene", outcome->error);
+  }
+  if (outcome->another_started) {
+    reload_started_ = std::chrono::steady_clock::now();
+    log_.info("reloading again: SIGHUP came during the load");
+    return;  // still reloading: READY=1 once the newest file is in
+  }
+  notifier_.ready(status_line());
+}
+
+// Between two frames: the loop runs one handler at a time, and a frame's events wait in its assembler
+// until SYN_REPORT, so every frame goes through one scene.
+void Daemon::apply(Configuration next) {
+  if (helper_desktop_ && !next.settings.desktop) next.pipeline.desktop = *helper_desktop_;
   log_notes(next);
+  std::shared_ptr<const Scene> replaced = config_.scene;
   if (only_scene_differs(config_, next)) {
     pipeline_->set_scene(next.scene);
     config_ = std::move(next);
@@ -611,8 +644,7 @@ void Daemon::reload() {
     config_ = std::move(next);
     restart_devices("settings changed");
   }
-  log_.info("reloaded: {} ({} regions)", config_.source, config_.scene->regions().size());
-  notifier_.ready(status_line());
+  reloader_.dispose(std::move(replaced));  // the last reference: freed off the event loop
 }
 
 std::string Daemon::status_line() const {

@@ -1,6 +1,6 @@
-// pseudohapticd's event loop: one epoll over the grabbed mice, the udev monitor, a signalfd and two
-// timers. Every mouse it takes gets its own virtual device and frame assembler; all share one pipeline,
-// so one cursor model, however many mice move it (docs/METHODS.md, "Cursor and output").
+// pseudohapticd's event loop: one epoll over the grabbed mice, the udev monitor, a signalfd, timers and
+// the reload worker's eventfd. Every mouse it takes gets its own virtual device and frame assembler; all share one
+// pipeline, so one cursor model, however many mice move it (docs/METHODS.md, "Cursor and output").
 #pragma once
 
 #include <chrono>
@@ -16,6 +16,7 @@
 #include "daemon/control_server.hpp"
 #include "daemon/evdev_device.hpp"
 #include "daemon/log.hpp"
+#include "daemon/scene_reloader.hpp"
 #include "daemon/service_notifier.hpp"
 #include "daemon/udev_watch.hpp"
 #include "daemon/unique_fd.hpp"
@@ -95,6 +96,8 @@ class Daemon final : private ControlHandler {
   void on_signal();
   void on_retry_tick();
   void reload();
+  void on_reload_ended();
+  void apply(Configuration next);
   void update_retry_timer();
   std::string status_line() const;
   void log_notes(const Configuration& configuration) const;
@@ -108,6 +111,8 @@ class Daemon final : private ControlHandler {
   UdevWatch udev_;
   UniqueFd epoll_, signals_, retry_timer_, watchdog_timer_, resync_timer_, hold_timer_;
   LogindSessions sessions_;
+  SceneReloader reloader_;  // SIGHUP's load, on a worker thread
+  SteadyTime reload_started_{};
   std::unique_ptr<ControlServer> control_;
   // Resync: pointers the daemon does not take, watched without a grab; the pixels it emitted lately (a
   // helper's report of one of those is the daemon's own motion, not a warp); when its mice last moved.

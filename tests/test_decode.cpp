@@ -74,6 +74,23 @@ void expect_normal_near(Normal actual, Normal expected, double tolerance) {
 
 // --- Normals: conventions -------------------------------------------------------------------------
 
+// A float depth map may hold heights up to 3.4e38: the slopes between them stay finite and within the
+// bound that slopes from normals have (what the daemon's image reader hands back must pass its checks).
+TEST(GradientFromDepth, HugeHeightsGiveBoundedFiniteSlopes) {
+  DepthField depth(3, 2);
+  depth.values = {-3.0e38f, 3.0e38f, 0.0f, 1.0f, 2.0e18f, 2.0e18f};
+  const GradientField g = gradient_from_depth(depth);
+  for (const Gradient& s : g.values) {
+    EXPECT_TRUE(std::isfinite(s.x) && std::isfinite(s.y));
+    EXPECT_LE(std::abs(s.x), kMaxSlope);
+    EXPECT_LE(std::abs(s.y), kMaxSlope);
+  }
+  EXPECT_EQ(g.at(0, 0).x, kMaxSlope);   // -3e38 to 3e38: steeply up, clamped
+  EXPECT_EQ(g.at(0, 1).x, kMaxSlope);   // 1 to 2e18 over two texels
+  EXPECT_EQ(g.at(2, 0).y, kMaxSlope);   // 0 to 2e18
+  EXPECT_EQ(g.at(1, 0).y, -kMaxSlope);  // 3e38 to 2e18
+}
+
 TEST(DecodeNormals, OpenGlHemisphereGivesScreenFrameNormals) {
   const Hemisphere hemisphere = make_hemisphere(33, 14.0);
   DecodeReport report;

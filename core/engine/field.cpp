@@ -27,9 +27,13 @@ GradientField gradient_from_depth(const DepthField& depth) {
   const std::int32_t w = depth.width;
   const std::int32_t h = depth.height;
   GradientField out(w, h);
-  // Central difference inside, one-sided at the border; a 1-texel axis has no slope along it.
+  // Central difference inside, one-sided at the border; a 1-texel axis has no slope along it. Clamped to
+  // +-kMaxSlope as slopes from normals are: a depth map of huge values (a float image may hold 1e38)
+  // would otherwise give slopes of 1e38 or inf.
   auto diff = [](float lo, float hi, std::int32_t span) {
-    return span > 0 ? (hi - lo) / static_cast<float>(span) : 0.0f;
+    if (span <= 0 || hi == lo) return 0.0f;
+    const double d = (static_cast<double>(hi) - static_cast<double>(lo)) / span;
+    return static_cast<float>(std::clamp(d, -static_cast<double>(kMaxSlope), static_cast<double>(kMaxSlope)));
   };
   for (std::int32_t y = 0; y < h; ++y) {
     const std::int32_t y0 = y > 0 ? y - 1 : y;

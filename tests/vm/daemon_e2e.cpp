@@ -7,20 +7,24 @@
 // status is 1 when any failed.
 //
 //   daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--rounds N]
-//              [--baseline BARE_REEMITTER] [--baseline-polls] [-v]
+//              [--baseline BARE_REEMITTER] [--baseline-polls] [--parts pfdr] [--scene-dir DIR] [-v]
 //
 // --tool: the pseudohaptic tool for `pseudohaptic status` (default: ../tools/pseudohaptic next to the
 // daemon's folder, as in the build tree); --cycles: hotplug create/destroy cycles (100); --latency-frames:
 // frames per latency figure (500); --rounds: interleaved rounds of the daemon against the bare re-emitter,
 // half as many frames each per round (10); --baseline: the bare re-emitter (bare_reemitter beside this
-// program); --baseline-polls: the re-emitter waits in poll() before each read(), as an event loop does; -v passes -v to
+// program); --baseline-polls: the re-emitter waits in poll() before each read(), as an event loop does;
+// --parts: the parts to run, by letter (below; all four by default); --scene-dir: where the default scene's
+// target maps are (x11_cursor_e2e --write-scene writes them on the host, faster than here; missing ones are
+// written in the scratch folder); -v passes -v to
 // the daemon (its debug lines are printed when a case fails) and traces the hotplug cycles.
 //
-// Three parts, each with a fresh daemon (or none): latency of the test mouse's own node; the daemon with a
+// Four parts, each with a fresh daemon (or none): (p) latency of the test mouse's own node; (f) the daemon with a
 // flat config file (held button at start, identity, latency, the control socket, resync through a fake
-// session helper and an untaken touchpad, SIGHUP reloads, SIGTERM with a held button); the daemon with the
+// session helper and an untaken touchpad, SIGHUP reloads, SIGTERM with a held button); (d) the daemon with the
 // embedded default scene (grab exclusivity, absolute output with adaptive acceleration over a texture
-// against the offline model, latency, hotplug, two mice, SYN_DROPPED, SIGTERM). Numbers in brackets number
+// against the offline model, latency, hotplug, two mice, SYN_DROPPED, SIGTERM); (r) latency while the daemon
+// reloads a full-HD region with materials and wells, against without a reload. Numbers in brackets number
 // the cases; tests/vm/README.md lists them.
 #include <fmt/format.h>
 
@@ -60,8 +64,10 @@ struct Options {
   int rounds = 10;              // interleaved rounds of the daemon against the bare re-emitter
   std::string baseline;         // the bare re-emitter (bare_reemitter beside this program)
   bool baseline_polls = false;  // --baseline-polls: the re-emitter waits in poll() before each read()
+  std::string parts = "pfdr";   // which parts run: passthrough, flat config, default scene, reload
   bool verbose = false;         // pass -v to the daemon
   std::filesystem::path scratch;
+  std::filesystem::path scene_dir;  // the default scene's target maps, if written on the host (faster)
 };
 
 // The daemon with the flat config file: relative output, gain 1, no acceleration (relative output's
@@ -1307,10 +1313,256 @@ void default_scene_part(Report& report, const Options& options, Latency& latency
   });
 }
 
+// ---- part 4: images read by the daemon's child; a reload of a full-HD region while the mouse moves ---------
+
+// A line "NAME:   N kB" of /proc/PID/status, in KiB; -1 when absent.
+long status_kib(pid_t pid, const std::string& name) {
+  std::istringstream status(read_text_file("/proc/" + std::to_string(pid) + "/status"));
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind(name + ":", 0) == 0) return std::stol(line.substr(name.size() + 1));
+  }
+  return -1;
+}
+
+// The maps of `spec`: those in `maps` when present there (written on the host), else written into `dir`.
+ph::TargetFilePaths target_maps(const ph::TargetSpec& spec, const std::filesystem::path& maps,
+                                const std::filesystem::path& dir) {
+  if (ph::target_files_present(maps, {spec})) return ph::target_file_paths(maps, spec);
+  if (!ph::target_files_present(dir, {spec})) ph::write_target_files(dir, {spec});
+  return ph::target_file_paths(dir, spec);
+}
+
+// A region of `spec` at (x, y) from its maps, named by absolute path.
+std::string target_region(const ph::TargetSpec& spec, const ph::TargetFilePaths& maps, int x, int y) {
+  std::string region = ph::target_scene_text(spec);
+  for (const auto& [key, path] :
+       {std::pair{"normal_map = \"", maps.normal_map}, std::pair{"depth_map = \"", maps.depth_map}}) {
+    const auto from = region.find(key) + std::strlen(key);
+    region.replace(from, region.find('"', from) - from, std::filesystem::absolute(path).string());
+  }
+  const std::string at_origin = "x = 0\ny = 0\n";
+  region.replace(region.find(at_origin), at_origin.size(), fmt::format("x = {}\ny = {}\n", x, y));
+  return region;
+}
+
+// The default scene's three targets at their places, from map files.
+std::string three_target_config(const Options& options) {
+  struct At {
+    const char* name;
+    int x, y;
+  };
+  constexpr At kAt[] = {
+      {"bump-gaussian-h1-r200", 135, 290}, {"hole-polynomial-h1-r200", 710, 290}, {"bump-linear-h1-r100", 1285, 290}};
+  std::string text = daemon_table();
+  for (const At& at : kAt) {
+    for (const ph::TargetSpec& spec : ph::all_targets()) {
+      if (spec.name() == at.name)
+        text += "\n" + target_region(spec, target_maps(spec, options.scene_dir, options.scratch), at.x, at.y);
+    }
+  }
+  return text;
+}
+
+// A [daemon] table on a desktop twice full HD wide, and one region over its left half (1920 x 1080) from
+// the hole target's maps, with materials and gravity wells: what makes a load take seconds (the class
+// map, the wells' pattern field). `variant` changes the filter and the wells' levels, so that a reload
+// has a new scene to compute.
+std::string full_hd_config(const ph::TargetSpec& spec, const ph::TargetFilePaths& maps, int variant) {
+  return fmt::format(
+      "[daemon]\n"
+      "devices = [\"name:ph-e2e*\"]\n"
+      "output = \"relative\"\n"
+      "desktop = [0, 0, 3840, 1080]\n"
+      "pointer_speed = 1.0\n\n"
+      "[[region]]\n"
+      "name = \"full-hd\"\n"
+      "x = 0\ny = 0\nwidth = 1920\nheight = 1080\n"
+      "method = \"curvature\"\n"
+      "normal_map = \"{normal}\"\n"
+      "depth_map = \"{depth}\"\n"
+      "depth_zero = 0.5\n"
+      "relief_px = {relief}\n\n"
+      "[region.materials]\n"
+      "source = \"depth\"\n"
+      "filter_radius = {radius}\n"
+      "parabolic = \"damping\"\n"
+      "elliptic = \"friction\"\n"
+      "hyperbolic = \"stick_slip\"\n\n"
+      "[region.wells]\n"
+      "pattern = \"contours\"\n"
+      "levels = [{level}, 20.0]\n"
+      "radius_px = 16.0\n",
+      fmt::arg("normal", std::filesystem::absolute(maps.normal_map).string()),
+      fmt::arg("depth", std::filesystem::absolute(maps.depth_map).string()), fmt::arg("relief", 2.0 * spec.relief_px),
+      fmt::arg("radius", 2 + variant), fmt::arg("level", 10.0 + variant));
+}
+
+// One motion frame every 8 ms (a 125 Hz mouse; REL_X +4 and -4 in turn over the flat part, so the
+// output is the input) until `done`: the latency of each, from just before the write into the test mouse
+// to just after the read from `out`. Paced alike with and without a reload, so that both medians see a
+// daemon that waited 8 ms between frames.
+template <typename Done>
+void paced_latency(Check& check, TestMouse& mouse, EventReader& out, ph::Pipeline& model, Latency& result, Done done) {
+  for (int i = 0; !done(); ++i) {
+    const auto next = Clock::now() + 8ms;
+    const Frame in = make_frame({rel(ev::kRelX, i % 2 == 0 ? 4 : -4)});
+    const Frame expected = untimed(model.process(in));
+    const auto before = Clock::now();
+    mouse.send(in);
+    const std::optional<Frame> got = out.next_frame(kFrameTimeout);
+    const auto after = Clock::now();
+    if (!got) throw Fatal(fmt::format("frame {}: nothing came out within {} s", i, kFrameTimeout.count()));
+    if (check.expect(same_events(*got, expected),
+                     fmt::format("frame {}: expected [{}], got [{}]", i, describe(expected), describe(*got))))
+      result.us.push_back(std::chrono::duration<double, std::micro>(after - before).count());
+    std::this_thread::sleep_until(next);
+  }
+}
+
+void reload_part(Report& report, const Options& options, Latency& steady, Latency& reloading) {
+  Session session(report, "daemon reloading a full-HD region with materials and wells (-c)");
+  const UeventMonitor uevents;
+  const std::filesystem::path config = options.scratch / "reload.toml";
+  const std::string virtual_name = "pseudohaptic ph-e2e reload mouse";
+  const std::string control_path = (options.scratch / "control-reload").string();
+  const ph::TargetSpec hole = hole_target();
+  std::optional<TestMouse> mouse;
+  std::optional<EventReader> out;
+  std::unique_ptr<NotifySocket>& notify = session.notify;
+  std::unique_ptr<ChildProcess>& daemon = session.daemon;
+  // The frames go over the flat right half, where relative output is the input unchanged: every frame's
+  // output is known exactly, whichever scene the daemon holds at that moment.
+  ph::PipelineConfig flat_right = pipeline_config();
+  flat_right.desktop = {0, 0, 3840, 1080};
+  flat_right.start = {2880.5, 540.5};
+  ph::Pipeline model(std::make_shared<const ph::Scene>(), flat_right);
+  ph::TargetFilePaths hole_maps;
+
+  session.run("[14] the default scene's three targets from image files: the daemon's memory", [&](Check& check) {
+    const std::filesystem::path three = options.scratch / "three.toml";
+    write_file_atomically(three, three_target_config(options));
+    const auto scene = ph::load_scene(ph::parse_scene_file(three));  // here, for the size of its fields
+    std::size_t field_bytes = 0;
+    for (const ph::Region& region : scene.regions()) field_bytes += region.fields.bytes();
+    NotifySocket three_notify((options.scratch / "notify-three.sock").string());
+    ChildProcess three_daemon(std::vector<std::string>{options.daemon, "-c", three.string(), "--control", ""},
+                              std::vector<std::string>{"NOTIFY_SOCKET=" + three_notify.path(), "LANG=C.UTF-8"},
+                              (options.scratch / "daemon-three.log").string());
+    if (!wait_ready(three_notify, three_daemon, 120s)) throw Fatal("no READY=1 within 120 s");
+    const std::string maps = read_text_file("/proc/" + std::to_string(three_daemon.pid()) + "/maps");
+    const long rss = status_kib(three_daemon.pid(), "VmRSS"), peak = status_kib(three_daemon.pid(), "VmHWM");
+    three_daemon.signal(SIGTERM);
+    three_daemon.wait_exit(30s);
+    check.expect(maps.find("OpenImageIO") == std::string::npos && maps.find("ph_image_oiio") == std::string::npos,
+                 "expected the daemon not to map OpenImageIO nor the image module; it does");
+    const long fields_kib = static_cast<long>(field_bytes / 1024);
+    check.expect(rss > 0 && rss <= 16 * 1024 + fields_kib,
+                 fmt::format("expected VmRSS at most 16 MiB + the fields ({} KiB), got {} KiB", fields_kib, rss));
+    check.note(fmt::format("daemon VmRSS {} KiB, of which fields {} KiB; peak (VmHWM) {} KiB; no OpenImageIO mapped",
+                           rss, fields_kib, peak));
+  });
+
+  session.run("[13] start on a full-HD region with materials and wells; latency without a reload", [&](Check& check) {
+    hole_maps = target_maps(hole, options.scene_dir, options.scratch);
+    write_file_atomically(config, full_hd_config(hole, hole_maps, 0));
+    mouse.emplace("ph-e2e reload mouse");
+    notify = std::make_unique<NotifySocket>((options.scratch / "notify-reload.sock").string());
+    const auto start = Clock::now();
+    daemon = start_daemon(options, {"-c", config.string(), "--control", control_path}, *notify, "daemon-reload.log");
+    if (!wait_ready(*notify, *daemon, 180s)) throw Fatal("no READY=1 within 180 s");
+    const double start_s = std::chrono::duration<double>(Clock::now() - start).count();
+    const std::string node = wait_for_device(virtual_name, kDeviceTimeout, uevents);
+    if (node.empty()) throw Fatal("no virtual device '" + virtual_name + "'");
+    out.emplace(node);
+    if (!wait_taken(*mouse, *out, kDeviceTimeout)) throw Fatal("nothing came out of " + node);
+    ph::control::Client control(control_path);
+    const ph::control::Reply reply =
+        control.request(ph::control::format_request(ph::control::PositionRequest{*flat_right.start}), 10s);
+    if (!reply.ok) throw Fatal("'position' refused: " + reply.text);
+    const std::size_t frames = static_cast<std::size_t>(options.latency_frames) / 2;
+    paced_latency(check, *mouse, *out, model, steady, [&] { return steady.us.size() >= frames; });
+    check.note(fmt::format("READY=1 {:.1f} s after the start (the scene loaded before it); {}", start_s,
+                           latency_text(steady)));
+  });
+
+  session.run("[13] SIGHUP: frames keep coming out while the new scene loads, within 2x the median", [&](Check& check) {
+    write_file_atomically(config, full_hd_config(hole, hole_maps, 1));
+    notify->clear();
+    const std::size_t log_before = daemon->log().size();
+    const double median = percentile(steady.us, 0.5);
+    const auto sent_hup = Clock::now();
+    daemon->signal(SIGHUP);
+    if (!notify->expect("RELOADING=1", 10s)) throw Fatal("no RELOADING=1 within 10 s of SIGHUP");
+    // The frames go on until the daemon says READY=1: the load runs meanwhile.
+    bool ready = false;
+    const auto deadline = Clock::now() + 180s;
+    paced_latency(check, *mouse, *out, model, reloading, [&] {
+      ready = ready || notify->expect("READY=1", 0ms);
+      return ready || Clock::now() > deadline;
+    });
+    const double reload_s = std::chrono::duration<double>(Clock::now() - sent_hup).count();
+    if (!ready) throw Fatal("no READY=1 within 180 s of SIGHUP");
+    const std::string said = daemon->log().substr(std::min(log_before, daemon->log().size()));
+    check.expect(said.find("reloaded: " + config.string()) != std::string::npos,
+                 "expected 'reloaded: " + config.string() + "' in the daemon's log, got: " + said);
+    check.expect(reloading.us.size() >= 10,
+                 fmt::format("expected at least 10 frames during the reload, got {}", reloading.us.size()));
+    const double during = percentile(reloading.us, 0.5);
+    check.expect(during <= 2 * median,
+                 fmt::format("expected the median latency during the reload within 2x the steady median ({:.0f} us), "
+                             "got {:.0f} us",
+                             median, during));
+    check.note(
+        fmt::format("READY=1 {:.1f} s after SIGHUP; {} frames meanwhile, all unchanged as expected; during "
+                    "the reload {}; without a reload median {:.0f} us",
+                    reload_s, reloading.us.size(), latency_text(reloading), median));
+  });
+
+  session.run("[15] SIGHUP with a truncated PNG: the reload fails naming it, the daemon keeps its scene",
+              [&](Check& check) {
+                // A copy of the depth map cut to a third (the maps may be on the host, read-only).
+                ph::TargetFilePaths maps = hole_maps;
+                const std::string bytes = read_text_file(maps.depth_map);
+                maps.depth_map = options.scratch / "truncated.depth.png";
+                write_file_atomically(maps.depth_map, bytes.substr(0, bytes.size() / 3));
+                write_file_atomically(config, full_hd_config(hole, maps, 2));
+                notify->clear();
+                const std::size_t log_before = daemon->log().size();
+                daemon->signal(SIGHUP);
+                check.expect(notify->expect("READY=1", 120s), "expected READY=1 after the failed reload, got none");
+                if (!daemon->running())
+                  throw Fatal("the daemon exited: " + describe_wait_status(*daemon->wait_exit(0s)));
+                std::string said;
+                wait_until(
+                    [&] {
+                      said = daemon->log().substr(std::min(log_before, daemon->log().size()));
+                      return said.find("keeping the previous scene") != std::string::npos;
+                    },
+                    5s);
+                const std::string png = maps.depth_map.string();
+                check.expect(said.find("reload failed: ") != std::string::npos && said.find(png) != std::string::npos &&
+                                 said.find("keeping the previous scene") != std::string::npos,
+                             "expected 'reload failed: ... " + png + " ... keeping the previous scene', got: " + said);
+                Latency after{"after the failed reload", {}, 0};
+                measure_latency(check, *mouse, *out, &model, 20, after);
+                const std::size_t at = said.find("reload failed: ");
+                if (at != std::string::npos) said = said.substr(at, said.find('\n', at) - at);
+                check.note("said \"" + said + "\"; 20 frames after it as before");
+              });
+
+  session.run("[13] SIGTERM", [&](Check& check) {
+    daemon->signal(SIGTERM);
+    const std::optional<int> status = daemon->wait_exit(30s);
+    check.expect(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0,
+                 "expected exit status 0, got " + (status ? describe_wait_status(*status) : "still running"));
+  });
+}
+
 int usage() {
-  std::fprintf(stderr,
-               "usage: daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--rounds N]\n"
-               "                  [--baseline BARE_REEMITTER] [--baseline-polls] [-v]\n");
+  std::fprintf(
+      stderr,
+      "usage: daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--rounds N]\n"
+      "                  [--baseline BARE_REEMITTER] [--baseline-polls] [--parts pfdr] [--scene-dir DIR] [-v]\n");
   return 2;
 }
 
@@ -1329,6 +1581,10 @@ int main(int argc, char** argv) {
       options.baseline_polls = true;
     } else if (arg == "--baseline" && i + 1 < argc) {
       options.baseline = argv[++i];
+    } else if (arg == "--scene-dir" && i + 1 < argc) {
+      options.scene_dir = std::filesystem::absolute(argv[++i]);
+    } else if (arg == "--parts" && i + 1 < argc) {
+      options.parts = argv[++i];
     } else if (arg == "--tool" && i + 1 < argc) {
       options.tool = argv[++i];
     } else if (arg == "-v" || arg == "--verbose") {
@@ -1352,6 +1608,7 @@ int main(int argc, char** argv) {
   const char* tmpdir = std::getenv("TMPDIR");
   options.scratch = std::filesystem::path(tmpdir != nullptr && *tmpdir != '\0' ? tmpdir : "/tmp") / "ph-e2e";
   std::filesystem::create_directories(options.scratch);
+  if (options.scene_dir.empty()) options.scene_dir = options.scratch;
   ::signal(SIGPIPE, SIG_IGN);
 
   std::printf("daemon e2e: %s, %d hotplug cycles, %d frames per latency figure\n", options.daemon.c_str(),
@@ -1362,10 +1619,13 @@ int main(int argc, char** argv) {
   Latency flat{"daemon, flat scene", {}, 0};
   LatencyRatio ratio;
   Latency texture{"daemon, default scene's texture", {}, 0};
+  Latency steady{"daemon, full-HD region (frames beside it), no reload", {}, 0};
+  Latency reloading{"daemon, the same while it reloads the region", {}, 0};
   try {
-    passthrough_part(report, options, passthrough);
-    flat_part(report, options, flat, ratio);
-    default_scene_part(report, options, texture);
+    if (options.parts.find('p') != std::string::npos) passthrough_part(report, options, passthrough);
+    if (options.parts.find('f') != std::string::npos) flat_part(report, options, flat, ratio);
+    if (options.parts.find('d') != std::string::npos) default_scene_part(report, options, texture);
+    if (options.parts.find('r') != std::string::npos) reload_part(report, options, steady, reloading);
   } catch (const std::exception& e) {
     report.not_run("the rest", e.what());
   }
@@ -1373,7 +1633,7 @@ int main(int argc, char** argv) {
   std::printf(
       "latency, write into the test mouse -> read from the output node (guest clock under TCG: emulated "
       "times, compare only within one run):\n");
-  for (const Latency* l : {&passthrough, &flat, &texture, &ratio.daemon, &ratio.bare}) {
+  for (const Latency* l : {&passthrough, &flat, &texture, &ratio.daemon, &ratio.bare, &steady, &reloading}) {
     std::printf("  %-52s %s\n", l->label.c_str(), l->us.empty() ? "not measured" : latency_text(*l).c_str());
   }
   std::printf("daemon over a flat scene / bare re-emitter%s (%d interleaved rounds): %s\n",

@@ -283,9 +283,9 @@ int main(int argc, char** argv) {
     const ph::TargetSpec hole = target("hole-polynomial-h1-r200");
     ph::write_target_files(dir, {hole});
     write_file(scene_file, scene_text(hole, "curvature"));
-    // The first image read loads the image module and its ~270 libraries; read over 9p under emulation
-    // that alone can take longer than the unit's WatchdogSec=10s, while the reload holds the event loop.
-    // Reading the scene once here puts those files in the page cache first.
+    // The first image read loads the image module and its ~270 libraries (in the daemon's image reader
+    // child); read over 9p under emulation that takes many seconds. Reading the scene once here puts
+    // those files in the page cache first, so that the reload below is quick.
     const auto warm_start = Clock::now();
     must_run("pseudohaptic check-config --quiet " + scene_file);
     const double warm_s = std::chrono::duration<double>(Clock::now() - warm_start).count();

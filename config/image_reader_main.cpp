@@ -1,0 +1,33 @@
+// pseudohaptic-image-reader: the daemon's image reader (config/image_child.hpp). Enters its sandbox,
+// then answers requests on stdin (config/image_wire.hpp) until stdin ends: reads, decodes and resamples
+// a region's maps through the image module, or reads an image's size, and writes the answer to stdout.
+// Not meant to be run by hand. docs/SERVICE.md, "Images".
+#include <unistd.h>
+
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "config/image_reader.hpp"
+#include "config/image_wire.hpp"
+#include "config/reader_sandbox.hpp"
+
+int main(int argc, char** argv) {
+  if (argc != 1 || ::isatty(0)) {
+    std::fprintf(stderr, "%s: pseudohapticd's image reader, started by the daemon; not for use by hand\n", argv[0]);
+    return 2;
+  }
+  for (const std::string& missed : ph::enter_reader_sandbox())
+    std::fprintf(stderr, "pseudohaptic-image-reader: sandbox: %s\n", missed.c_str());
+  try {
+    std::vector<std::byte> bytes;
+    while (ph::image_wire::read_message(0, bytes))
+      ph::image_wire::write_message(
+          1, ph::image_wire::encode(ph::serve_image_request(ph::image_wire::decode_request(bytes))));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pseudohaptic-image-reader: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,75 @@
+// libFuzzer target for what the daemon's image reader child does with an image (config/image_reader.cpp):
+// OpenImageIO's PNG, TIFF and OpenEXR readers through the image module, then decoding, repair and
+// resampling to a region's size; and the answer as the daemon checks it (config/image_wire.cpp). The
+// first byte picks the file's extension (which reader OpenImageIO tries first) and whether it is read as a
+// normal map or a depth map; the rest is the file. Any input must give fields the daemon accepts or a
+// Failure; a crash here is one the child would have had (and only the child, in the daemon).
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <variant>
+
+#include "config/image_reader.hpp"
+#include "config/image_wire.hpp"
+
+namespace {
+
+// A file in a tmpfs, rewritten for each input.
+const std::string& scratch(const char* extension) {
+  static const std::string base = "/dev/shm/ph-fuzz-image-" + std::to_string(::getpid());
+  static std::string paths[3] = {base + ".png", base + ".tif", base + ".exr"};
+  const int i = extension[1] == 'p' ? 0 : extension[1] == 't' ? 1 : 2;
+  return paths[i];
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size < 1) return 0;
+  static const char* const kExtensions[] = {".png", ".tif", ".exr"};
+  const std::string& path = scratch(kExtensions[data[0] % 3]);
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0) return 0;
+  const bool written = ::write(fd, data + 1, size - 1) == static_cast<ssize_t>(size - 1);
+  ::close(fd);
+  if (!written) return 0;
+
+  ph::image_wire::FieldsRequest request;
+  const bool as_normals = (data[0] / 3) % 2 == 1;
+  if (as_normals) {
+    request.sources.normal_map = path;
+    request.needs.gradient = true;
+  } else {
+    request.sources.depth_map = path;
+    request.needs = {true, true};  // gradient from depth as well
+  }
+  request.width = 24;  // larger and smaller than the seeds: both ways of resampling
+  request.height = 4;
+  // Smaller limits than the daemon's, so that a header claiming a large image is refused rather than
+  // allocated and zeroed (at 2^20 pixels that alone held the fuzzer to 20 executions a second; the child
+  // has RLIMIT_AS for the daemon's limits). The decoders still see every size up to 256 x 256.
+  ph::ImageLimits limits;
+  limits.max_pixels = 1 << 16;
+  limits.max_side = 1024;
+  limits.max_channels = 4;  // what normal and depth maps use
+  const ph::image_wire::Request as_request{request};
+  const ph::image_wire::Answer answer = ph::serve_image_request(as_request, limits);
+  // What the daemon does with it: an answer it would refuse (a NaN, a field of the wrong size) is a bug
+  // of the reader, so the WireError escapes and counts as a crash.
+  const ph::image_wire::Answer checked = ph::image_wire::decode_answer(ph::image_wire::encode(answer), as_request);
+  if (answer.index() != checked.index()) __builtin_trap();
+  // The size request (materials ask it) opens the file as the fields request did: not repeated here,
+  // which would halve the executions for no new path.
+  return 0;
+}
+
+// A smaller quarantine than ASan's 256 MB: OpenImageIO's reads free buffers of megabytes, and poisoning
+// them took most of the time. OpenImageIO keeps its last error message per thread for good, which
+// LeakSanitizer would call a leak. An allocation too large fails as it does in the reader child (under
+// RLIMIT_AS): std::bad_alloc, which the reader answers as a Failure.
+extern "C" const char* __asan_default_options() {
+  return "quarantine_size_mb=32:detect_leaks=0:allocator_may_return_null=1";
+}

@@ -1,0 +1,248 @@
+// The daemon's image reader child: the fields it hands back equal those read in process, the process
+// that asks never maps the image module, and a corrupt image, a crashing or lying reader is an error that
+// names the file, never a crash of the asking process. Also the reader's sandbox itself.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <thread>
+
+#include "config/image_child.hpp"
+#include "config/image_wire.hpp"
+#include "config/reader_sandbox.hpp"
+#include "config/scene_file.hpp"
+#include "config/target_files.hpp"
+#include "core/engine/targets.hpp"
+#include "tests/scratch_dir.hpp"
+#include "tests/thrown_message.hpp"
+
+namespace ph {
+namespace {
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+// Runs `body` in a forked child and returns its exit status: what writes images maps the image module,
+// which this process must not.
+template <typename Body>
+int in_child(Body body) {
+  const pid_t pid = ::fork();
+  if (pid == 0) _exit(body());
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+bool maps_image_library() {
+  const std::string maps = read_text("/proc/self/maps");
+  return maps.find("ph_image_oiio") != std::string::npos || maps.find("OpenImageIO") != std::string::npos;
+}
+
+TargetSpec small_target() {
+  TargetSpec spec = all_targets().front();
+  spec.size = 96;
+  return spec;
+}
+
+// A scene with one region of `spec`, with materials so that the image size is asked for too.
+std::filesystem::path write_scene(const std::filesystem::path& dir, const TargetSpec& spec) {
+  EXPECT_EQ(in_child([&] {
+              write_target_files(dir, {spec});
+              return 0;
+            }),
+            0);
+  const std::filesystem::path scene = target_file_paths(dir, spec).scene;
+  write_text(scene, read_text(scene) + "\n[region.materials]\nsource = \"depth\"\n");
+  return scene;
+}
+
+TEST(ImageChild, FieldsEqualThoseReadInProcessAndTheModuleIsNeverMappedHere) {
+  const ScratchDir dir("image-child");
+  const TargetSpec spec = small_target();
+  const std::filesystem::path scene_file = write_scene(dir.path(), spec);
+  ASSERT_FALSE(maps_image_library());
+  const SceneSpec spec_file = parse_scene_file(scene_file);
+  pid_t reader_pid = -1;
+  Scene from_child;
+  {
+    ImageChild child;
+    from_child = load_scene(spec_file, nullptr, &child);
+    reader_pid = child.pid();
+  }
+  EXPECT_GT(reader_pid, 0);
+  EXPECT_FALSE(maps_image_library()) << "the image module was mapped by the asking process";
+  EXPECT_EQ(::kill(reader_pid, 0), -1) << "the reader still runs after the load";
+  const Scene here = load_scene(spec_file);
+  ASSERT_EQ(from_child.regions().size(), 1u);
+  const RegionFields& a = from_child.regions()[0].fields;
+  const RegionFields& b = here.regions()[0].fields;
+  ASSERT_TRUE(a.gradient && b.gradient);
+  ASSERT_EQ(a.gradient->values.size(), b.gradient->values.size());
+  for (std::size_t i = 0; i < a.gradient->values.size(); ++i) {
+    ASSERT_EQ(a.gradient->values[i].x, b.gradient->values[i].x) << i;
+    ASSERT_EQ(a.gradient->values[i].y, b.gradient->values[i].y) << i;
+  }
+  EXPECT_EQ(from_child.regions()[0].effects.size(), here.regions()[0].effects.size());
+}
+
+// PNG, TIFF and OpenEXR, 8-bit, 16-bit and float, as normal and depth maps: the sandboxed reader reads
+// each as this process would (the sandbox leaves every decoder what it needs).
+TEST(ImageChild, ReadsEveryFormatInItsSandboxAsInProcess) {
+  ImageChild child;
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(PH_IMAGE_SEEDS_DIR)) {
+    const std::filesystem::path path = entry.path();
+    FieldSources sources;
+    FieldNeeds needs{true, false};
+    if (path.filename().string().rfind("normal", 0) == 0) {
+      sources.normal_map = path;
+    } else {
+      sources.depth_map = path;
+      needs.depth = true;
+    }
+    FieldLoadReport from_child_report, here_report;
+    const RegionFields a = child.load_fields(sources, 16, 12, needs, from_child_report);
+    const RegionFields b = load_region_fields(sources, 16, 12, needs, here_report);
+    ASSERT_TRUE(a.gradient && b.gradient) << path;
+    EXPECT_EQ(a.gradient->values.size(), 16u * 12u) << path;
+    for (std::size_t i = 0; i < a.gradient->values.size(); ++i) {
+      ASSERT_EQ(a.gradient->values[i].x, b.gradient->values[i].x) << path << " texel " << i;
+      ASSERT_EQ(a.gradient->values[i].y, b.gradient->values[i].y) << path << " texel " << i;
+    }
+    EXPECT_EQ(child.image_size(path).code_max, read_image_size(path).code_max) << path;
+    ++files;
+  }
+  EXPECT_GE(files, 6);
+}
+
+TEST(ImageChild, CorruptImagesAreErrorsThatNameTheFile) {
+  const ScratchDir dir("image-child-corrupt");
+  const std::filesystem::path scene_file = write_scene(dir.path(), small_target());
+  const SceneSpec spec = parse_scene_file(scene_file);
+  const std::filesystem::path depth = *spec.regions[0].sources.depth_map;
+  const std::string png = read_text(depth);
+  for (const std::string& bad : {png.substr(0, png.size() / 2), png.substr(0, 40) + std::string(4000, '\x5a'),
+                                 std::string("\x89PNG\r\n\x1a\n") + std::string(300, '\xff')}) {
+    write_text(depth, bad);
+    ImageChild child;
+    const std::string message = thrown_message<ConfigError>([&] { load_scene(spec, nullptr, &child); });
+    EXPECT_NE(message.find(depth.string()), std::string::npos) << message;
+  }
+}
+
+// A stand-in for the reader program: a shell script.
+std::filesystem::path fake_reader(const std::filesystem::path& dir, const std::string& body) {
+  const std::filesystem::path path = dir / "fake-reader";
+  write_text(path, "#!/bin/sh\n" + body + "\n");
+  ::chmod(path.c_str(), 0755);
+  return path;
+}
+
+FieldSources depth_only(const std::filesystem::path& path) {
+  FieldSources sources;
+  sources.depth_map = path;
+  return sources;
+}
+
+TEST(ImageChild, AReaderThatCrashesFailsTheRequestNamingTheFile) {
+  const ScratchDir dir("image-child-crash");
+  ImageChild child(fake_reader(dir.path(), "kill -SEGV $$"));
+  FieldLoadReport report;
+  const std::string message = thrown_message<FieldError>([&] {
+    child.load_fields(depth_only("/x/map.png"), 8, 8, {false, true}, report);
+  });
+  EXPECT_NE(message.find("/x/map.png"), std::string::npos) << message;
+  EXPECT_NE(message.find("killed by signal 11 (SIGSEGV)"), std::string::npos) << message;
+  // The next request starts a new reader (which crashes again, and says so again).
+  EXPECT_NE(thrown_message<FieldError>([&] { child.image_size("/x/other.png"); }).find("/x/other.png"),
+            std::string::npos);
+}
+
+TEST(ImageChild, AReaderThatSendsNonsenseFailsTheRequest) {
+  const ScratchDir dir("image-child-lies");
+  // A message of 16 bytes that claims to be a fields answer and is cut short.
+  ImageChild child(fake_reader(dir.path(), "printf '\\020\\0\\0\\0\\0\\0\\0\\0\\003abcdefghijklmno'; sleep 5"));
+  FieldLoadReport report;
+  const std::string message = thrown_message<FieldError>([&] {
+    child.load_fields(depth_only("/x/map.png"), 8, 8, {false, true}, report);
+  });
+  EXPECT_NE(message.find("sent a wrong answer"), std::string::npos) << message;
+}
+
+TEST(ImageChild, AReaderThatHangsIsKilledAfterTheTimeout) {
+  const ScratchDir dir("image-child-hang");
+  ImageChild child(fake_reader(dir.path(), "exec sleep 60"), std::chrono::milliseconds(300));
+  const auto start = std::chrono::steady_clock::now();
+  const std::string message = thrown_message<FieldError>([&] { child.image_size("/x/slow.png"); });
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+  EXPECT_NE(message.find("no answer within"), std::string::npos) << message;
+}
+
+TEST(ImageChild, AReaderThatStopsInTheMiddleOfAnAnswerIsKilledAfterTheTimeout) {
+  const ScratchDir dir("image-child-half");
+  ImageChild child(fake_reader(dir.path(), "printf '\\020\\0\\0\\0\\0\\0\\0\\0\\003abc'; exec sleep 60"),
+                   std::chrono::milliseconds(300));
+  const auto start = std::chrono::steady_clock::now();
+  const std::string message = thrown_message<FieldError>([&] { child.image_size("/x/half.png"); });
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+  EXPECT_NE(message.find("not complete in time"), std::string::npos) << message;
+}
+
+TEST(ImageWire, AnswersWithNonFiniteOrMisshapenFieldsAreRefused) {
+  image_wire::FieldsRequest request;
+  request.width = 2;
+  request.height = 1;
+  request.needs = {true, false};
+  image_wire::FieldsAnswer answer;
+  answer.fields.gradient = GradientField(2, 1, Gradient{0.5f, -0.5f});
+  const auto ok = image_wire::decode_answer(image_wire::encode(image_wire::Answer{answer}), request);
+  ASSERT_TRUE(std::holds_alternative<image_wire::FieldsAnswer>(ok));
+  EXPECT_EQ(std::get<image_wire::FieldsAnswer>(ok).fields.gradient->values[1].y, -0.5f);
+
+  answer.fields.gradient->values[1].x = std::nanf("");
+  EXPECT_THROW(image_wire::decode_answer(image_wire::encode(image_wire::Answer{answer}), request),
+               image_wire::WireError);
+  answer.fields.gradient = GradientField(1, 2);  // the right count, the wrong shape
+  EXPECT_THROW(image_wire::decode_answer(image_wire::encode(image_wire::Answer{answer}), request),
+               image_wire::WireError);
+  answer.fields.gradient = GradientField(2, 1);
+  answer.fields.depth = DepthField(2, 1);  // a field not asked for
+  EXPECT_THROW(image_wire::decode_answer(image_wire::encode(image_wire::Answer{answer}), request),
+               image_wire::WireError);
+}
+
+TEST(ReaderSandbox, ForbidsWritingSocketsAndNewProcessesButNotThreadsOrReading) {
+  const ScratchDir dir("sandbox");
+  const std::string target = (dir.path() / "written").string();
+  const int status = in_child([&] {
+    enter_reader_sandbox();
+    int failures = 0;
+    if (::open(target.c_str(), O_WRONLY | O_CREAT, 0600) >= 0 || errno != EACCES) failures |= 1;
+    if (::socket(AF_UNIX, SOCK_STREAM, 0) >= 0 || errno != EPERM) failures |= 2;
+    if (::fork() >= 0 || errno != EPERM) failures |= 4;
+    if (::open("/proc/self/status", O_RDONLY) < 0) failures |= 8;
+    bool ran = false;
+    std::thread([&] { ran = true; }).join();
+    if (!ran) failures |= 16;
+    return failures;
+  });
+  EXPECT_EQ(status, 0) << "bits: 1 wrote a file, 2 made a socket, 4 forked, 8 could not read, 16 no thread";
+  EXPECT_FALSE(std::filesystem::exists(target));
+}
+
+}  // namespace
+}  // namespace ph
