@@ -95,29 +95,47 @@ class CurvatureMethod final : public Method {
   // "Which two normals"). The sample: v0 = a and v1 = t (the slope along m) of the texel, v2 = a behind and
   // v3 = theta behind - theta here. Where a neighbour needed lies outside the region, v2 is kNoBehind and
   // cd() pairs the texel the walk came from, which keeps the step at a region's border.
-#if defined(__GNUC__)
-  [[gnu::always_inline]]  // once per texel step in the walk; GCC otherwise leaves it out of line
-#endif
-  TexelSample
-  sample(const RegionFields* fields, Texel local, Vec2 m) const override {
-    if (fields == nullptr || !fields->gradient) return {0.0, 0.0, 0.0, 0.0};
-    const GradientField& f = *fields->gradient;
-    const std::int32_t ox = m.x > 0.0 ? -1 : (m.x < 0.0 ? 1 : 0);
-    const std::int32_t oy = m.y > 0.0 ? -1 : (m.y < 0.0 ? 1 : 0);
-    const Gradient* texel = &f.values[static_cast<std::size_t>(local.y) * f.width + local.x];
-    const double t = slope_along(texel[0], m);
-    const double a = projected(t);
-    // One unsigned compare per axis: a neighbour at -1 wraps to above the width.
-    const auto nx = static_cast<std::uint32_t>(local.x + ox), ny = static_cast<std::uint32_t>(local.y + oy);
-    if (nx >= static_cast<std::uint32_t>(f.width) || ny >= static_cast<std::uint32_t>(f.height)) [[unlikely]]
-      return {a, t, kNoBehind, kNoBehind};
-    const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(oy) * f.width;
-    const double wx = std::abs(m.x), wy = std::abs(m.y);
-    // Differences first: a constant field gives exactly t behind, so a plane keeps delta-beta exactly 0.
-    const double tb = t + wx * (1.0 - wy) * (slope_along(texel[ox], m) - t) +
-                      (1.0 - wx) * wy * (slope_along(texel[row], m) - t) +
-                      wx * wy * (slope_along(texel[row + ox], m) - t);
-    return {a, t, projected(tb), slope_angle_change(tb, t)};
+  // What the nearest reading needs of one straight leg of the walk, worked out once per leg (the offsets
+  // to the neighbours behind and the bilinear weights of the point 1 px behind): the walk then reads each
+  // texel with four gradient loads and the arithmetic of the slopes.
+  class Leg {
+   public:
+    Leg(const RegionFields* fields, Vec2 m)
+        : field_(fields != nullptr && fields->gradient ? &*fields->gradient : nullptr),
+          m_(m),
+          ox_(m.x > 0.0 ? -1 : (m.x < 0.0 ? 1 : 0)),
+          oy_(m.y > 0.0 ? -1 : (m.y < 0.0 ? 1 : 0)),
+          row_(field_ != nullptr ? static_cast<std::ptrdiff_t>(oy_) * field_->width : 0),
+          w_x_(std::abs(m.x) * (1.0 - std::abs(m.y))),
+          w_y_((1.0 - std::abs(m.x)) * std::abs(m.y)),
+          w_xy_(std::abs(m.x) * std::abs(m.y)) {}
+
+    PH_ALWAYS_INLINE TexelSample sample(Texel local) const {
+      if (field_ == nullptr) return {0.0, 0.0, 0.0, 0.0};
+      const GradientField& f = *field_;
+      const Gradient* texel = &f.values[static_cast<std::size_t>(local.y) * f.width + local.x];
+      const double t = slope_along(texel[0], m_);
+      const double a = projected(t);
+      // One unsigned compare per axis: a neighbour at -1 wraps to above the width.
+      const auto nx = static_cast<std::uint32_t>(local.x + ox_), ny = static_cast<std::uint32_t>(local.y + oy_);
+      if (nx >= static_cast<std::uint32_t>(f.width) || ny >= static_cast<std::uint32_t>(f.height)) [[unlikely]]
+        return {a, t, kNoBehind, kNoBehind};
+      // Differences first: a constant field gives exactly t behind, so a plane keeps delta-beta exactly 0.
+      const double tb = t + w_x_ * (slope_along(texel[ox_], m_) - t) + w_y_ * (slope_along(texel[row_], m_) - t) +
+                        w_xy_ * (slope_along(texel[row_ + ox_], m_) - t);
+      return {a, t, projected(tb), slope_angle_change(tb, t)};
+    }
+
+   private:
+    const GradientField* field_;
+    Vec2 m_;
+    std::int32_t ox_, oy_;     // offsets to the neighbours behind; 0 along an axis the motion does not move along
+    std::ptrdiff_t row_;       // offset to the neighbour behind along y
+    double w_x_, w_y_, w_xy_;  // bilinear weights of the neighbours behind along x, along y, diagonally
+  };
+  Leg leg(const RegionFields* fields, Vec2 m) const { return Leg(fields, m); }
+  TexelSample sample(const RegionFields* fields, Texel local, Vec2 m) const override {
+    return Leg(fields, m).sample(local);
   }
   // The same from the gradient interpolated at `at` (Sampling::bilinear); the walk pairs it with the previous
   // sample point.

@@ -162,17 +162,29 @@ class Walker {
   void walk_region(std::size_t index, const M& method, bool first_leg) {
     const Region& region = scene_.regions()[index];
     TexelSample previous = sample_from(method);
-    // A copy the compiler can keep in registers: what a method derives from the direction is then computed
-    // once per leg, not per step (m_ could alias the walk's stores).
-    const Vec2 m = m_;
-    // Inlined, so that the samples stay in registers: an out-of-line call per step cost the depth method a
-    // fifth of its typical frame.
-    step_through(index, first_leg, [&, m](bool entered) PH_ALWAYS_INLINE {
-      const TexelSample here = sample_here(region, method, m);
-      const double cd = step_cd(region, method, previous, here, entered);
-      previous = here;
-      return cd;
-    });
+    if constexpr (Mode == WalkMode::nearest && requires { method.leg(&region.fields, m_).sample(Texel{}); }) {
+      // A method that works out once per leg what its nearest reading needs of the direction (offsets,
+      // weights, the field): each step is then only the reading.
+      const auto leg = method.leg(&region.fields, m_);
+      step_through(index, first_leg, [&](bool entered) PH_ALWAYS_INLINE {
+        const TexelSample here = leg.sample(region.local(texel_));
+        const double cd = step_cd(region, method, previous, here, entered);
+        previous = here;
+        return cd;
+      });
+    } else {
+      // A copy the compiler can keep in registers: what a method derives from the direction is then computed
+      // once per leg, not per step (m_ could alias the walk's stores).
+      const Vec2 m = m_;
+      // Inlined, so that the samples stay in registers: an out-of-line call per step cost the depth method a
+      // fifth of its typical frame.
+      step_through(index, first_leg, [&, m](bool entered) PH_ALWAYS_INLINE {
+        const TexelSample here = sample_here(region, method, m);
+        const double cd = step_cd(region, method, previous, here, entered);
+        previous = here;
+        return cd;
+      });
+    }
   }
 
   // The same with each texel's C/D from a direction table.
