@@ -43,19 +43,25 @@ struct Options {
   fs::path scratch;
 };
 
+// A listening, non-blocking Unix socket at `path` for a stand-in compositor.
+Fd listen_on(const std::string& what, const std::string& path) {
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
+  Fd listener(::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
+  if (!listener || ::bind(listener.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof addr) < 0 ||
+      ::listen(listener.get(), 8) < 0) {
+    throw Fatal(what + " at " + path + ": " + errno_text(errno));
+  }
+  return listener;
+}
+
 // A stand-in for Hyprland's request socket: each connection reads a request and gets "X, Y" for
 // `cursorpos` (then the end of the connection, as Hyprland does); counts the questions.
 class FakeHyprland {
  public:
   explicit FakeHyprland(const std::string& path) : path_(path) {
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
-    listener_ = Fd(::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
-    if (!listener_ || ::bind(listener_.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof addr) < 0 ||
-        ::listen(listener_.get(), 8) < 0) {
-      throw Fatal("fake Hyprland socket at " + path + ": " + errno_text(errno));
-    }
+    listener_ = listen_on("fake Hyprland socket", path);
     thread_ = std::thread([this] { serve(); });
   }
   ~FakeHyprland() {
@@ -101,14 +107,7 @@ class FakeHyprland {
 class FakeWayfire {
  public:
   FakeWayfire(const std::string& path, std::string reply) : path_(path), reply_(std::move(reply)) {
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
-    listener_ = Fd(::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
-    if (!listener_ || ::bind(listener_.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof addr) < 0 ||
-        ::listen(listener_.get(), 8) < 0) {
-      throw Fatal("fake Wayfire socket at " + path + ": " + errno_text(errno));
-    }
+    listener_ = listen_on("fake Wayfire socket", path);
     thread_ = std::thread([this] { serve(); });
   }
   ~FakeWayfire() {
