@@ -52,19 +52,33 @@ class HybridMethod final : public Method {
   void prepare(RegionFields& fields) const override;
 
   // Curvature's sample (v0-v3) of the smoothed normals; on a discontinuity texel, depth's (v4, v5) with v2 =
-  // kDepthStep. Inline: the traversal calls these directly on the final class.
-#if defined(__GNUC__)
-  [[gnu::always_inline]]
-#endif
-  TexelSample
-  sample(const RegionFields* fields, Texel local, Vec2 m) const override {
-    if (fields != nullptr && fields->discontinuity && fields->depth &&
-        fields->discontinuity->values[static_cast<std::size_t>(local.y) * fields->discontinuity->width + local.x])
-        [[unlikely]] {
-      const TexelSample d = depth_.sample(fields, local, m);
-      if (!std::isnan(d.v1)) return {0.0, 0.0, kDepthStep, 0.0, d.v0, d.v1};
+  // kDepthStep. Like its parents, what a straight leg of the walk needs is worked out once per leg: the
+  // parents' legs and where the discontinuity marks are. Inline: the traversal calls these directly on the
+  // final class.
+  class Leg {
+   public:
+    Leg(const RegionFields* fields, Vec2 m)
+        : curvature_(fields, m),
+          depth_(fields, m),
+          marks_(fields != nullptr && fields->discontinuity && fields->depth ? &*fields->discontinuity : nullptr) {}
+
+    PH_ALWAYS_INLINE TexelSample sample(Texel local) const {
+      if (marks_ != nullptr && marks_->values[static_cast<std::size_t>(local.y) * marks_->width + local.x])
+          [[unlikely]] {
+        const TexelSample d = depth_.sample(local);
+        if (!std::isnan(d.v1)) return {0.0, 0.0, kDepthStep, 0.0, d.v0, d.v1};
+      }
+      return curvature_.sample(local);
     }
-    return curvature_.sample(fields, local, m);
+
+   private:
+    CurvatureMethod::Leg curvature_;
+    DepthMethod::Leg depth_;
+    const DiscontinuityField* marks_;  // null: no depth field, so no texel is a discontinuity
+  };
+  Leg leg(const RegionFields* fields, Vec2 m) const { return Leg(fields, m); }
+  TexelSample sample(const RegionFields* fields, Texel local, Vec2 m) const override {
+    return Leg(fields, m).sample(local);
   }
   TexelSample sample_at(const RegionFields* fields, Texel local, Vec2 at, Vec2 m) const override {
     return curvature_.sample_at(fields, local, at, m);
