@@ -1,9 +1,11 @@
 // `pseudohaptic accuracy OUTDIR [--small]`: speed against accuracy of every variant of the engine
 // (docs/SPEED_VS_ACCURACY.md), from one binary, as CSV for tools/charts.py.
 //
-// Variants: method (curvature, depth) x storage x engine options (core/engine/engine_options.hpp: every traversal with
-// every sampling it accepts, direction_lut with 8 and 16 directions). Storage is how a user's map reaches the
-// engine, built from the exact target in memory and decoded through the loader's own path (core/engine/decode.hpp):
+// Variants: method (curvature, depth, hybrid) x storage x engine options (core/engine/engine_options.hpp: every
+// traversal with every sampling it accepts, direction_lut with 8 and 16 directions), and traversal = "auto" at the
+// budgets kAutoBudgetsPx (label auto0.25, auto2, auto8; f32 storage): each shape gets what choose_variant picks.
+// Storage is how a user's map reaches the engine, built from the exact target in memory and decoded through the
+// loader's own path (core/engine/decode.hpp):
 //   f32  the exact field rasterised at texel centres (target_gradient_field / target_depth_field);
 //   n16, n8  a 16- / 8-bit normal map: codes round((n + 1) / 2 * cmax), decode_normals, then the loader's own
 //            gradient_from_normals (core/engine/field.hpp: g = -n_xy / n_z, walls clamped);
@@ -73,6 +75,7 @@
 #include "core/engine/scene.hpp"
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
+#include "core/engine/variant_choice.hpp"
 #include "core/lab/cd_profile.hpp"
 #include "core/lab/ground_truth.hpp"
 #include "core/lab/map_storage.hpp"
@@ -547,7 +550,43 @@ VariantRow measure_variant(const Workload& w, const MethodTruth& truth, const Me
   return row;
 }
 
-// Every variant of every method: method x storage x engine.
+// traversal = "auto" at each budget (accuracy_px): each shape's scene gets the variant choose_variant picks for
+// its region, as the scene file's loader does; the row is the mix over the shapes.
+VariantRow measure_auto(const Workload& w, const MethodTruth& truth, const MethodPtr& method, Storage storage,
+                        StorageScenes& scenes, double budget_px) {
+  VariantRow row;
+  row.method = std::string(method->name());
+  row.traversal = fmt::format("auto{:g}", budget_px);
+  row.storage = name_of(storage);
+  row.sampling = std::string(name_of(EngineOptions{}.sampling));
+  row.variant = fmt::format("{}/{}/{}/{}", row.method, row.traversal, row.storage, row.sampling);
+  double options_ms = 0.0;
+  std::size_t bytes = 0, chose_exact = 0;
+  std::int64_t area = 0;
+  for (Scene& scene : scenes.scenes) {
+    const Clock::time_point t0 = Clock::now();
+    const VariantChoice choice = choose_variant(scene.regions().front(), {budget_px});
+    scene.set_options(choice.options);
+    options_ms += ms_since(t0);
+    chose_exact += choice.options.traversal == Traversal::exact ? 1 : 0;
+    bytes += scene.bytes();
+    area += scene.regions().front().rect.area();
+  }
+  row.precompute_ms = scenes.build_ms + options_ms / static_cast<double>(scenes.scenes.size());
+  row.bytes_texel = static_cast<double>(bytes) / static_cast<double>(area);
+  fmt::print(stderr, "accuracy: {:<44} exact on {} of {} shapes, frame_midpoint on the rest\n", row.variant,
+             chose_exact, scenes.scenes.size());
+  measure_strokes(w, truth, scenes.scenes, *method, row);
+  row.drift = measure_drift(truth, scenes.scenes);
+  measure_speed(truth, scenes.scenes, w.config.timing_s, row);
+  return row;
+}
+
+// The budgets auto is measured at: the default (VariantBudget), then looser ones that let it choose
+// frame_midpoint on more shapes.
+constexpr double kAutoBudgetsPx[] = {0.25, 2.0, 8.0};
+
+// Every variant of every method: method x storage x (engine variants, auto at each budget).
 std::vector<VariantRow> measure_all(const Workload& w, const std::vector<MethodPtr>& methods) {
   std::vector<VariantRow> rows;
   for (const MethodPtr& method : methods) {
@@ -556,12 +595,14 @@ std::vector<VariantRow> measure_all(const Workload& w, const std::vector<MethodP
     fmt::print(stderr, "accuracy: {} ground truth in {:.1f} s\n", method->name(), ms_since(t_truth) / 1000.0);
     for (Storage storage : storages_for(*method)) {
       StorageScenes scenes = build_scenes(w, method, storage);
-      for (const EngineOptions& engine : w.engines) {
-        rows.push_back(measure_variant(w, truth, method, storage, scenes, engine));
-        const VariantRow& row = rows.back();
+      auto report = [&rows](VariantRow row) {
         fmt::print(stderr, "accuracy: {:<44} end rms {:.3g} px, C/D rms {:.3g}, {:.0f} ns/frame\n", row.variant,
                    row.end_rms, row.cd_rms, row.ns_median);
-      }
+        rows.push_back(std::move(row));
+      };
+      for (const EngineOptions& engine : w.engines) report(measure_variant(w, truth, method, storage, scenes, engine));
+      if (storage != Storage::f32) continue;  // auto on exact fields only: a point per budget, not a cloud
+      for (double budget : kAutoBudgetsPx) report(measure_auto(w, truth, method, storage, scenes, budget));
     }
   }
   return rows;
