@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/engine/geometry.hpp"
+#include "session/desktop.hpp"
 
 namespace ph::session {
 
@@ -22,6 +23,10 @@ class CursorSource {
   virtual std::string name() const = 0;
   // Where it asks (for messages).
   virtual const std::string& socket() const = 0;
+  // A source that is told rather than asks (KWin's script, kwin_cursor.hpp): what the helper's loop waits
+  // on for it, and the handling of what arrived there, which never blocks.
+  virtual Watch watch() const { return {}; }
+  virtual void dispatch() {}
 };
 
 inline constexpr std::chrono::milliseconds kCursorQueryTimeout{250};
