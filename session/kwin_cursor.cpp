@@ -76,15 +76,24 @@ std::optional<double> read_number(sd_bus_message* m, char type) {
     return static_cast<double>(value);
   };
   switch (type) {
-    case 'y': return read(std::uint8_t{});
-    case 'n': return read(std::int16_t{});
-    case 'q': return read(std::uint16_t{});
-    case 'i': return read(std::int32_t{});
-    case 'u': return read(std::uint32_t{});
-    case 'x': return read(std::int64_t{});
-    case 't': return read(std::uint64_t{});
-    case 'd': return read(double{});
-    default: return std::nullopt;
+    case 'y':
+      return read(std::uint8_t{});
+    case 'n':
+      return read(std::int16_t{});
+    case 'q':
+      return read(std::uint16_t{});
+    case 'i':
+      return read(std::int32_t{});
+    case 'u':
+      return read(std::uint32_t{});
+    case 'x':
+      return read(std::int64_t{});
+    case 't':
+      return read(std::uint64_t{});
+    case 'd':
+      return read(double{});
+    default:
+      return std::nullopt;
   }
 }
 
@@ -187,8 +196,8 @@ struct KWinCursor::State {
     unload();
     BusError error;
     sd_bus_message* raw = nullptr;
-    int r = sd_bus_call_method(bus.get(), kKWinService, kScriptingPath, kScriptingInterface, "loadScript",
-                               error.get(), &raw, "ss", script_path.c_str(), kKWinScriptPlugin);
+    int r = sd_bus_call_method(bus.get(), kKWinService, kScriptingPath, kScriptingInterface, "loadScript", error.get(),
+                               &raw, "ss", script_path.c_str(), kKWinScriptPlugin);
     const MessagePtr reply(raw);
     if (r < 0) {
       why = fmt::format("KWin did not load the script ({})", error.describe(r));
@@ -208,8 +217,8 @@ struct KWinCursor::State {
   bool run(std::int32_t id, std::string& why) {
     for (const std::string& path : {fmt::format("/Scripting/Script{}", id), fmt::format("/{}", id)}) {
       BusError error;
-      const int r = sd_bus_call_method(bus.get(), kKWinService, path.c_str(), kScriptInterface, "run", error.get(),
-                                       nullptr, "");
+      const int r =
+          sd_bus_call_method(bus.get(), kKWinService, path.c_str(), kScriptInterface, "run", error.get(), nullptr, "");
       if (r >= 0) return true;
       if (!error.has_name(SD_BUS_ERROR_UNKNOWN_OBJECT) && !error.has_name(SD_BUS_ERROR_UNKNOWN_METHOD) &&
           !error.has_name(SD_BUS_ERROR_UNKNOWN_INTERFACE)) {
@@ -218,8 +227,8 @@ struct KWinCursor::State {
       }
     }
     BusError error;
-    const int r = sd_bus_call_method(bus.get(), kKWinService, kScriptingPath, kScriptingInterface, "start",
-                                     error.get(), nullptr, "");
+    const int r = sd_bus_call_method(bus.get(), kKWinService, kScriptingPath, kScriptingInterface, "start", error.get(),
+                                     nullptr, "");
     if (r < 0) why = fmt::format("KWin did not run the script ({})", error.describe(r));
     return r >= 0;
   }
@@ -287,8 +296,8 @@ std::unique_ptr<KWinCursor> KWinCursor::start(const KWinOptions& options, std::s
     return nullptr;
   }
   sd_bus* bus = state->bus.get();
-  sd_bus_set_method_call_timeout(
-      bus, static_cast<std::uint64_t>(std::chrono::microseconds(options.call_timeout).count()));
+  sd_bus_set_method_call_timeout(bus,
+                                 static_cast<std::uint64_t>(std::chrono::microseconds(options.call_timeout).count()));
 
   sd_bus_slot* slot = nullptr;
   r = sd_bus_add_match(bus, &slot,
@@ -299,8 +308,8 @@ std::unique_ptr<KWinCursor> KWinCursor::start(const KWinOptions& options, std::s
   BusError error;
   sd_bus_message* raw_reply = nullptr;
   if (r >= 0) {
-    r = sd_bus_call_method(bus, "org.freedesktop.DBus", "/org/freedesktop/DBus", "org.freedesktop.DBus",
-                           "GetNameOwner", error.get(), &raw_reply, "s", kKWinService);
+    r = sd_bus_call_method(bus, "org.freedesktop.DBus", "/org/freedesktop/DBus", "org.freedesktop.DBus", "GetNameOwner",
+                           error.get(), &raw_reply, "s", kKWinService);
   }
   const MessagePtr owner_reply(raw_reply);
   const char* owner = nullptr;
@@ -323,9 +332,10 @@ std::unique_ptr<KWinCursor> KWinCursor::start(const KWinOptions& options, std::s
   if (state->script_path.empty() || !state->load_and_run(why)) return nullptr;
 
   const auto deadline = Clock::now() + options.first_position_timeout;
-  while (!state->position && state->process() && Clock::now() < deadline) {
+  while (state->process() && !state->position) {
     const auto left = std::chrono::ceil<std::chrono::microseconds>(deadline - Clock::now()).count();
-    if (left > 0) sd_bus_wait(bus, static_cast<std::uint64_t>(left));
+    if (left <= 0) break;
+    sd_bus_wait(bus, static_cast<std::uint64_t>(left));
   }
   if (!state->position && options.first_position_timeout.count() > 0) {
     why = state->broken ? "the session bus went away"

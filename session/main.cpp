@@ -273,7 +273,8 @@ int main(int argc, char** argv) {
       "out, over its control socket: at start, whenever the layout changes, and whenever the daemon asks.\n"
       "Runs in the user's graphical session (the systemd user unit pseudohaptic-session.service) until\n"
       "SIGTERM or SIGINT; reconnects when the daemon restarts. On Wayland the position comes from Hyprland,\n"
-      "Wayfire or KWin (through a script it loads); other compositors give only the layout. See pseudohaptic-session(1)."};
+      "Wayfire or KWin (through a script it loads); other compositors give only the layout. See "
+      "pseudohaptic-session(1)."};
   std::string control = "/run/pseudohaptic/control";
   std::string backend = "auto";
   std::string display, wayland_display;
