@@ -59,7 +59,7 @@ class WayfireCursor : public CursorSource {
 
 // The compositor's cursor source that this session's environment names: Hyprland where
 // HYPRLAND_INSTANCE_SIGNATURE names a socket that exists, Wayfire where WAYFIRE_SOCKET is set; nullptr for
-// any other compositor (GNOME, KDE, sway, weston...).
+// any other compositor (GNOME, KDE, sway, weston...; KWin's source is kwin_cursor.hpp).
 std::unique_ptr<CursorSource> cursor_source_from_environment();
 
 }  // namespace ph::session
