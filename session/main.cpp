@@ -221,7 +221,7 @@ std::string_view env(const char* name) {
 std::unique_ptr<CursorSource> start_kwin(const Log& log) {
   std::string why;
   std::unique_ptr<KWinCursor> kwin = KWinCursor::start(KWinOptions{}, why);
-  if (!kwin) log.notice(fmt::format("KWin does not say where the pointer is: {}", why));
+  if (!kwin) log.notice(fmt::format("no pointer position from KWin: {}; telling the daemon the layout only", why));
   return kwin;
 }
 #endif
@@ -238,7 +238,8 @@ std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::str
 #ifdef PH_SESSION_WAYLAND
   if (backend == "wayland") {
     std::unique_ptr<CursorSource> cursor = cursor_source_from_environment();
-    if (!cursor && kde_session(env("KDE_SESSION_VERSION"), env("XDG_CURRENT_DESKTOP"))) cursor = start_kwin(log);
+    const bool kwin = !cursor && kde_session(env("KDE_SESSION_VERSION"), env("XDG_CURRENT_DESKTOP"));
+    if (kwin) cursor = start_kwin(log);
     // A compositor that does not answer now (Wayfire without its ipc-rules plugin) would leave every
     // question of the daemon's unanswered, and the daemon waiting: report the layout only instead.
     if (cursor && !cursor->position()) {
@@ -251,7 +252,7 @@ std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::str
       log.notice("the compositor has no xdg-output: the layout is each wl_output's mode divided by its scale");
     if (const CursorSource* cursor = desktop->cursor()) {
       log.info(fmt::format("the pointer's position from {} ({})", cursor->name(), cursor->socket()));
-    } else {
+    } else if (!kwin) {  // start_kwin said why
       log.notice(
           "this compositor gives no pointer position (only Hyprland, Wayfire and KWin do): telling the daemon the "
           "layout only");
