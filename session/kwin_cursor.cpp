@@ -59,7 +59,7 @@ class BusError {
   }
 
  private:
-  sd_bus_error error_ = SD_BUS_ERROR_NULL;
+  sd_bus_error error_{};  // SD_BUS_ERROR_NULL, whose compound literal is C only
 };
 
 std::uint64_t monotonic_usec() {

@@ -18,13 +18,13 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <future>
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -239,6 +239,26 @@ class StandInKWin {
     return sd_bus_reply_method_return(m, nullptr);
   }
 
+  // The four strings of the script's `callDBus("SERVICE", "PATH", "INTERFACE", "METHOD", at.x, at.y)`
+  // (std::regex would do, but GCC 12 warns inside it under -O1 and the sanitizers).
+  static std::optional<std::vector<std::string>> call_target(const std::string& script) {
+    const std::size_t call = script.find("callDBus(");
+    if (call == std::string::npos) return std::nullopt;
+    std::vector<std::string> strings;
+    std::size_t at = call + std::strlen("callDBus(");
+    for (int i = 0; i < 4; ++i) {
+      const std::string separator = i == 0 ? "\"" : ", \"";
+      if (script.compare(at, separator.size(), separator) != 0) return std::nullopt;
+      at += separator.size();
+      const std::size_t end = script.find('"', at);
+      if (end == std::string::npos || end == at) return std::nullopt;
+      strings.push_back(script.substr(at, end - at));
+      at = end + 1;
+    }
+    if (script.compare(at, std::strlen(", at.x, at.y)"), ", at.x, at.y)") != 0) return std::nullopt;
+    return strings;
+  }
+
   // Runs the loaded script as far as a stand-in can: reads it and takes callDBus's target from it.
   void run(const char* object) {
     if (!loaded_ || running_) return;
@@ -250,18 +270,13 @@ class StandInKWin {
       seen_.runs.emplace_back(object);
       seen_.script = in ? text.str() : "";
     }
-    std::smatch target;
-    const std::string script = text.str();
-    if (!in ||
-        !std::regex_search(script, target,
-                           std::regex(R"re(callDBus\("([^"]+)", "([^"]+)", "([^"]+)", "([^"]+)", at\.x, at\.y\))re"))) {
-      return;
-    }
+    const std::optional<std::vector<std::string>> target = call_target(text.str());
+    if (!in || !target) return;
     running_ = true;
-    service_ = target[1];
-    path_ = target[2];
-    interface_ = target[3];
-    method_ = target[4];
+    service_ = (*target)[0];
+    path_ = (*target)[1];
+    interface_ = (*target)[2];
+    method_ = (*target)[3];
     if (options_.first) call_back(*options_.first);
   }
 
