@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/engine/geometry.hpp"
+#include "session/desktop.hpp"
 
 namespace ph::session {
 
@@ -22,6 +23,10 @@ class CursorSource {
   virtual std::string name() const = 0;
   // Where it asks (for messages).
   virtual const std::string& socket() const = 0;
+  // A source that is told rather than asks (KWin's script, kwin_cursor.hpp): what the helper's loop waits
+  // on for it, and the handling of what arrived there, which never blocks.
+  virtual Watch watch() const { return {}; }
+  virtual void dispatch() {}
 };
 
 inline constexpr std::chrono::milliseconds kCursorQueryTimeout{250};
@@ -54,7 +59,7 @@ class WayfireCursor : public CursorSource {
 
 // The compositor's cursor source that this session's environment names: Hyprland where
 // HYPRLAND_INSTANCE_SIGNATURE names a socket that exists, Wayfire where WAYFIRE_SOCKET is set; nullptr for
-// any other compositor (GNOME, KDE, sway, weston...).
+// any other compositor (GNOME, KDE, sway, weston...; KWin's source is kwin_cursor.hpp).
 std::unique_ptr<CursorSource> cursor_source_from_environment();
 
 }  // namespace ph::session

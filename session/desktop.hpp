@@ -10,6 +10,15 @@
 
 namespace ph::session {
 
+// A descriptor besides the display server's that the helper's loop waits on (the session bus, where
+// KWin's script reports the pointer): the poll(2) events it waits for and how long the loop may sleep
+// before it must be handled anyway (ms; -1: no limit). fd -1: none.
+struct Watch {
+  int fd = -1;
+  short events = 0;
+  int timeout_ms = -1;
+};
+
 class Desktop {
  public:
   virtual ~Desktop() = default;
@@ -25,6 +34,8 @@ class Desktop {
     bool focus = false;   // the active window
   };
   virtual Changes read_events() = 0;
+  // The second descriptor to wait on; read_events() handles what arrives there too.
+  virtual Watch watch() const { return {}; }
   // The bounding box of all outputs in logical pixels; nullopt while there is none.
   virtual std::optional<Rect> layout() const = 0;
   // Whether this desktop can say where the pointer is. Without it the helper reports the layout only

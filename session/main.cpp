@@ -1,7 +1,8 @@
 // pseudohaptic-session: runs in the user's desktop session and tells pseudohapticd, over its control
 // socket, the desktop's layout and where the real cursor is: at start, when the layout changes, and
-// whenever the daemon asks. Reconnects when the daemon restarts; exits on SIGTERM or SIGINT. Backends: X11
-// (x11_desktop.hpp) and Wayland (wayland_desktop.hpp), each built where its libraries are found.
+// whenever the daemon asks. Reconnects when the daemon restarts; exits on SIGTERM or SIGINT (which unloads
+// the script KWin ran for it). Backends: X11 (x11_desktop.hpp) and Wayland (wayland_desktop.hpp), each
+// built where its libraries are found.
 #include <fmt/format.h>
 #include <poll.h>
 #include <signal.h>
@@ -10,6 +11,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -17,6 +19,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "control/protocol.hpp"
@@ -29,6 +32,7 @@
 #endif
 #ifdef PH_SESSION_WAYLAND
 #include "session/compositor_cursor.hpp"
+#include "session/kwin_cursor.hpp"
 #include "session/wayland_desktop.hpp"
 #endif
 
@@ -90,16 +94,18 @@ class Helper {
       const Desktop::Changes changes = desktop_.read_events();
       if (changes.layout && link_.connection) send_layout();
       if (changes.focus && link_.connection) send_passthrough();
-      pollfd fds[3] = {{signals, POLLIN, 0}, {desktop_.fd(), POLLIN, 0}, {-1, POLLIN, 0}};
+      const Watch watch = desktop_.watch();  // the session bus, where KWin's script reports the pointer
+      pollfd fds[4] = {{signals, POLLIN, 0}, {desktop_.fd(), POLLIN, 0}, {-1, POLLIN, 0}, {watch.fd, watch.events, 0}};
       if (link_.connection) fds[2].fd = link_.connection->fd();
-      int timeout = -1;
+      int timeout = watch.timeout_ms;
       if (desktop_.events_queued()) {
         timeout = 0;  // read while answering: handle them before sleeping
       } else if (!link_.connection) {
-        timeout = static_cast<int>(std::max<long long>(
+        const int until_attempt = static_cast<int>(std::max<long long>(
             0, std::chrono::ceil<std::chrono::milliseconds>(link_.next_attempt - Clock::now()).count()));
+        timeout = timeout < 0 ? until_attempt : std::min(timeout, until_attempt);
       }
-      if (::poll(fds, 3, timeout) < 0 && errno != EINTR) {
+      if (::poll(fds, 4, timeout) < 0 && errno != EINTR) {
         log_.error(fmt::format("poll: {}", std::strerror(errno)));
         return 1;
       }
@@ -204,6 +210,22 @@ class Helper {
   Link link_;
 };
 
+std::string_view env(const char* name) {
+  const char* value = std::getenv(name);
+  return value != nullptr ? value : "";
+}
+
+#ifdef PH_SESSION_WAYLAND
+// KWin's position through a script it runs (kwin_cursor.hpp); nullptr, with a notice, where KWin does not
+// take it (no org.kde.KWin on the session bus, scripting refused, a script that sends nothing).
+std::unique_ptr<CursorSource> start_kwin(const Log& log) {
+  std::string why;
+  std::unique_ptr<KWinCursor> kwin = KWinCursor::start(KWinOptions{}, why);
+  if (!kwin) log.notice(fmt::format("no pointer position from KWin: {}; telling the daemon the layout only", why));
+  return kwin;
+}
+#endif
+
 std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::string& x_display,
                                       const std::string& wayland_display, const Log& log) {
 #ifdef PH_SESSION_X11
@@ -216,6 +238,8 @@ std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::str
 #ifdef PH_SESSION_WAYLAND
   if (backend == "wayland") {
     std::unique_ptr<CursorSource> cursor = cursor_source_from_environment();
+    const bool kwin = !cursor && kde_session(env("KDE_SESSION_VERSION"), env("XDG_CURRENT_DESKTOP"));
+    if (kwin) cursor = start_kwin(log);
     // A compositor that does not answer now (Wayfire without its ipc-rules plugin) would leave every
     // question of the daemon's unanswered, and the daemon waiting: report the layout only instead.
     if (cursor && !cursor->position()) {
@@ -228,10 +252,10 @@ std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::str
       log.notice("the compositor has no xdg-output: the layout is each wl_output's mode divided by its scale");
     if (const CursorSource* cursor = desktop->cursor()) {
       log.info(fmt::format("the pointer's position from {} ({})", cursor->name(), cursor->socket()));
-    } else {
+    } else if (!kwin) {  // start_kwin said why
       log.notice(
-          "this compositor gives no pointer position (only Hyprland and Wayfire do): telling the daemon the layout "
-          "only");
+          "this compositor gives no pointer position (only Hyprland, Wayfire and KWin do): telling the daemon the "
+          "layout only");
     }
     return desktop;
   }
@@ -249,8 +273,9 @@ int main(int argc, char** argv) {
       "pseudohaptic-session: tells pseudohapticd where the desktop's real cursor is and how the desktop is laid\n"
       "out, over its control socket: at start, whenever the layout changes, and whenever the daemon asks.\n"
       "Runs in the user's graphical session (the systemd user unit pseudohaptic-session.service) until\n"
-      "SIGTERM or SIGINT; reconnects when the daemon restarts. On Wayland the position comes from Hyprland or\n"
-      "Wayfire; other compositors give only the layout. See pseudohaptic-session(1)."};
+      "SIGTERM or SIGINT; reconnects when the daemon restarts. On Wayland the position comes from Hyprland,\n"
+      "Wayfire or KWin (through a script it loads); other compositors give only the layout. See "
+      "pseudohaptic-session(1)."};
   std::string control = "/run/pseudohaptic/control";
   std::string backend = "auto";
   std::string display, wayland_display;
@@ -277,10 +302,6 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   const Log log(verbose);
-  const auto env = [](const char* name) -> std::string_view {
-    const char* value = std::getenv(name);
-    return value != nullptr ? value : "";
-  };
   backend = choose_backend(backend, display, env("WAYLAND_DISPLAY"), env("DISPLAY"));
   if (backend.empty()) {
     log.error("no desktop this helper knows: neither WAYLAND_DISPLAY nor DISPLAY is set (see pseudohaptic-session(1))");

@@ -196,6 +196,7 @@ WaylandDesktop::Changes WaylandDesktop::read_events() {
     throw WaylandError(std::string("the Wayland compositor went away") +
                        (error != 0 ? std::string(" (") + std::strerror(error) + ")" : ""));
   }
+  if (cursor_) cursor_->dispatch();  // what KWin's script sent
   Changes changes;
   changes.layout = std::exchange(state_->changed, false);
   return changes;

@@ -1,8 +1,9 @@
 // The Wayland backend of pseudohaptic-session: the desktop's layout from every wl_output's logical
 // position and size (xdg-output, which any compositor but the smallest offers; wl_output's own mode and
 // scale otherwise), kept current as outputs come, go and change; and where the pointer is from the
-// compositor's own socket where it has one (compositor_cursor.hpp). Wayland gives clients no global
-// pointer position, so elsewhere (GNOME, KDE, sway, weston) the helper reports the layout only.
+// compositor where it says it (Hyprland's and Wayfire's sockets, compositor_cursor.hpp; KWin's script,
+// kwin_cursor.hpp). Wayland gives clients no global pointer position, so elsewhere (GNOME, sway, weston)
+// the helper reports the layout only.
 #pragma once
 
 #include <memory>
@@ -36,6 +37,7 @@ class WaylandDesktop : public Desktop {
   bool events_queued() const override { return false; }  // read_events() dispatches all it reads
   // Throws WaylandError when the compositor has gone (or broke the connection).
   Changes read_events() override;
+  Watch watch() const override { return cursor_ ? cursor_->watch() : Watch{}; }
   std::optional<Rect> layout() const override;
   bool knows_pointer() const override { return cursor_ != nullptr; }
   std::optional<Vec2> pointer() const override;

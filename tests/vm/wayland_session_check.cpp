@@ -13,7 +13,11 @@
 // socket ($WAYFIRE_SOCKET), `helper wayland-wayfire` and its position; with one that answers as Wayfire
 // without its ipc-rules plugin does, the layout only. (4) with --daemon (it needs /dev/uinput: the VM), the
 // real daemon on its default scene takes weston's layout from the helper: `status` says
-// desktop=0,0,1600,900 and helper=no. (5) when weston stops, the helper exits with status 1.
+// desktop=0,0,1600,900 and helper=no. (5) with a stand-in KWin (tests/kwin_stand_in.hpp) on a private
+// session bus and XDG_CURRENT_DESKTOP=KDE, `helper wayland-kwin`, the layout and the position the script
+// sends, the newest one for a `query`, and the script unloaded at SIGTERM; with a KWin that refuses the
+// script, the layout only and KWin's refusal in the helper's log (skipped without dbus-daemon). (6) when
+// weston stops, the helper exits with status 1.
 // tests/vm/README.md, "Wayland: weston", has the figures.
 #include <fmt/format.h>
 #include <sys/stat.h>
@@ -25,6 +29,7 @@
 #include <thread>
 #include <vector>
 
+#include "tests/kwin_stand_in.hpp"
 #include "tests/vm/control_stub.hpp"
 #include "tests/vm/e2e_support.hpp"
 
@@ -302,6 +307,66 @@ bool wayfire_case(const Options& options, const fs::path& runtime) {
   return c.verdict(helper ? &*helper : nullptr);
 }
 
+bool kwin_case(const Options& options, const fs::path& runtime) {
+  using namespace ph::kwin_stand_in;
+  Case c{"weston's layout with a stand-in KWin on a private session bus: script, positions, unload; refused", {}};
+  const std::optional<std::string> dbus_daemon = find_dbus_daemon();
+  if (!dbus_daemon) {
+    std::printf("SKIP %s: no dbus-daemon\n", c.label.c_str());
+    return true;
+  }
+  const PrivateBus bus(*dbus_daemon, options.scratch);
+  std::vector<std::string> env = session_environment(runtime, "");
+  env.push_back("XDG_CURRENT_DESKTOP=KDE");
+  env.push_back("DBUS_SESSION_BUS_ADDRESS=" + bus.address());
+  std::optional<ChildProcess> helper;
+  try {
+    if (bus.address().empty()) throw Fatal("dbus-daemon printed no address");
+    {
+      StandInKWin kwin(bus.address(), {KWinVersion::six, false, Sent{812, 95, "ii"}});
+      if (!kwin.started()) throw Fatal("the stand-in KWin did not start");
+      ControlStub stub((options.scratch / "control").string());
+      helper.emplace(std::vector<std::string>{options.session, "--control", stub.path(), "-v"}, env,
+                     (options.scratch / "session-kwin.log").string());
+      if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
+      c.expect(stub, "helper wayland-kwin", "at start");
+      c.expect(stub, kLayout, "at start");
+      c.expect(stub, "position 812 95", "at start");  // KWin's whole pixels as they come
+      kwin.send({-3.25, 1200.5, "dd"});
+      if (!wait_for_stand_in([&] { return kwin.seen().replies_ok == 2; }))
+        c.problems.push_back("the helper did not answer the script's second call");
+      stub.send("query");
+      c.expect(stub, "position -3.25 1200.5", "after a query");
+      check_sigterm(*helper, c);
+      const Seen seen = kwin.seen();
+      if (seen.loaded.size() != 1 || seen.unloaded.size() != 2)
+        c.problems.push_back(
+            fmt::format("the script was loaded {} and unloaded {} times, not 1 and 2 (a stale one, "
+                        "then at exit)",
+                        seen.loaded.size(), seen.unloaded.size()));
+      if (!seen.loaded.empty() && seen.loaded[0].first.rfind(runtime.string() + "/", 0) != 0)
+        c.problems.push_back("the script's file is not in XDG_RUNTIME_DIR: " + seen.loaded[0].first);
+      if (!seen.loaded.empty() && fs::exists(seen.loaded[0].first))
+        c.problems.push_back("the script's file is still there after the helper exited");
+    }
+    StandInKWin refusing(bus.address(), {KWinVersion::six, true, Sent{1, 2, "ii"}});
+    if (!refusing.started()) throw Fatal("the refusing stand-in KWin did not start");
+    ControlStub stub((options.scratch / "control").string());
+    helper.reset();
+    helper.emplace(std::vector<std::string>{options.session, "--control", stub.path(), "-v"}, env,
+                   (options.scratch / "session-kwin-refused.log").string());
+    if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
+    c.expect(stub, kLayout, "with a refusing KWin, at start");
+    c.expect_silence(stub, 1s, "with a refusing KWin, after the layout");
+    if (helper->log().find("scripting is disabled here") == std::string::npos)
+      c.problems.push_back("with a refusing KWin: no notice with KWin's answer in the helper's log");
+    check_sigterm(*helper, c);
+  } catch (const Fatal& e) {
+    c.problems.push_back(e.what());
+  }
+  return c.verdict(helper ? &*helper : nullptr);
+}
+
 bool daemon_case(const Options& options, const fs::path& runtime) {
   Case c{"pseudohapticd takes weston's layout from the helper", {}};
   const std::string control = (options.scratch / "daemon.sock").string();
@@ -407,7 +472,8 @@ int main(int argc, char** argv) {
     failed += !layout_only_case(options, runtime);
     failed += !hyprland_case(options, runtime);
     failed += !wayfire_case(options, runtime);
-    const int cases = options.daemon.empty() ? 4 : 5;
+    failed += !kwin_case(options, runtime);
+    const int cases = options.daemon.empty() ? 5 : 6;
     if (!options.daemon.empty()) failed += !daemon_case(options, runtime);
     failed += !compositor_gone_case(options, runtime, weston);
     if (failed != 0) std::printf("weston's log:\n%s", weston.log().c_str());
