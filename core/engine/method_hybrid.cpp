@@ -132,11 +132,23 @@ void fuse_with_depth_gradient(const DepthField& depth, const DiscontinuityField&
   }
 }
 
+// The noise band at the region's highest height: `noise_slope`, a map's rounding, at most; less where the map
+// shows less noise than that (a float map, whose residual from the smoothed field is its relief's own curvature),
+// so that a clean map's relief is not smoothed. The noise is estimated as by the universal threshold over the
+// texels whose residual is not zero: those of an area decoded exactly flat carry no information on it.
+double noise_band(double noise_slope, const GradientField& g, const GradientField& s) {
+  std::vector<double> residual = differences(g, s);
+  std::erase(residual, 0.0);
+  const double shown = universal_threshold(residual.size()) * robust_sigma(residual) / kResidualGain;
+  return std::min(noise_slope, shown);
+}
+
 // Replaces each gradient by the smoothed one where they differ by at most the noise band, wider further from the
 // viewer: within the band the difference is the map's noise (rounding, a generator's jitter); beyond it, a
 // feature (a rim, a kink), which stays sharp.
 void smooth_within_band(const HybridParams& params, const DepthField* depth, GradientField& g) {
   const GradientField s = smoothed(g);
+  const double base = noise_band(params.noise_slope, g, s);
   float lowest = 0.0f, highest = 0.0f;
   if (depth != nullptr) {
     const auto [lo, hi] = std::minmax_element(depth->values.begin(), depth->values.end());
@@ -146,7 +158,7 @@ void smooth_within_band(const HybridParams& params, const DepthField* depth, Gra
   const double range = static_cast<double>(highest) - lowest;
   for (std::size_t i = 0; i < g.values.size(); ++i) {
     const double farness = range > 0.0 ? (highest - static_cast<double>(depth->values[i])) / range : 0.0;
-    const double band = params.noise_slope * (1.0 + params.far_noise_gain * farness);
+    const double band = base * (1.0 + params.far_noise_gain * farness);
     if (std::abs(s.values[i].x - g.values[i].x) <= band && std::abs(s.values[i].y - g.values[i].y) <= band)
       g.values[i] = s.values[i];
   }
