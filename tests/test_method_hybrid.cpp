@@ -219,6 +219,28 @@ TEST(HybridMethod, PullsNoisyNormalsToTheSlopesOfACleanDepthMap) {
   for (std::uint8_t mark : noisy.discontinuity->values) EXPECT_EQ(mark, 0);
 }
 
+// The same on a region of more than 2^20 texels, whose noise is estimated from every second texel.
+TEST(HybridMethod, EstimatesTheNoiseOfALargeRegionFromASample) {
+  RegionFields fields;
+  fields.gradient = GradientField(1200, 900);
+  fields.depth = DepthField(1200, 900);
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  double before = 0.0;
+  for (int y = 0; y < 900; ++y) {
+    for (int x = 0; x < 1200; ++x) {
+      fields.depth->at(x, y) = 0.1f * static_cast<float>(x);  // a plane rising 0.1 px per px
+      const Gradient g{static_cast<float>(0.1 + noise(rng)), static_cast<float>(noise(rng))};
+      fields.gradient->at(x, y) = g;
+      before += std::pow(g.x - 0.1, 2) + std::pow(g.y, 2);
+    }
+  }
+  prepare_hybrid_fields(HybridParams{}, fields);
+  double after = 0.0;
+  for (const Gradient& g : fields.gradient->values) after += std::pow(g.x - 0.1, 2) + std::pow(g.y, 2);
+  EXPECT_LT(std::sqrt(after), 0.01 * std::sqrt(before));
+}
+
 // Normals that agree with their heights within the rounding: the depth map changes nothing but what it marks, so
 // with the same band everywhere the gradient is bit for bit the one prepared from the normal map alone.
 TEST(HybridMethod, LeavesACleanNormalMapAsTheNormalMapAloneWouldBe) {
