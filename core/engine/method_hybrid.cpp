@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 namespace ph {
 
@@ -31,28 +32,143 @@ GradientField binomial_pass(const GradientField& in) {
   return out;
 }
 
-// How far a height change `dh` over 1 px lies outside the slopes a and b of the two texels: a continuous surface
-// whose slope goes from a to b changes by anything between them (a kink or a rim between the centres included),
-// so only the excess is unexplained.
+// Two passes: a Gaussian of about 1 px.
+GradientField smoothed(const GradientField& g) { return binomial_pass(binomial_pass(g)); }
+
+// The robust standard deviation of zero-centred values given as magnitudes: their median times 1.4826, which is
+// a Gaussian's sigma; features (rims, steps) are fewer than half the texels and do not move it.
+double robust_sigma(std::vector<double> magnitudes) {
+  if (magnitudes.empty()) return 0.0;
+  const auto mid = magnitudes.begin() + static_cast<std::ptrdiff_t>(magnitudes.size() / 2);
+  std::nth_element(magnitudes.begin(), mid, magnitudes.end());
+  return 1.4826 * *mid;
+}
+
+// Texels whose differences the noise estimates read: every one up to 2^20, every k-th beyond (the median of a
+// million values is as good as that of all, and a 4K region's would take 130 MB).
+constexpr std::size_t kSampledTexels = std::size_t{1} << 20;
+std::size_t sample_stride(std::size_t texels) { return texels / kSampledTexels + 1; }
+
+// Both components of a - b, as magnitudes, at every sample_stride-th texel.
+std::vector<double> differences(const GradientField& a, const GradientField& b) {
+  const std::size_t stride = sample_stride(a.values.size());
+  std::vector<double> out;
+  out.reserve(2 * (a.values.size() / stride + 1));
+  for (std::size_t i = 0; i < a.values.size(); i += stride) {
+    out.push_back(std::abs(static_cast<double>(a.values[i].x) - b.values[i].x));
+    out.push_back(std::abs(static_cast<double>(a.values[i].y) - b.values[i].y));
+  }
+  return out;
+}
+
+// White noise of sigma s leaves a residual g - smoothed(g) of sigma 0.891 s: sqrt(1 - 2 k0 + sum k^2) with the
+// two-pass kernel's centre k0 = 36/256 and sum k^2 = (70/256)^2.
+constexpr double kResidualGain = 0.891;
+
+// A gradient field's noise as the field itself shows it: the robust sigma of its residual from the smoothed field.
+// It counts the relief's own fine detail too (a grating, a rough surface), so it is an upper bound.
+double gradient_noise(const GradientField& g) { return robust_sigma(differences(g, smoothed(g))) / kResidualGain; }
+
+// The universal threshold (Donoho and Johnstone): of n Gaussian values of sigma 1, none is likely to exceed
+// sqrt(2 ln n); a difference beyond it times the noise's sigma is a feature, not noise.
+double universal_threshold(std::size_t n) { return std::sqrt(2.0 * std::log(std::max<double>(2.0, n))); }
+
+// How far a height change `dh` over 1 px lies outside the slopes a and b of the two texels, signed: a continuous
+// surface whose slope goes from a to b changes by anything between them (a kink or a rim between the centres
+// included), so only the excess is unexplained.
 double unexplained(double dh, double a, double b) {
   const double lo = std::min(a, b), hi = std::max(a, b);
-  return dh < lo ? lo - dh : (dh > hi ? dh - hi : 0.0);
+  return dh < lo ? dh - lo : (dh > hi ? dh - hi : 0.0);
+}
+
+// Whether the unexplained change `e` of an edge, between those of the edges before and after it along the same
+// axis, is a change of level. An opposite change on a neighbouring edge of comparable size (less than twice
+// `e`'s) takes it back within one texel: a spike or an alternation of the heights, which is what a grating near
+// the texel period aliases to, not a step. What is left of `e` after those must exceed the threshold. (A much
+// larger opposite neighbour is its own step, of which `e` is the overshoot of a generator's smeared normals.)
+bool is_step(double before, double e, double after, double threshold) {
+  if (std::abs(e) <= threshold) return false;
+  double kept = e;
+  for (double n : {before, after}) {
+    if (n * e < 0.0 && std::abs(n) < 2.0 * std::abs(e)) kept += n;
+  }
+  return kept * e > threshold * std::abs(e);
 }
 
 // Marks both texels of every edge across which the height changes by more than `threshold` beyond what the
-// normals explain.
+// normals explain, and keeps it changed (is_step).
 DiscontinuityField find_discontinuities(const GradientField& g, const DepthField& d, double threshold) {
   const std::int32_t w = g.width, h = g.height;
+  auto along_x = [&](std::int32_t x, std::int32_t y) {  // the edge between (x, y) and (x + 1, y); 0 outside
+    return x < 0 || x + 1 >= w ? 0.0 : unexplained(d.at(x + 1, y) - d.at(x, y), g.at(x, y).x, g.at(x + 1, y).x);
+  };
+  auto along_y = [&](std::int32_t x, std::int32_t y) {  // between (x, y) and (x, y + 1)
+    return y < 0 || y + 1 >= h ? 0.0 : unexplained(d.at(x, y + 1) - d.at(x, y), g.at(x, y).y, g.at(x, y + 1).y);
+  };
   DiscontinuityField marks(w, h, 0);
   for (std::int32_t y = 0; y < h; ++y) {
     for (std::int32_t x = 0; x < w; ++x) {
-      if (x + 1 < w && unexplained(d.at(x + 1, y) - d.at(x, y), g.at(x, y).x, g.at(x + 1, y).x) > threshold)
+      if (x + 1 < w && is_step(along_x(x - 1, y), along_x(x, y), along_x(x + 1, y), threshold))
         marks.at(x, y) = marks.at(x + 1, y) = 1;
-      if (y + 1 < h && unexplained(d.at(x, y + 1) - d.at(x, y), g.at(x, y).y, g.at(x, y + 1).y) > threshold)
+      if (y + 1 < h && is_step(along_y(x, y - 1), along_y(x, y), along_y(x, y + 1), threshold))
         marks.at(x, y) = marks.at(x, y + 1) = 1;
     }
   }
   return marks;
+}
+
+// The normals and the depth map's central differences are two estimates of the same slopes. Where the normals
+// disagree with the heights by more than the map's rounding (`noise_slope`), each texel whose disagreement is
+// noise-like (within the universal threshold of its robust sigma) and that is no discontinuity takes their
+// inverse-variance mean, each field's variance estimated from its own residual: noisy normals over a clean depth
+// map become the depth map's slopes, clean normals over a coarse depth map stay as they are.
+void fuse_with_depth_gradient(const DepthField& depth, const DiscontinuityField& marks, double noise_slope,
+                              GradientField& g) {
+  const GradientField from_depth = gradient_from_depth(depth);
+  const double band = universal_threshold(2 * g.values.size()) * robust_sigma(differences(g, from_depth));
+  if (band <= noise_slope) return;  // they agree within the rounding: nothing to fix
+  const double vn = std::pow(gradient_noise(g), 2), vd = std::pow(gradient_noise(from_depth), 2);
+  if (vn + vd <= 0.0) return;
+  const double normals_weight = vd / (vn + vd);
+  for (std::size_t i = 0; i < g.values.size(); ++i) {
+    const Gradient n = g.values[i], d = from_depth.values[i];
+    if (marks.values[i] != 0 || std::abs(n.x - d.x) > band || std::abs(n.y - d.y) > band) continue;
+    g.values[i] = {static_cast<float>(d.x + normals_weight * (n.x - d.x)),
+                   static_cast<float>(d.y + normals_weight * (n.y - d.y))};
+  }
+}
+
+// The noise band at the region's highest height: `noise_slope`, a map's rounding, at most; less where the map
+// shows less noise than that (a float map, whose residual from the smoothed field is its relief's own curvature),
+// so that a clean map's relief is not smoothed. The noise is estimated as by the universal threshold over the
+// texels whose residual is not zero: those of an area decoded exactly flat carry no information on it.
+double noise_band(double noise_slope, const GradientField& g, const GradientField& s) {
+  std::vector<double> residual = differences(g, s);
+  std::erase(residual, 0.0);
+  const std::size_t tested = residual.size() * sample_stride(g.values.size());  // nonzero, all texels
+  const double shown = universal_threshold(tested) * robust_sigma(residual) / kResidualGain;
+  return std::min(noise_slope, shown);
+}
+
+// Replaces each gradient by the smoothed one where they differ by at most the noise band, wider further from the
+// viewer: within the band the difference is the map's noise (rounding, a generator's jitter); beyond it, a
+// feature (a rim, a kink), which stays sharp.
+void smooth_within_band(const HybridParams& params, const DepthField* depth, GradientField& g) {
+  const GradientField s = smoothed(g);
+  const double base = noise_band(params.noise_slope, g, s);
+  float lowest = 0.0f, highest = 0.0f;
+  if (depth != nullptr) {
+    const auto [lo, hi] = std::minmax_element(depth->values.begin(), depth->values.end());
+    lowest = *lo;
+    highest = *hi;
+  }
+  const double range = static_cast<double>(highest) - lowest;
+  for (std::size_t i = 0; i < g.values.size(); ++i) {
+    const double farness = range > 0.0 ? (highest - static_cast<double>(depth->values[i])) / range : 0.0;
+    const double band = base * (1.0 + params.far_noise_gain * farness);
+    if (std::abs(s.values[i].x - g.values[i].x) <= band && std::abs(s.values[i].y - g.values[i].y) <= band)
+      g.values[i] = s.values[i];
+  }
 }
 
 }  // namespace
@@ -72,23 +188,8 @@ void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields) {
   fields.discontinuity = has_depth ? find_discontinuities(g, *fields.depth, params.discontinuity_px)
                                    : DiscontinuityField(g.width, g.height, 0);
   if (params.noise_slope <= 0.0) return;
-  // Two passes: a Gaussian of about 1 px.
-  const GradientField smoothed = binomial_pass(binomial_pass(g));
-  float lowest = 0.0f, highest = 0.0f;
-  if (has_depth) {
-    const auto [lo, hi] = std::minmax_element(fields.depth->values.begin(), fields.depth->values.end());
-    lowest = *lo;
-    highest = *hi;
-  }
-  const double range = static_cast<double>(highest) - lowest;
-  for (std::size_t i = 0; i < g.values.size(); ++i) {
-    const double farness = range > 0.0 ? (highest - static_cast<double>(fields.depth->values[i])) / range : 0.0;
-    const double band = params.noise_slope * (1.0 + params.far_noise_gain * farness);
-    const Gradient s = smoothed.values[i];
-    // Within the band the difference is the map's noise (rounding, a generator's jitter); beyond it, a
-    // feature (a rim, a kink), which stays sharp.
-    if (std::abs(s.x - g.values[i].x) <= band && std::abs(s.y - g.values[i].y) <= band) g.values[i] = s;
-  }
+  if (has_depth) fuse_with_depth_gradient(*fields.depth, *fields.discontinuity, params.noise_slope, g);
+  smooth_within_band(params, has_depth ? &*fields.depth : nullptr, g);
 }
 
 void HybridMethod::prepare(RegionFields& fields) const { prepare_hybrid_fields(params_, fields); }

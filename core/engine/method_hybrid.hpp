@@ -23,7 +23,9 @@ struct HybridParams {
   // discontinuity (px).
   double discontinuity_px = 0.5;
   // A texel's gradient is replaced by the smoothed one where they differ by at most this (per component, px
-  // per px): about one code of an 8-bit normal map at a flat texel (2/255 = 0.0078). 0: no smoothing.
+  // per px; less where the map shows less noise, as a float map does): about one code of an 8-bit normal map at
+  // a flat texel (2/255 = 0.0078). Normals that disagree with the depth map's slopes by more noise than this
+  // are first pulled toward them (method_hybrid.cpp, fuse_with_depth_gradient). 0: no smoothing and no fusion.
   double noise_slope = 0.01;
   // How much wider that band is at the region's lowest height than at its highest (the paper: smooth more
   // further from the viewer); 0: the same everywhere.
