@@ -1,8 +1,9 @@
 // The hybrid of the curvature and depth methods that the curvature paper proposes for its method's two failure
 // modes (docs/METHODS.md, "Hybrid"): where the height changes across a texel edge by more than the normals
 // explain (a discontinuity, which a normal map cannot show), the depth method's C/D; elsewhere the curvature
-// method's, on normals smoothed where their differences are within the map's noise, more so further from the
-// viewer. Everything is derived once at load (prepare); a step costs the curvature method's plus one byte read.
+// method's, on normals fused with the depth map's slopes where they are noisier than it, and smoothed where their
+// differences are within the map's noise, more so further from the viewer. Everything is derived once at load
+// (prepare); a step costs the curvature method's plus one byte read.
 #pragma once
 
 #include <array>
@@ -34,8 +35,10 @@ struct HybridParams {
 
 std::string validate(const HybridParams& params);
 
-// Smooths `fields.gradient` within the noise band and marks the discontinuities, as HybridMethod::prepare does
-// (exposed for tests). Without a depth field no texel is a discontinuity and the band is the same everywhere.
+// Marks the discontinuities, pulls noisy normals toward the depth map's slopes where the two disagree by
+// noise-like amounts (not at a step), then smooths `fields.gradient` within the noise band, as
+// HybridMethod::prepare does (exposed for tests). Without a depth field no texel is a discontinuity, nothing is
+// fused and the band is the same everywhere.
 void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields);
 
 class HybridMethod final : public Method {
