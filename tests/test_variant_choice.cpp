@@ -11,6 +11,7 @@
 #include "config/target_files.hpp"
 #include "core/engine/direction_lut.hpp"
 #include "core/engine/method_curvature.hpp"
+#include "core/engine/method_depth.hpp"
 #include "core/engine/method_flat.hpp"
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
@@ -60,6 +61,26 @@ TEST(VariantChoice, CheapVariantOnAGentleRegionExactOnASharpOne) {
 
   // The budget decides: a loose one lets the sharp region take the cheap variant too.
   const VariantChoice loose = choose_variant(curvature_target(sharp_bump(), {0, 0}), {1e6, 10.0});
+  EXPECT_EQ(loose.options.traversal, Traversal::frame_midpoint) << loose.reason;
+}
+
+// A constant slope: one C/D throughout the region, another (1) on the flat outside. A frame that crosses the
+// border is what frame_midpoint gets wrong there, so the estimate counts the border too.
+TEST(VariantChoice, ARegionWhoseCdDiffersFromTheOutsideKeepsTheExactWalk) {
+  Region slope;
+  slope.name = "slope";
+  slope.rect = {0, 0, 64, 64};
+  DepthField depth(64, 64);
+  for (std::int32_t y = 0; y < 64; ++y)
+    for (std::int32_t x = 0; x < 64; ++x) depth.at(x, y) = 0.2f * static_cast<float>(x);
+  slope.fields.depth = std::move(depth);
+  slope.method = std::make_shared<DepthMethod>(DepthParams{});
+  const VariantChoice choice = choose_variant(slope);
+  EXPECT_EQ(choice.options.traversal, Traversal::exact) << choice.reason;
+  EXPECT_GT(choice.midpoint_error_px, 1.0) << "0.2 px of height per px: C/D well away from 1";
+
+  // A loose enough budget accepts the jump at the border.
+  const VariantChoice loose = choose_variant(slope, {1e6, 10.0});
   EXPECT_EQ(loose.options.traversal, Traversal::frame_midpoint) << loose.reason;
 }
 

@@ -63,6 +63,29 @@ double midpoint_spread(const Region& region, double frame_px) {
   return spread;
 }
 
+// The largest |1/CD - 1| over the region's edge texels, entered along each of the 8 directions: a frame that
+// crosses the border has the flat outside (C/D 1) on the other side, which its midpoint's C/D also stands for.
+double border_spread(const Region& region) {
+  const std::int32_t w = region.rect.w, h = region.rect.h;
+  double spread = 0.0;
+  auto at = [&](std::int32_t x, std::int32_t y) {
+    for (int k = 0; k < kDirections; ++k) {
+      const double angle = 2.0 * std::numbers::pi * k / kDirections;
+      const double u = inverse_cd(region, {x, y}, {std::cos(angle), std::sin(angle)});
+      if (u >= 0.0) spread = std::max(spread, std::abs(u - 1.0));
+    }
+  };
+  for (std::int32_t x = 0; x < w; ++x) {
+    at(x, 0);
+    at(x, h - 1);
+  }
+  for (std::int32_t y = 0; y < h; ++y) {
+    at(0, y);
+    at(w - 1, y);
+  }
+  return spread;
+}
+
 }  // namespace
 
 VariantChoice choose_variant(const Region& region, const VariantBudget& budget) {
@@ -75,7 +98,8 @@ VariantChoice choose_variant(const Region& region, const VariantBudget& budget) 
     choice.reason = "frame_midpoint: the method's C/D is 1 throughout, every variant is exact";
     return choice;
   }
-  choice.midpoint_error_px = budget.frame_px * midpoint_spread(region, budget.frame_px);
+  choice.midpoint_error_px =
+      budget.frame_px * std::max(midpoint_spread(region, budget.frame_px), border_spread(region));
   const std::string estimate = "frame_midpoint would be off by up to " + number(choice.midpoint_error_px) +
                                " px over a " + number(budget.frame_px) + " px frame";
   if (choice.midpoint_error_px <= budget.accuracy_px) {

@@ -27,7 +27,7 @@ struct VariantChoice {
 // memory besides, so they are never chosen. frame_midpoint's error over a frame of length L is at most
 // L * max |1/CD(p) - 1/CD(q)| over points q within L/2 of p along the motion (the midpoint's C/D stands for
 // the whole frame); that spread is sampled on a grid of at most ~20 000 texels, in 8 directions, at 1, L/4
-// and L/2 px.
+// and L/2 px, and at every edge texel against the flat outside (C/D 1), which a frame crossing the border meets.
 VariantChoice choose_variant(const Region& region, const VariantBudget& budget = {});
 
 }  // namespace ph
