@@ -40,7 +40,7 @@ def main(argv):
     print("|---|---|---|---:|---:|---:|---:|")
     for key, worst in full.items():
         s = small.get(key, {})
-        cells = [f"{worst.get('other', math.nan):.1f}", f"{worst.get('d8', math.nan):.1f}",
+        cells = [f"{worst['other']:.1f}" if "other" in worst else "-", f"{worst['d8']:.1f}" if "d8" in worst else "-",
                  str(bound(s["other"])) if "other" in s else "-", str(bound(s["d8"])) if "d8" in s else "-"]
         print(f"| {' | '.join(key)} | {' | '.join(cells)} |")
     return 0
