@@ -688,8 +688,8 @@ Run add_accuracy_command(CLI::App& app) {
   auto o = std::make_shared<AccuracyOptions>();
   app.description(
       "Measure accuracy against the exact ground truth and speed of every engine variant (method x storage x\n"
-      "traversal x sampling) over seeded strokes and random walks across the 24 targets and the 9\n"
-      "interrogation surfaces; write\n"
+      "traversal x sampling, and traversal = \"auto\" at accuracy_px 0.25, 2 and 8) over seeded strokes and\n"
+      "random walks across the 24 targets and the 9 interrogation surfaces; write\n"
       "OUTDIR/variants.csv, OUTDIR/fig5_traces.csv and OUTDIR/fig2_grid.csv for tools/charts.py.");
   app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)")->required();
   app.add_flag("--small", o->small, "A handful of strokes and a short walk (seconds; for CI)");
