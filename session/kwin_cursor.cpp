@@ -167,7 +167,6 @@ bool kde_session(std::string_view kde_session_version, std::string_view xdg_curr
 }
 
 struct KWinCursor::State {
-  KWinOptions options;
   BusPtr bus;
   // After the bus, so that they go before it.
   SlotPtr callback_object, owner_match;
@@ -277,7 +276,6 @@ struct KWinCursor::State {
 
 std::unique_ptr<KWinCursor> KWinCursor::start(const KWinOptions& options, std::string& why) {
   auto state = std::make_unique<State>();
-  state->options = options;
   sd_bus* raw = nullptr;
   int r = 0;
   if (options.bus_address.empty()) {

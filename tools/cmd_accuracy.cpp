@@ -443,14 +443,15 @@ StorageScenes build_scenes(const Workload& w, const MethodPtr& method, Storage s
   return out;
 }
 
-// Selects the engine variant in every scene; fills the row's precompute time and bytes per texel.
-void select_engine(StorageScenes& s, const EngineOptions& engine, VariantRow& row) {
+// Selects each scene's engine variant, as `choose` gives it for the scene's region (timed with the
+// precomputation); fills the row's precompute time and bytes per texel.
+void select_engines(StorageScenes& s, const std::function<EngineOptions(const Region&)>& choose, VariantRow& row) {
   double options_ms = 0.0;
   std::size_t bytes = 0;
   std::int64_t area = 0;
   for (Scene& scene : s.scenes) {
     const Clock::time_point t0 = Clock::now();
-    scene.set_options(engine);
+    scene.set_options(choose(scene.regions().front()));
     options_ms += ms_since(t0);
     bytes += scene.bytes();
     area += scene.regions().front().rect.area();
@@ -535,50 +536,42 @@ void measure_speed(const MethodTruth& truth, const std::vector<Scene>& scenes, d
   row.ns_step = total_steps > 0 ? total_ns / static_cast<double>(total_steps) : 0.0;
 }
 
-VariantRow measure_variant(const Workload& w, const MethodTruth& truth, const MethodPtr& method, Storage storage,
-                           StorageScenes& scenes, const EngineOptions& engine) {
+// One row: every scene on what `choose` gives for its region, labelled with `traversal` and `sampling`.
+VariantRow measure_row(const Workload& w, const MethodTruth& truth, const MethodPtr& method, Storage storage,
+                       StorageScenes& scenes, std::string traversal, Sampling sampling,
+                       const std::function<EngineOptions(const Region&)>& choose) {
   VariantRow row;
   row.method = std::string(method->name());
-  row.traversal = traversal_label(engine);
+  row.traversal = std::move(traversal);
   row.storage = name_of(storage);
-  row.sampling = std::string(name_of(engine.sampling));
+  row.sampling = std::string(name_of(sampling));
   row.variant = fmt::format("{}/{}/{}/{}", row.method, row.traversal, row.storage, row.sampling);
-  select_engine(scenes, engine, row);
+  select_engines(scenes, choose, row);
   measure_strokes(w, truth, scenes.scenes, *method, row);
   row.drift = measure_drift(truth, scenes.scenes);
   measure_speed(truth, scenes.scenes, w.config.timing_s, row);
   return row;
 }
 
-// traversal = "auto" at each budget (accuracy_px): each shape's scene gets the variant choose_variant picks for
-// its region, as the scene file's loader does; the row is the mix over the shapes.
+VariantRow measure_variant(const Workload& w, const MethodTruth& truth, const MethodPtr& method, Storage storage,
+                           StorageScenes& scenes, const EngineOptions& engine) {
+  return measure_row(w, truth, method, storage, scenes, traversal_label(engine), engine.sampling,
+                     [&engine](const Region&) { return engine; });
+}
+
+// traversal = "auto" at a budget (accuracy_px): each shape's scene gets the variant choose_variant picks for its
+// region, as the scene file's loader does; the row is the mix over the shapes.
 VariantRow measure_auto(const Workload& w, const MethodTruth& truth, const MethodPtr& method, Storage storage,
                         StorageScenes& scenes, double budget_px) {
-  VariantRow row;
-  row.method = std::string(method->name());
-  row.traversal = fmt::format("auto{:g}", budget_px);
-  row.storage = name_of(storage);
-  row.sampling = std::string(name_of(EngineOptions{}.sampling));
-  row.variant = fmt::format("{}/{}/{}/{}", row.method, row.traversal, row.storage, row.sampling);
-  double options_ms = 0.0;
-  std::size_t bytes = 0, chose_exact = 0;
-  std::int64_t area = 0;
-  for (Scene& scene : scenes.scenes) {
-    const Clock::time_point t0 = Clock::now();
-    const VariantChoice choice = choose_variant(scene.regions().front(), {budget_px});
-    scene.set_options(choice.options);
-    options_ms += ms_since(t0);
-    chose_exact += choice.options.traversal == Traversal::exact ? 1 : 0;
-    bytes += scene.bytes();
-    area += scene.regions().front().rect.area();
-  }
-  row.precompute_ms = scenes.build_ms + options_ms / static_cast<double>(scenes.scenes.size());
-  row.bytes_texel = static_cast<double>(bytes) / static_cast<double>(area);
+  std::size_t chose_exact = 0;
+  VariantRow row = measure_row(w, truth, method, storage, scenes, fmt::format("auto{:g}", budget_px),
+                               EngineOptions{}.sampling, [&](const Region& region) {
+                                 const EngineOptions chosen = choose_variant(region, {budget_px}).options;
+                                 chose_exact += chosen.traversal == Traversal::exact ? 1 : 0;
+                                 return chosen;
+                               });
   fmt::print(stderr, "accuracy: {:<44} exact on {} of {} shapes, frame_midpoint on the rest\n", row.variant,
              chose_exact, scenes.scenes.size());
-  measure_strokes(w, truth, scenes.scenes, *method, row);
-  row.drift = measure_drift(truth, scenes.scenes);
-  measure_speed(truth, scenes.scenes, w.config.timing_s, row);
   return row;
 }
 
