@@ -3,6 +3,7 @@
 #include <dlfcn.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -13,6 +14,7 @@
 #include <system_error>
 #include <vector>
 
+#include "config/exr_header.hpp"
 #include "config/image_backend.hpp"
 
 namespace ph {
@@ -129,13 +131,26 @@ void write_unorm(const fs::path& path, std::int32_t width, std::int32_t height, 
   }
 }
 
+// What can be refused before a decoder sees the file: an OpenEXR file whose headers claim more bytes than
+// it holds (config/exr_header.hpp). The module opens a file only with the reader its extension names.
+void check_before_decoding(const fs::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension == ".exr") check_exr_header(path);
+}
+
 }  // namespace
 
 ImageSize read_image_size(const fs::path& path, const ImageLimits& limits) {
+  check_before_decoding(path);
   return backend(path).read_image_size(path, limits);
 }
 
-RawImage read_image(const fs::path& path, const ImageLimits& limits) { return backend(path).read_image(path, limits); }
+RawImage read_image(const fs::path& path, const ImageLimits& limits) {
+  check_before_decoding(path);
+  return backend(path).read_image(path, limits);
+}
 
 void write_normal_image(const std::filesystem::path& path, const NormalImage& normals, ImageEncoding encoding) {
   std::vector<double> values;

@@ -192,6 +192,29 @@ TEST(ImageIo, ExrNormalMapWithNaNTexelsIsRepaired) {
   EXPECT_NEAR(n.at(0, 0).x, 0.6f, 1e-6);  // signed values, not unorm
 }
 
+// A real OpenEXR file whose compression attribute is made to claim 2 GB: refused from its header, by name,
+// before OpenEXR allocates what it claims (config/exr_header.hpp); the file as written reads.
+TEST(ImageIo, ExrFileClaimingMoreThanItHoldsIsRefusedBeforeDecoding) {
+  const ScratchDir dir;
+  const fs::path path = dir / "depth.EXR";
+  write_float_image(path, 2, 2, 1, {0.0f, 0.25f, 0.5f, 1.0f});
+  EXPECT_EQ(read_image(path).width, 2);
+  std::vector<char> bytes = read_bytes(path);
+  const std::string attribute("compression\0compression\0", 24);
+  const auto at = std::search(bytes.begin(), bytes.end(), attribute.begin(), attribute.end());
+  ASSERT_NE(at, bytes.end());
+  const auto size_field = at + static_cast<std::ptrdiff_t>(attribute.size());
+  ASSERT_EQ(*size_field, 1);  // one byte: the compression code
+  const char claim[4] = {'\xff', '\xff', '\xff', '\x7f'};
+  std::copy(std::begin(claim), std::end(claim), size_field);
+  std::ofstream(path, std::ios::binary | std::ios::trunc)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  const std::string message = thrown_message<FieldError>([&] { read_image(path); });
+  EXPECT_NE(message.find(path.string() + ": attribute 'compression' claims 2147483647 bytes"), std::string::npos)
+      << message;
+  EXPECT_NE(thrown_message<FieldError>([&] { read_image_size(path); }).find("claims"), std::string::npos);
+}
+
 // What decoding an unorm normal map must give for a normal written as write_normal_image writes it: the codes,
 // c = round((n + 1) / 2 * cmax), read back as 2c / cmax - 1 (green flipped: OpenGL convention), tangent
 // components within one code of 0 taken as 0, renormalised.
