@@ -1,24 +1,28 @@
-// pseudohaptic-session's KWin backend against a real KWin: kwin_wayland (Debian 12: KWin 5.27) with its
-// virtual backend (one 1600x900 output, no GPU, no seat) on a private session bus, and a stand-in for the
-// daemon's control socket. Runs in the VM of tests/vm/run-in-vm (scripts/vm-test), or anywhere
-// kwin_wayland, dbus-daemon and plasma-wayland-protocols are installed; prints SKIP and exits 0 where
-// kwin_wayland or dbus-daemon is missing:
+// pseudohaptic-session's KWin backend against a real KWin: kwin_wayland (Debian 12: KWin 5.27) on a private
+// session bus, with a stand-in for the daemon's control socket. Runs in the VM of tests/vm/run-in-vm under
+// tests/vm/with-drm (scripts/vm-test); without --daemon it runs anywhere kwin_wayland, dbus-daemon and
+// plasma-wayland-protocols are installed, as any user. Prints SKIP and exits 0 where kwin_wayland or
+// dbus-daemon is missing:
 //
 //   kwin_session_check SESSION [--daemon PSEUDOHAPTICD] [--kwin PATH] [--scratch DIR]
 //
-// KWin's virtual backend has no input backend (only its DRM backend reads devices, through libinput, and
-// only with a logind or ConsoleKit session to open them), so a uinput mouse, or the daemon's virtual
-// device, does not reach it. The pointer is moved through KWin's own input pipeline instead, with the
-// fake-input Wayland protocol (org_kde_kwin_fake_input, which KWin 5 offers to any client once
-// KWIN_WAYLAND_NO_PERMISSION_CHECKS=1 lifts its desktop-file check, and then authenticates): what KWin does
-// with a real device's motion after libinput, acceleration aside.
-//
-// Cases: (1) with XDG_CURRENT_DESKTOP=KDE the helper loads its script into the real KWin and says
-// `helper wayland-kwin`, the layout and KWin's start position (the output's QRect::center(), 799 449);
-// after absolute and relative moves a `query` gets where KWin's pointer is (whole pixels, rounded from
-// KWin's fractional position, kept at 1599 at the right edge); KWin says the script is loaded while the
-// helper runs, and not after SIGTERM (exit 0, the script's file gone). (2) when KWin stops, the helper
-// exits with status 1. tests/vm/README.md, "KWin", has the figures.
+// First KWin's virtual backend (one 1600x900 output, no GPU, no seat). It has no input backend, so the
+// pointer is moved through KWin's own input pipeline with the fake-input Wayland protocol
+// (org_kde_kwin_fake_input, which KWin 5 authenticates by itself). (1) With XDG_CURRENT_DESKTOP=KDE the
+// helper loads its script into KWin and says `helper wayland-kwin`, the layout and KWin's start position
+// (the output's QRect::center(), 799 449, reported as 798.5 448.5: KWin 5 rounds half up, the helper
+// reports n - 0.5); after absolute and relative moves a `query` gets where KWin's pointer is (fractions
+// kept by KWin and rounded, KWin's pointer kept at 1599 on the right edge); KWin says the script is loaded
+// while the helper runs and not after SIGTERM (exit 0, the script's file gone). (2) When KWin stops, the
+// helper exits with status 1.
+// With --daemon, then KWin's DRM backend on the VM's bochs device (1280x800) with libinput, which opens
+// its devices through logind: a stand-in logind (tests/vm/logind_stand_in.hpp) on a private system bus
+// hands them over. (3) pseudohapticd (absolute output, flat acceleration, the desktop the helper said)
+// takes a uinput test mouse; after each stroke the helper's report of KWin's pointer is the centre of the
+// daemon's model's pixel (one pixel short on the right and bottom edges, where KWin keeps the pointer at
+// W - 1); then with the helper on the daemon's own socket, five pauses and strokes (each pause makes the
+// daemon ask the helper) leave the model exactly where the strokes take it.
+// tests/vm/README.md, "KWin", has the figures.
 #include <fmt/format.h>
 #include <sys/stat.h>
 #include <systemd/sd-bus.h>
