@@ -106,6 +106,14 @@ std::optional<Vec2> read_point(sd_bus_message* m) {
   return Vec2{*x, *y};
 }
 
+// KWin 5 rounds its position half up to whole pixels (QPointF::toPoint). An absolute device, the daemon's
+// included, puts the pointer on pixel centres, p + 0.5, which KWin 5 names p + 1: the pixel centre that
+// rounds to n, n - 0.5, is on the pixel the pointer is on for every such position. Taken as it comes, the
+// daemon would see p + 1, a pixel it did not emit, and move its model there at every resync.
+double kwin5_coordinate(double n) { return n == std::floor(n) ? n - 0.5 : n; }
+
+Vec2 kwin5_report(Vec2 at) { return {kwin5_coordinate(at.x), kwin5_coordinate(at.y)}; }
+
 std::string script_directory(const KWinOptions& options) {
   if (!options.script_dir.empty()) return options.script_dir;
   const char* runtime = std::getenv("XDG_RUNTIME_DIR");
@@ -176,6 +184,9 @@ struct KWinCursor::State {
   bool script_loaded = false;
   bool reload = false;  // KWin came back to the bus: load the script again
   bool broken = false;  // the bus connection failed
+  // KWin 5 (its script at /<id>): cursorPos is a QPoint, rounded half up from KWin's position (see
+  // report_of()).
+  bool rounded = false;
   std::optional<Vec2> position;
 
   ~State() {
@@ -214,11 +225,15 @@ struct KWinCursor::State {
   // KWin 6 puts a loaded script's object at /Scripting/Script<id>, KWin 5 at /<id>; where neither is,
   // /Scripting's start() runs every script loaded and not yet running.
   bool run(std::int32_t id, std::string& why) {
-    for (const std::string& path : {fmt::format("/Scripting/Script{}", id), fmt::format("/{}", id)}) {
+    for (const auto& [path, kwin5] :
+         {std::pair{fmt::format("/Scripting/Script{}", id), false}, std::pair{fmt::format("/{}", id), true}}) {
       BusError error;
       const int r =
           sd_bus_call_method(bus.get(), kKWinService, path.c_str(), kScriptInterface, "run", error.get(), nullptr, "");
-      if (r >= 0) return true;
+      if (r >= 0) {
+        rounded = kwin5;
+        return true;
+      }
       if (!error.has_name(SD_BUS_ERROR_UNKNOWN_OBJECT) && !error.has_name(SD_BUS_ERROR_UNKNOWN_METHOD) &&
           !error.has_name(SD_BUS_ERROR_UNKNOWN_INTERFACE)) {
         why = fmt::format("KWin did not run the script ({})", error.describe(r));
@@ -226,6 +241,7 @@ struct KWinCursor::State {
       }
     }
     BusError error;
+    rounded = true;  // only KWin 5 lacks a script object to run
     const int r = sd_bus_call_method(bus.get(), kKWinService, kScriptingPath, kScriptingInterface, "start", error.get(),
                                      nullptr, "");
     if (r < 0) why = fmt::format("KWin did not run the script ({})", error.describe(r));
@@ -255,7 +271,7 @@ struct KWinCursor::State {
     }
     const std::optional<Vec2> at = read_point(m);
     if (!at) return sd_bus_reply_method_errorf(m, SD_BUS_ERROR_INVALID_ARGS, "expected two numbers: x, y");
-    state.position = at;
+    state.position = state.rounded ? kwin5_report(*at) : *at;
     return sd_bus_reply_method_return(m, nullptr);  // KWin's call waits for a reply
   }
 

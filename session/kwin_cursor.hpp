@@ -50,9 +50,9 @@ class KWinCursor : public CursorSource {
   KWinCursor(const KWinCursor&) = delete;
   KWinCursor& operator=(const KWinCursor&) = delete;
 
-  // The latest position the script sent, taken as it comes (docs/SERVICE.md: KWin's whole pixels are
-  // rounded, so each already is the centre of what it stands for); nullopt before the first, and after KWin
-  // left the bus.
+  // The latest position the script sent: KWin 6's fractional one as it comes, KWin 5's whole pixels (rounded
+  // half up) as the pixel centre that rounds to them, n - 0.5 (docs/SERVICE.md); nullopt before the first,
+  // and after KWin left the bus.
   std::optional<Vec2> position() override;
   std::string name() const override { return "kwin"; }
   const std::string& socket() const override { return where_; }  // "the session bus, as NAME"

@@ -86,8 +86,12 @@ TEST(KWinScript, KdeSessionsAreTheOnesTheEnvironmentSaysAre) {
   EXPECT_FALSE(kde_session("", ""));
 }
 
+// KWin 6 sends its fractional position; KWin 5 whole pixels rounded half up, which the helper reports as
+// the pixel centre that rounds to them (half a pixel up and left): `whole` maps what the script sends.
 void loads_the_script_and_answers_with_the_latest_position(const std::string& address, const KWinOptions& options,
                                                            KWinVersion version, const std::string& run_object) {
+  const double rounding = version == KWinVersion::five ? 0.5 : 0.0;
+  const auto whole = [&](double x, double y) { return Vec2{x - rounding, y - rounding}; };
   StandInKWin kwin(address, {version, false, Sent{640, 360, "ii"}});
   ASSERT_TRUE(kwin.started());
   std::string why;
@@ -96,7 +100,7 @@ void loads_the_script_and_answers_with_the_latest_position(const std::string& ad
   ASSERT_NE(cursor, nullptr) << why;
   EXPECT_LT(Clock::now() - begin, 1s);  // done when the first position came, not at the deadline
   EXPECT_EQ(cursor->name(), "kwin");
-  EXPECT_EQ(cursor->position(), (Vec2{640, 360}));  // the script's report at start, whole pixels as they are
+  EXPECT_EQ(cursor->position(), whole(640, 360));  // the script's report at start
   const std::string script_path = cursor->script_path();
   EXPECT_TRUE(std::filesystem::exists(script_path));
   Seen seen = kwin.seen();
@@ -107,12 +111,14 @@ void loads_the_script_and_answers_with_the_latest_position(const std::string& ad
   EXPECT_EQ(seen.unloaded, std::vector<std::string>{kKWinScriptPlugin});  // a stale one, before loading
   EXPECT_EQ(seen.calls.front(), "unloadScript");
 
-  kwin.send({812.25, 95.5, "dd"});  // KWin 6: fractional pixels
+  kwin.send({812.25, 95.5, "dd"});  // KWin 6: fractional pixels, as they come
   EXPECT_TRUE(wait_until(*cursor, [&] { return cursor->position() == Vec2{812.25, 95.5}; }));
   kwin.send({-1920, 4.75, "id"});
+  EXPECT_TRUE(wait_until(*cursor, [&] { return cursor->position() == Vec2{-1920 - rounding, 4.75}; }));
+  kwin.send({-7, 0, "ii"});
   kwin.send({100, 200, "ii"});  // two in a row: the latest wins
-  EXPECT_TRUE(wait_until(*cursor, [&] { return cursor->position() == Vec2{100, 200}; }));
-  EXPECT_TRUE(wait_for_stand_in([&] { return kwin.seen().replies_ok == 4; }));  // each call answered
+  EXPECT_TRUE(wait_until(*cursor, [&] { return cursor->position() == whole(100, 200); }));
+  EXPECT_TRUE(wait_for_stand_in([&] { return kwin.seen().replies_ok == 5; }));  // each call answered
   EXPECT_EQ(kwin.seen().replies_error, 0) << kwin.seen().last_error;
 
   cursor.reset();  // the helper exits
@@ -128,7 +134,7 @@ TEST_F(KWinCursorTest, Kwin6LoadsTheScriptAndAnswersWithTheLatestPosition) {
 }
 
 TEST_F(KWinCursorTest, Kwin5LoadsTheScriptAndAnswersWithTheLatestPosition) {
-  loads_the_script_and_answers_with_the_latest_position(address(), options(), KWinVersion::five, "/7");
+  loads_the_script_and_answers_with_the_latest_position(address(), options(), KWinVersion::five, "/0");
 }
 
 TEST_F(KWinCursorTest, AKWinThatRefusesTheScriptGivesNoSource) {
@@ -214,7 +220,7 @@ TEST_F(KWinCursorTest, AKWinThatRestartsGetsTheScriptAgain) {
   EXPECT_TRUE(wait_until(*cursor, [&] { return !cursor->position(); }));
   StandInKWin second(address(), {KWinVersion::five, false, Sent{70, 80, "ii"}});
   ASSERT_TRUE(second.started());
-  EXPECT_TRUE(wait_until(*cursor, [&] { return cursor->position() == Vec2{70, 80}; }));
+  EXPECT_TRUE(wait_until(*cursor, [&] { return cursor->position() == Vec2{69.5, 79.5}; }));  // KWin 5's rounding
   EXPECT_EQ(second.seen().loaded.size(), 1U);
 }
 
