@@ -185,7 +185,7 @@ struct KWinCursor::State {
   bool reload = false;  // KWin came back to the bus: load the script again
   bool broken = false;  // the bus connection failed
   // KWin 5 (its script at /<id>): cursorPos is a QPoint, rounded half up from KWin's position (see
-  // report_of()).
+  // kwin5_report()).
   bool rounded = false;
   std::optional<Vec2> position;
 
