@@ -12,15 +12,20 @@
 #include <span>
 #include <string>
 
+#include "config/image_io.hpp"
+
 namespace ph {
 
 // Why the headers of an OpenEXR file (its first bytes; `file_size` is the whole file's size) cannot be
-// those of a readable file, or nothing when every attribute's value fits in the file. Reads only the
-// magic number, the version field and each attribute's name, type and size (layout: docs/FUZZING.md,
-// "OpenEXR headers"); `head` may end before the file does, and what it does not show is not checked.
-std::optional<std::string> exr_header_problem(std::span<const std::uint8_t> head, std::uint64_t file_size);
+// those of a readable file within `limits`, or nothing. Reads the magic number, the version field, each
+// attribute's name, type and size, and the values OpenEXR sizes itself by: a known fixed-size type must have
+// its size, a channel list, string vector or preview must end where its size says, the data window and the
+// number of channels must be within the limits. `head` may end before the file does; what it does not show
+// is not checked.
+std::optional<std::string> exr_header_problem(std::span<const std::uint8_t> head, std::uint64_t file_size,
+                                              const ImageLimits& limits = {});
 
 // Reads the start of `path` and throws FieldError("PATH: reason") on a problem exr_header_problem finds.
-void check_exr_header(const std::filesystem::path& path);
+void check_exr_header(const std::filesystem::path& path, const ImageLimits& limits);
 
 }  // namespace ph

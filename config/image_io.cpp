@@ -132,23 +132,24 @@ void write_unorm(const fs::path& path, std::int32_t width, std::int32_t height, 
 }
 
 // What can be refused before a decoder sees the file: an OpenEXR file whose headers claim more bytes than
-// it holds (config/exr_header.hpp). The module opens a file only with the reader its extension names.
-void check_before_decoding(const fs::path& path) {
+// it holds, or an image beyond the limits (config/exr_header.hpp). The module opens a file only with the
+// reader its extension names.
+void check_before_decoding(const fs::path& path, const ImageLimits& limits) {
   std::string extension = path.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (extension == ".exr") check_exr_header(path);
+  if (extension == ".exr") check_exr_header(path, limits);
 }
 
 }  // namespace
 
 ImageSize read_image_size(const fs::path& path, const ImageLimits& limits) {
-  check_before_decoding(path);
+  check_before_decoding(path, limits);
   return backend(path).read_image_size(path, limits);
 }
 
 RawImage read_image(const fs::path& path, const ImageLimits& limits) {
-  check_before_decoding(path);
+  check_before_decoding(path, limits);
   return backend(path).read_image(path, limits);
 }
 

@@ -93,6 +93,102 @@ TEST(ExrHeader, NotAnExrFileOrOneCutInsideItsHeaderIsRefused) {
   EXPECT_NE(why->find("longer than 255 bytes"), std::string::npos) << *why;
 }
 
+// OpenEXR reads a box2i as 16 bytes whatever its size field says, and the rest of the value as the next
+// attribute: a walk by the size field would check other bytes than OpenEXR reads (a fuzzer's input that
+// passed the size check this way made OpenEXR allocate a 2 GB attribute further on).
+TEST(ExrHeader, AKnownFixedTypeWithAnotherSizeIsRefused) {
+  Bytes file = start();
+  add_attribute(file, "dataWindow", "box2i", 16, 16);
+  add_attribute(file, "caow", "box2i", 20, 20);
+  file.push_back(0);
+  const std::optional<std::string> why = problem(file);
+  ASSERT_TRUE(why.has_value());
+  EXPECT_NE(why->find("attribute 'caow' of type box2i: size 20, not 16"), std::string::npos) << *why;
+}
+
+// The values OpenEXR reads with sizes of their own must end where the declared size does.
+TEST(ExrHeader, ChannelListsStringVectorsAndPreviewsMustFitTheirSize) {
+  const auto with_value = [](const std::string& type, const Bytes& value) {
+    Bytes file = start();
+    add_attribute(file, "a", type, static_cast<std::int32_t>(value.size()), 0);
+    file.insert(file.end(), value.begin(), value.end());
+    file.push_back(0);
+    return file;
+  };
+  Bytes channel = {'Y', 0};
+  channel.insert(channel.end(), 16, 0);
+  Bytes chlist = channel;
+  chlist.push_back(0);  // the list's end
+  EXPECT_EQ(problem(with_value("chlist", chlist)), std::nullopt);
+  Bytes unterminated = channel;
+  EXPECT_NE(problem(with_value("chlist", unterminated)), std::nullopt);
+  Bytes short_channel = {'Y', 0, 1, 2, 3, 0};
+  EXPECT_NE(problem(with_value("chlist", short_channel)), std::nullopt);
+
+  const Bytes two_strings = {2, 0, 0, 0, 'h', 'i', 0, 0, 0, 0};
+  EXPECT_EQ(problem(with_value("stringvector", two_strings)), std::nullopt);
+  const Bytes huge_string = {0xff, 0xff, 0xff, 0x7f, 'h', 'i'};
+  const std::optional<std::string> why = problem(with_value("stringvector", huge_string));
+  ASSERT_TRUE(why.has_value());
+  EXPECT_NE(why->find("a string claims 2147483647 bytes"), std::string::npos) << *why;
+
+  Bytes preview = {1, 0, 0, 0, 2, 0, 0, 0};  // 1 x 2 px
+  preview.insert(preview.end(), 8, 0x80);
+  EXPECT_EQ(problem(with_value("preview", preview)), std::nullopt);
+  const Bytes huge_preview = {0xff, 0xff, 0, 0, 0xff, 0xff, 0, 0, 1, 2, 3, 4};  // 65535 x 65535 px claimed
+  EXPECT_NE(problem(with_value("preview", huge_preview)), std::nullopt);
+}
+
+// OpenEXR allocates its line buffers for the data window when it opens the file: a window beyond the limits
+// is refused from the header, as the reader would refuse the image after opening it.
+TEST(ExrHeader, ADataWindowOrChannelListBeyondTheLimitsIsRefused) {
+  const auto little = [](std::int32_t v) {
+    const auto u = static_cast<std::uint32_t>(v);
+    return Bytes{static_cast<std::uint8_t>(u), static_cast<std::uint8_t>(u >> 8), static_cast<std::uint8_t>(u >> 16),
+                 static_cast<std::uint8_t>(u >> 24)};
+  };
+  const auto with_window = [&](std::int32_t xmax, std::int32_t ymax) {
+    Bytes file = start();
+    add_attribute(file, "dataWindow", "box2i", 16, 0);
+    for (const std::int32_t v : {0, 0, xmax, ymax}) {
+      const Bytes b = little(v);
+      file.insert(file.end(), b.begin(), b.end());
+    }
+    file.push_back(0);
+    return file;
+  };
+  ImageLimits limits;
+  limits.max_side = 1024;
+  limits.max_pixels = 1 << 16;
+  limits.max_channels = 4;
+  const Bytes fits = with_window(255, 255);
+  EXPECT_EQ(exr_header_problem(fits, fits.size(), limits), std::nullopt);
+  const Bytes wide = with_window(2047, 0);
+  std::optional<std::string> why = exr_header_problem(wide, wide.size(), limits);
+  ASSERT_TRUE(why.has_value());
+  EXPECT_NE(why->find("image is 2048 x 1 px, more than the limit of 1024 px per side"), std::string::npos) << *why;
+  const Bytes many = with_window(511, 511);
+  EXPECT_NE(exr_header_problem(many, many.size(), limits), std::nullopt);
+  const Bytes empty = with_window(-1, 0);
+  EXPECT_NE(exr_header_problem(empty, empty.size(), limits), std::nullopt);
+
+  Bytes chlist;
+  for (const char c : {'R', 'G', 'B', 'A', 'Z'}) {
+    chlist.push_back(static_cast<std::uint8_t>(c));
+    chlist.push_back(0);
+    chlist.insert(chlist.end(), 16, 0);
+  }
+  chlist.push_back(0);
+  Bytes five = start();
+  add_attribute(five, "channels", "chlist", static_cast<std::int32_t>(chlist.size()), 0);
+  five.insert(five.end(), chlist.begin(), chlist.end());
+  five.push_back(0);
+  why = exr_header_problem(five, five.size(), limits);
+  ASSERT_TRUE(why.has_value());
+  EXPECT_NE(why->find("image has 5 channels, more than the limit of 4"), std::string::npos) << *why;
+  EXPECT_EQ(exr_header_problem(five, five.size()), std::nullopt);  // the default limits: 16
+}
+
 TEST(ExrHeader, WhatTheFirstBytesDoNotShowIsNotJudged) {
   // A large value (a preview image, say) runs past the bytes read: the rest of the file is not checked.
   Bytes file = start();
