@@ -151,6 +151,8 @@ class CurvatureMethod final : public Method {
     const double t = point.gradient.x * m.x + point.gradient.y * m.y;
     return {projected(t), t, kNoBehind, kExactAngles};
   }
+  // Whether cd(from, to, ...) reads `from`: only where `to` has no point behind of its own.
+  static bool reads_from(const TexelSample& to) { return std::isnan(to.v2); }
 #if defined(__GNUC__)
   [[gnu::always_inline]]  // once per texel step in the walk, like sample()
 #endif

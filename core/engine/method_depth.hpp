@@ -104,6 +104,8 @@ class DepthMethod final : public Method {
   TexelSample sample_exact(const SurfacePoint& point, Vec2 /*direction*/) const override {
     return {point.height, kNoBehind};
   }
+  // Whether cd(from, to, ...) reads `from`: only where `to` has no upwind change of its own.
+  static bool reads_from(const TexelSample& to) { return std::isnan(to.v1); }
   double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
     if (std::isnan(to.v1)) return depth_cd(params_, from.v0, to.v0, step_px, detail);
     return depth_cd(params_, 0.0, to.v1, 1.0, detail);  // the change along 1 px of the motion

@@ -113,6 +113,16 @@ class Walker {
     }
   }
 
+  // Whether method.cd(from, to, ...) reads `from`; true for a method that does not say.
+  template <typename M>
+  static bool reads_from(const M& method, const TexelSample& to) {
+    if constexpr (requires { method.reads_from(to); }) {
+      return method.reads_from(to);
+    } else {
+      return true;
+    }
+  }
+
   // Sample of the texel the walk came from, at the start of a leg.
   template <typename M>
   TexelSample sample_from(const M& method) {
@@ -161,18 +171,26 @@ class Walker {
   template <typename M>
   void walk_region(std::size_t index, const M& method, bool first_leg) {
     const Region& region = scene_.regions()[index];
-    TexelSample previous = sample_from(method);
     if constexpr (Mode == WalkMode::nearest && requires { method.leg(&region.fields, m_).sample(Texel{}); }) {
       // A method that works out once per leg what its nearest reading needs of the direction (offsets,
       // weights, the field): each step is then only the reading.
       const auto leg = method.leg(&region.fields, m_);
+      // The texel the walk came from is sampled only where cd() pairs with it (a region's border, for the
+      // methods that read along the motion): otherwise that sample was a sixth of a typical frame's work.
+      TexelSample previous;
+      bool first = true;
       step_through(index, first_leg, [&](bool entered) PH_ALWAYS_INLINE {
         const TexelSample here = leg.sample(region.local(texel_));
+        if (first) [[unlikely]] {
+          first = false;
+          if (reads_from(method, here)) previous = sample_from(method);
+        }
         const double cd = step_cd(region, method, previous, here, entered);
         previous = here;
         return cd;
       });
     } else {
+      TexelSample previous = sample_from(method);
       // A copy the compiler can keep in registers: what a method derives from the direction is then computed
       // once per leg, not per step (m_ could alias the walk's stores).
       const Vec2 m = m_;
