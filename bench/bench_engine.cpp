@@ -9,8 +9,11 @@
 //                    seconds (the library always uses CPU time for rates), kInvert turns steps per second
 //                    into seconds per step. The value is in seconds; the console prints it with an SI
 //                    prefix ("12.3ns"). It includes the per-frame overhead spread over the frame's steps.
+// latency/typical/... times each frame of the typical stream on its own and reports the median and 99th percentile
+// of those times (median_ns, p99_ns) and the cost of an empty timed interval (clock_ns), which both include.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstddef>
@@ -220,6 +223,46 @@ void run_typical_frames(benchmark::State& state, std::span<const ph::Scene* cons
   report_steps(state, steps);
 }
 
+// The spread of single frames: the typical stream as run_typical_frames, each frame timed on its own with
+// steady_clock. Counters: the median and 99th percentile of those times (ns) and the median of an empty timed
+// interval (clock_ns), which both include; the benchmark's own time per iteration includes two clock reads.
+void run_frame_latency(benchmark::State& state, std::span<const ph::Scene* const> scenes, ph::Vec2 start,
+                       ph::Rect keep_in) {
+  using Clock = std::chrono::steady_clock;
+  const std::vector<ph::Vec2>& motions = typical_motions();
+  const ph::CursorState start_cursor = ph::cursor_at(start);
+  ph::CursorState cursor = start_cursor;
+  std::size_t scene_index = 0;
+  std::size_t frame = 0;
+  std::vector<double> frame_ns, clock_ns;
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    const ph::FrameResult result = ph::advance(*scenes[scene_index], cursor, motions[frame & kStreamMask]);
+    const auto t1 = Clock::now();
+    benchmark::DoNotOptimize(result);
+    frame_ns.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count());
+    if ((frame & 15) == 0) {
+      const auto c0 = Clock::now();
+      const auto c1 = Clock::now();
+      clock_ns.push_back(std::chrono::duration<double, std::nano>(c1 - c0).count());
+    }
+    if (!inside(keep_in, cursor.position)) cursor = start_cursor;
+    if ((++frame & kStreamMask) == 0 && scenes.size() > 1) {
+      scene_index = (scene_index + 1) % scenes.size();
+      cursor = start_cursor;
+    }
+  }
+  auto quantile = [](std::vector<double>& v, double q) {
+    if (v.empty()) return 0.0;
+    const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
+    std::nth_element(v.begin(), v.begin() + k, v.end());
+    return v[static_cast<std::size_t>(k)];
+  };
+  state.counters["median_ns"] = quantile(frame_ns, 0.5);
+  state.counters["p99_ns"] = quantile(frame_ns, 0.99);
+  state.counters["clock_ns"] = quantile(clock_ns, 0.5);
+}
+
 // With several scenes, the next takes over after this many flicks: a 0.5 s run then covers all 24 targets
 // several times, and each field stays in cache for a while as it would during a session.
 constexpr std::size_t kFlicksPerScene = 64;
@@ -272,6 +315,9 @@ void register_pair(const std::string& label, MethodKind kind, SceneListFn make_s
   });
   benchmark::RegisterBenchmark(("flick/" + suffix).c_str(),
                                [=](benchmark::State& state) { run_flicks(state, scenes_for()); });
+  benchmark::RegisterBenchmark(("latency/typical/" + suffix).c_str(), [=](benchmark::State& state) {
+    run_frame_latency(state, scenes_for(), kTargetCentre, kTargetRect);
+  });
 }
 
 std::vector<const ph::Scene*> one_target(MethodKind kind, const std::string& name) {

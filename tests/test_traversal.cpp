@@ -2,6 +2,7 @@
 // independent reference integral.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -251,6 +252,46 @@ TEST(Traversal, EnteringARegionFromTheFlatOutsideIsAStep) {
   // 9.75 px of flat travel, then the remaining 10.25 px of motor spent at C/D >= 1.
   EXPECT_GT(cursor.position.x, 100.0);
   EXPECT_LT(cursor.position.x, 110.25);
+}
+
+// Where the texel entered has no neighbour behind in its own region, the step pairs it with the texel the walk came
+// from, in the region it came from (the walk samples that texel only for such steps).
+TEST(Traversal, CurvatureStepIntoARegionPairsWithTheRegionItCameFrom) {
+  std::vector<Region> regions;
+  regions.push_back(gradient_region({0, 0, 100, 50}, {1.0f, 0.0f}));
+  regions.push_back(gradient_region({100, 0, 100, 50}, {0.5f, 0.0f}));
+  const Scene scene = scene_of(std::move(regions));
+  CursorState cursor = cursor_at({98.5, 10.5});
+  Recorder rec;
+  advance(scene, cursor, {20.0, 0.0}, &rec);
+  const auto entry = std::find_if(rec.steps.begin(), rec.steps.end(), [](const StepRecord& s) {
+    return s.texel == Texel{100, 10};
+  });
+  ASSERT_NE(entry, rec.steps.end());
+  EXPECT_EQ(entry->came_from, (Texel{99, 10}));
+  // Slope 1 behind, 0.5 here: delta-beta > 0 and kmax at its upper limit (to fast_atan's accuracy). Paired with
+  // the flat outside's sample instead (a1 = theta1 = 0), delta-beta < 0 and the step would get C/D 1.
+  const double theta1 = std::atan(1.0), theta2 = std::atan(0.5);
+  EXPECT_NEAR(entry->cd, curvature_cd(CurvatureParams{}, -std::sin(theta1), theta1, -std::sin(theta2), theta2, nullptr),
+              1e-6);
+  EXPECT_GT(entry->cd, 10.0);
+}
+
+TEST(Traversal, DepthStepIntoARegionPairsWithTheRegionItCameFrom) {
+  std::vector<Region> regions;
+  regions.push_back(depth_region({0, 0, 100, 50}, [](int, int) { return 5.0f; }));
+  regions.push_back(depth_region({100, 0, 100, 50}, [](int, int) { return 5.2f; }));
+  const Scene scene = scene_of(std::move(regions));
+  CursorState cursor = cursor_at({90.5, 10.5});
+  Recorder rec;
+  advance(scene, cursor, {20.0, 0.0}, &rec);
+  const auto entry = std::find_if(rec.steps.begin(), rec.steps.end(), [](const StepRecord& s) {
+    return s.texel == Texel{100, 10};
+  });
+  ASSERT_NE(entry, rec.steps.end());
+  // A height change of 0.2 px over the 1 px step from the last texel of the first region (not 5.2 from the flat).
+  EXPECT_DOUBLE_EQ(entry->cd, depth_cd(DepthParams{}, 5.0, static_cast<double>(5.2f), 1.0, nullptr));
+  EXPECT_LT(entry->cd, DepthParams{}.kmax);
 }
 
 TEST(Traversal, TopmostRegionGoverns) {

@@ -6,7 +6,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 
+#include "core/engine/fast_math.hpp"
 #include "core/engine/field.hpp"
 #include "core/engine/geometry.hpp"
 
@@ -29,6 +32,21 @@ inline BilinearCell bilinear_cell(std::int32_t width, std::int32_t height, Vec2 
   c.fx = u - c.x0;
   c.fy = v - c.y0;
   return c;
+}
+
+// How many rows ahead of the texel it reads a walk asks the cache for: each step along y enters a new row, which
+// is not in the cache yet, and a walk reaches the row this many y-steps later.
+inline constexpr std::ptrdiff_t kRowsAhead = 3;
+
+// Asks the cache for the line `bytes` away from `texel` (a texel rows ahead of the walk). Integer arithmetic:
+// the address may lie outside the field, which a prefetch never reads.
+PH_ALWAYS_INLINE inline void prefetch_ahead(const void* texel, std::ptrdiff_t bytes) {
+#if defined(__GNUC__)
+  __builtin_prefetch(reinterpret_cast<const void*>(reinterpret_cast<std::uintptr_t>(texel) + bytes));
+#else
+  static_cast<void>(texel);
+  static_cast<void>(bytes);
+#endif
 }
 
 inline double lerp_exact(double a, double b, double t) { return a + t * (b - a); }

@@ -108,12 +108,14 @@ class CurvatureMethod final : public Method {
           row_(field_ != nullptr ? static_cast<std::ptrdiff_t>(oy_) * field_->width : 0),
           w_x_(std::abs(m.x) * (1.0 - std::abs(m.y))),
           w_y_((1.0 - std::abs(m.x)) * std::abs(m.y)),
-          w_xy_(std::abs(m.x) * std::abs(m.y)) {}
+          w_xy_(std::abs(m.x) * std::abs(m.y)),
+          ahead_(-kRowsAhead * row_ * static_cast<std::ptrdiff_t>(sizeof(Gradient))) {}
 
     PH_ALWAYS_INLINE TexelSample sample(Texel local) const {
       if (field_ == nullptr) return {0.0, 0.0, 0.0, 0.0};
       const GradientField& f = *field_;
       const Gradient* texel = &f.values[static_cast<std::size_t>(local.y) * f.width + local.x];
+      prefetch_ahead(texel, ahead_);
       const double t = slope_along(texel[0], m_);
       const double a = projected(t);
       // One unsigned compare per axis: a neighbour at -1 wraps to above the width.
@@ -132,6 +134,7 @@ class CurvatureMethod final : public Method {
     std::int32_t ox_, oy_;     // offsets to the neighbours behind; 0 along an axis the motion does not move along
     std::ptrdiff_t row_;       // offset to the neighbour behind along y
     double w_x_, w_y_, w_xy_;  // bilinear weights of the neighbours behind along x, along y, diagonally
+    std::ptrdiff_t ahead_;     // bytes to the texel kRowsAhead rows ahead along y (prefetch_ahead)
   };
   Leg leg(const RegionFields* fields, Vec2 m) const { return Leg(fields, m); }
   TexelSample sample(const RegionFields* fields, Texel local, Vec2 m) const override {
@@ -151,6 +154,8 @@ class CurvatureMethod final : public Method {
     const double t = point.gradient.x * m.x + point.gradient.y * m.y;
     return {projected(t), t, kNoBehind, kExactAngles};
   }
+  // Whether cd(from, to, ...) reads `from`: only where `to` has no point behind of its own.
+  static bool reads_from(const TexelSample& to) { return std::isnan(to.v2); }
 #if defined(__GNUC__)
   [[gnu::always_inline]]  // once per texel step in the walk, like sample()
 #endif

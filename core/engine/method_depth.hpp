@@ -70,12 +70,14 @@ class DepthMethod final : public Method {
           oy_(direction.y > 0.0 ? -1 : (direction.y < 0.0 ? 1 : 0)),
           row_(field_ != nullptr ? static_cast<std::ptrdiff_t>(oy_) * field_->width : 0),
           wx_(std::abs(direction.x)),
-          wy_(std::abs(direction.y)) {}
+          wy_(std::abs(direction.y)),
+          ahead_(-kRowsAhead * row_ * static_cast<std::ptrdiff_t>(sizeof(float))) {}
 
     PH_ALWAYS_INLINE TexelSample sample(Texel local) const {
       if (field_ == nullptr) return {0.0, kNoBehind};
       const DepthField& f = *field_;
       const float* texel = &f.values[static_cast<std::size_t>(local.y) * f.width + local.x];
+      prefetch_ahead(texel, ahead_);
       const double here = *texel;
       // One unsigned compare per axis: a neighbour at -1 wraps to above the width.
       const auto nx = static_cast<std::uint32_t>(local.x + ox_), ny = static_cast<std::uint32_t>(local.y + oy_);
@@ -90,6 +92,7 @@ class DepthMethod final : public Method {
     std::int32_t ox_, oy_;  // offsets to the upwind neighbours; 0 along an axis the motion does not move along
     std::ptrdiff_t row_;    // offset to the upwind neighbour along y
     double wx_, wy_;        // |m_x|, |m_y|
+    std::ptrdiff_t ahead_;  // bytes to the texel kRowsAhead rows ahead along y (prefetch_ahead)
   };
   Leg leg(const RegionFields* fields, Vec2 direction) const { return Leg(fields, direction); }
   TexelSample sample(const RegionFields* fields, Texel local, Vec2 direction) const override {
@@ -104,6 +107,8 @@ class DepthMethod final : public Method {
   TexelSample sample_exact(const SurfacePoint& point, Vec2 /*direction*/) const override {
     return {point.height, kNoBehind};
   }
+  // Whether cd(from, to, ...) reads `from`: only where `to` has no upwind change of its own.
+  static bool reads_from(const TexelSample& to) { return std::isnan(to.v1); }
   double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
     if (std::isnan(to.v1)) return depth_cd(params_, from.v0, to.v0, step_px, detail);
     return depth_cd(params_, 0.0, to.v1, 1.0, detail);  // the change along 1 px of the motion

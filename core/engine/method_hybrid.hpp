@@ -92,6 +92,8 @@ class HybridMethod final : public Method {
   TexelSample sample_exact(const SurfacePoint& point, Vec2 m) const override {
     return curvature_.sample_exact(point, m);
   }
+  // Whether cd(from, to, ...) reads `from`: as the curvature method, never on a discontinuity texel.
+  static bool reads_from(const TexelSample& to) { return to.v2 != kDepthStep && CurvatureMethod::reads_from(to); }
 #if defined(__GNUC__)
   [[gnu::always_inline]]
 #endif

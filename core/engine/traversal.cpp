@@ -113,6 +113,16 @@ class Walker {
     }
   }
 
+  // Whether method.cd(from, to, ...) reads `from`; true for a method that does not say.
+  template <typename M>
+  static bool reads_from(const M& method, const TexelSample& to) {
+    if constexpr (requires { method.reads_from(to); }) {
+      return method.reads_from(to);
+    } else {
+      return true;
+    }
+  }
+
   // Sample of the texel the walk came from, at the start of a leg.
   template <typename M>
   TexelSample sample_from(const M& method) {
@@ -161,18 +171,26 @@ class Walker {
   template <typename M>
   void walk_region(std::size_t index, const M& method, bool first_leg) {
     const Region& region = scene_.regions()[index];
-    TexelSample previous = sample_from(method);
     if constexpr (Mode == WalkMode::nearest && requires { method.leg(&region.fields, m_).sample(Texel{}); }) {
       // A method that works out once per leg what its nearest reading needs of the direction (offsets,
       // weights, the field): each step is then only the reading.
       const auto leg = method.leg(&region.fields, m_);
+      // The texel the walk came from is sampled only where cd() pairs with it (a region's border, for the
+      // methods that read along the motion): otherwise that sample was a sixth of a typical frame's work.
+      TexelSample previous;
+      bool first = true;
       step_through(index, first_leg, [&](bool entered) PH_ALWAYS_INLINE {
         const TexelSample here = leg.sample(region.local(texel_));
+        if (first) [[unlikely]] {
+          first = false;
+          if (reads_from(method, here)) previous = sample_from(method);
+        }
         const double cd = step_cd(region, method, previous, here, entered);
         previous = here;
         return cd;
       });
     } else {
+      TexelSample previous = sample_from(method);
       // A copy the compiler can keep in registers: what a method derives from the direction is then computed
       // once per leg, not per step (m_ could alias the walk's stores).
       const Vec2 m = m_;
@@ -335,7 +353,7 @@ class Walker {
 
 // True when the segment from the cursor by `motor` cannot touch any region: its bounding box misses
 // every region's closed box (a few compares per region), and it stays well inside the world.
-bool crosses_only_flat(const Scene& scene, const CursorState& cursor, Vec2 motor) {
+PH_ALWAYS_INLINE inline bool crosses_only_flat(const Scene& scene, const CursorState& cursor, Vec2 motor) {
   constexpr double kFar = kWorldLimitPx / 2;
   const Vec2 p = cursor.position;
   const Vec2 end = p + motor;
@@ -394,10 +412,11 @@ double apply_effects(const Scene& scene, CursorState& cursor, Vec2& motor, TimeU
 // registers) into one through the stack to add them as a pair, hence no SLP vectorisation here (gcc 12: about
 // a third of a flat frame's time).
 #if defined(__GNUC__) && !defined(__clang__)
-[[gnu::optimize("no-tree-slp-vectorize")]]
+#define PH_NO_SLP [[gnu::optimize("no-tree-slp-vectorize")]]
+#else
+#define PH_NO_SLP
 #endif
-FrameResult
-flat_frame(CursorState& cursor, Vec2 motor) {
+PH_NO_SLP PH_ALWAYS_INLINE inline FrameResult flat_frame(CursorState& cursor, Vec2 motor) {
   const double ex = cursor.position.x + motor.x, ey = cursor.position.y + motor.y;
   Texel t = cursor.texel;
   if (motor.x != 0.0) t.x = cell_behind_predictable(ex, motor.x);
@@ -410,6 +429,11 @@ flat_frame(CursorState& cursor, Vec2 motor) {
   result.display.x = motor.x;
   result.display.y = motor.y;
   return result;
+}
+
+// The same out of line, for the frames the effects moved off every region (advance() has it inline).
+PH_NO_SLP [[gnu::noinline]] FrameResult flat_frame_after_effects(CursorState& cursor, Vec2 motor) {
+  return flat_frame(cursor, motor);
 }
 
 template <WalkMode Mode>
@@ -489,7 +513,7 @@ FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserv
   if (motor.x == 0.0 && motor.y == 0.0) return {};
   // advance() has found that this frame meets a region; the effects may have moved it off every region.
   FrameResult result = scene.has_effects() && crosses_only_flat(scene, cursor, motor)
-                           ? flat_frame(cursor, motor)
+                           ? flat_frame_after_effects(cursor, motor)
                            : walk(scene, cursor, motor, observer);
   if (gain != 1.0) {
     // The hand's motor travel was the frame's; the effects let only `gain` of it reach the walk.
@@ -501,7 +525,9 @@ FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserv
 
 }  // namespace
 
-FrameResult advance(const Scene& scene, CursorState& cursor, Vec2 motor, TimeUs time, StepObserver* observer) {
+// Without SLP vectorisation, as flat_frame, which is inline here: a frame outside every region then makes no call.
+PH_NO_SLP FrameResult advance(const Scene& scene, CursorState& cursor, Vec2 motor, TimeUs time,
+                              StepObserver* observer) {
   if (!is_finite(motor) || (motor.x == 0.0 && motor.y == 0.0)) return {};
   if (!scene.has_effects() && crosses_only_flat(scene, cursor, motor)) return flat_frame(cursor, motor);
   return advance_through_regions(scene, cursor, motor, time, observer);
