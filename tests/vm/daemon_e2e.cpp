@@ -1605,9 +1605,8 @@ int main(int argc, char** argv) {
         std::filesystem::path(options.daemon).parent_path().parent_path() / "tools" / "pseudohaptic";
     if (std::filesystem::exists(sibling)) options.tool = sibling.string();
   }
-  const char* tmpdir = std::getenv("TMPDIR");
-  options.scratch = std::filesystem::path(tmpdir != nullptr && *tmpdir != '\0' ? tmpdir : "/tmp") / "ph-e2e";
-  std::filesystem::create_directories(options.scratch);
+  options.scratch = own_scratch("ph-e2e");
+  std::printf("daemon e2e: scratch folder %s\n", options.scratch.c_str());
   if (options.scene_dir.empty()) options.scene_dir = options.scratch;
   ::signal(SIGPIPE, SIG_IGN);
 

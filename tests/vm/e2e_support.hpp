@@ -25,6 +25,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <deque>
 #include <filesystem>
@@ -58,6 +59,17 @@ class Fatal : public std::runtime_error {
 };
 
 inline std::string errno_text(int err) { return std::strerror(err); }
+
+// A scratch folder of this run's own, $TMPDIR/PREFIX-XXXXXX (or under /tmp): a second run, or another user's,
+// never meets this one's files. It stays after the run for its logs; the programs print where it is.
+inline std::filesystem::path own_scratch(const std::string& prefix) {
+  const char* tmp = std::getenv("TMPDIR");
+  std::string pattern =
+      (std::filesystem::path(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") / (prefix + "-XXXXXX")).string();
+  if (::mkdtemp(pattern.data()) == nullptr)
+    throw Fatal("cannot create a scratch folder " + pattern + ": " + errno_text(errno));
+  return pattern;
+}
 
 // Milliseconds from now until `deadline`, rounded up, at least 0 and at most `cap`: a poll(2) timeout.
 inline int ms_until(Clock::time_point deadline, std::chrono::milliseconds cap = std::chrono::hours(1)) {

@@ -508,10 +508,7 @@ int main(int argc, char** argv) {
     }
   }
   if (options.session.empty()) return usage();
-  if (options.scratch.empty()) {
-    const char* tmp = std::getenv("TMPDIR");
-    options.scratch = fs::path(tmp != nullptr ? tmp : "/tmp") / "ph-kwin";
-  }
+
   if (::access(options.kwin.c_str(), X_OK) != 0) {
     std::printf("SKIP kwin_session_check: no %s (Debian: kwin-wayland)\n", options.kwin.c_str());
     return 0;
@@ -522,7 +519,12 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
-    fs::remove_all(options.scratch);
+    if (options.scratch.empty()) {
+      options.scratch = own_scratch("ph-kwin");
+    } else {
+      fs::remove_all(options.scratch);
+    }
+    std::printf("kwin_session_check: scratch folder %s\n", options.scratch.c_str());
     int failed = 0, cases = 0;
     Options virtual_options = options;
     virtual_options.scratch = options.scratch / "virtual";

@@ -448,12 +448,13 @@ int main(int argc, char** argv) {
                  "usage: wayland_session_check SESSION [--daemon PSEUDOHAPTICD] [--weston PATH] [--scratch DIR]\n");
     return 2;
   }
-  if (options.scratch.empty()) {
-    const char* tmp = std::getenv("TMPDIR");
-    options.scratch = fs::path(tmp != nullptr ? tmp : "/tmp") / "ph-wayland";
-  }
   try {
-    fs::remove_all(options.scratch);
+    if (options.scratch.empty()) {
+      options.scratch = own_scratch("ph-wayland");
+    } else {
+      fs::remove_all(options.scratch);
+    }
+    std::printf("wayland_session_check: scratch folder %s\n", options.scratch.c_str());
     const fs::path runtime = options.scratch / "runtime";
     fs::create_directories(runtime);
     fs::permissions(runtime, fs::perms::owner_all);  // as XDG_RUNTIME_DIR must be

@@ -893,9 +893,8 @@ int main(int argc, char** argv) {
     }
   }
   if (options.daemon.empty()) return usage("no daemon given");
-  const char* tmp = std::getenv("TMPDIR");
-  options.scratch = std::filesystem::path(tmp != nullptr ? tmp : "/tmp") / "ph-x11";
-  std::filesystem::create_directories(options.scratch);
+  options.scratch = own_scratch("ph-x11");
+  std::printf("x11_cursor_e2e: scratch folder %s\n", options.scratch.c_str());
 
   int failed = 0;
   try {
