@@ -1,6 +1,6 @@
-// Cost of ph::advance, the exact per-texel traversal (docs/METHODS.md, "The traversal"), for the curvature and the
-// depth method on the paper's targets: typical frames, fast flicks, a pointer outside every region and a
-// flat region. docs/PERFORMANCE.md explains the figures and how to reproduce them.
+// Cost of ph::advance, the exact per-texel traversal (docs/METHODS.md, "The traversal"), for the curvature, the
+// depth and the hybrid method (given both maps) on the paper's targets: typical frames, fast flicks, a pointer outside
+// every region and a flat region. docs/PERFORMANCE.md explains the figures and how to reproduce them.
 //
 // Every benchmark reports, besides the time per iteration (= per frame, one advance call):
 //   steps_per_frame  texel boundaries crossed inside regions per frame (FrameResult::steps, averaged);
@@ -32,15 +32,18 @@
 #include "core/engine/engine_options.hpp"
 #include "core/engine/method_curvature.hpp"
 #include "core/engine/method_depth.hpp"
+#include "core/engine/method_hybrid.hpp"
 #include "core/engine/scene.hpp"
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
 
 namespace {
 
-enum class MethodKind { curvature, depth };
+enum class MethodKind { curvature, depth, hybrid };
 
-const char* method_name(MethodKind kind) { return kind == MethodKind::curvature ? "curvature" : "depth"; }
+const char* method_name(MethodKind kind) {
+  return kind == MethodKind::curvature ? "curvature" : kind == MethodKind::depth ? "depth" : "hybrid";
+}
 
 constexpr std::int32_t kTargetSize = 500;  // TargetSpec's default: the region is 500 x 500 px at (0, 0)
 constexpr ph::Vec2 kTargetCentre{kTargetSize / 2.0, kTargetSize / 2.0};
@@ -57,6 +60,10 @@ ph::Region target_region(const ph::TargetSpec& spec, MethodKind kind) {
   if (kind == MethodKind::depth) {
     region.fields.depth = ph::target_depth_field(spec);
     region.method = std::make_shared<ph::DepthMethod>(ph::DepthParams{});
+  } else if (kind == MethodKind::hybrid) {  // both maps, as a hybrid region is given them
+    region.fields.gradient = ph::target_gradient_field(spec);
+    region.fields.depth = ph::target_depth_field(spec);
+    region.method = std::make_shared<ph::HybridMethod>(ph::HybridParams{});
   } else {
     region.fields.gradient = ph::target_gradient_field(spec);
     region.method = std::make_shared<ph::CurvatureMethod>(ph::CurvatureParams{});
@@ -73,6 +80,10 @@ ph::Region flat_region(ph::Rect rect, MethodKind kind) {
   if (kind == MethodKind::depth) {
     region.fields.depth = ph::DepthField(rect.w, rect.h, 0.0f);
     region.method = std::make_shared<ph::DepthMethod>(ph::DepthParams{});
+  } else if (kind == MethodKind::hybrid) {
+    region.fields.gradient = ph::GradientField(rect.w, rect.h, ph::Gradient{});
+    region.fields.depth = ph::DepthField(rect.w, rect.h, 0.0f);
+    region.method = std::make_shared<ph::HybridMethod>(ph::HybridParams{});
   } else {
     region.fields.gradient = ph::GradientField(rect.w, rect.h, ph::Gradient{});
     region.method = std::make_shared<ph::CurvatureMethod>(ph::CurvatureParams{});
@@ -121,7 +132,8 @@ std::vector<const ph::Scene*> all_target_scenes(MethodKind kind, const ph::Engin
 const ph::Scene& flat_scene(MethodKind kind) {
   static const ph::Scene curvature = scene_of(flat_region(kTargetRect, MethodKind::curvature));
   static const ph::Scene depth = scene_of(flat_region(kTargetRect, MethodKind::depth));
-  return kind == MethodKind::curvature ? curvature : depth;
+  static const ph::Scene hybrid = scene_of(flat_region(kTargetRect, MethodKind::hybrid));
+  return kind == MethodKind::curvature ? curvature : kind == MethodKind::depth ? depth : hybrid;
 }
 
 // A 1920 x 1080 screen with a 300 x 300 region in each corner: the cursor in the middle never reaches
@@ -427,7 +439,7 @@ void register_lut_builds() {
 }
 
 void register_all() {
-  for (MethodKind kind : {MethodKind::curvature, MethodKind::depth}) {
+  for (MethodKind kind : {MethodKind::curvature, MethodKind::depth, MethodKind::hybrid}) {
     for (const char* name : kRepresentativeTargets) register_pair(name, kind, one_target);
     register_pair("all-24", kind, every_target);
     register_pair("flat", kind, flat_only);
