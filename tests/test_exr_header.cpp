@@ -13,17 +13,16 @@ namespace {
 
 using Bytes = std::vector<std::uint8_t>;
 
+// Appends a 32-bit value, little-endian as OpenEXR stores it.
+void put32(Bytes& out, std::uint32_t v) {
+  for (int shift = 0; shift < 32; shift += 8) out.push_back(static_cast<std::uint8_t>(v >> shift));
+}
+
 // Magic number and version field (version 2, the given flags).
 Bytes start(std::uint32_t flags = 0) {
-  const std::uint32_t version = 2 | flags;
-  return {0x76,
-          0x2f,
-          0x31,
-          0x01,
-          static_cast<std::uint8_t>(version),
-          static_cast<std::uint8_t>(version >> 8),
-          static_cast<std::uint8_t>(version >> 16),
-          static_cast<std::uint8_t>(version >> 24)};
+  Bytes file = {0x76, 0x2f, 0x31, 0x01};
+  put32(file, 2 | flags);
+  return file;
 }
 
 // One attribute: name, type, a size field of `claimed` and `actual` bytes of value.
@@ -33,8 +32,7 @@ void add_attribute(Bytes& file, const std::string& name, const std::string& type
   file.push_back(0);
   file.insert(file.end(), type.begin(), type.end());
   file.push_back(0);
-  const auto size = static_cast<std::uint32_t>(claimed);
-  for (int shift = 0; shift < 32; shift += 8) file.push_back(static_cast<std::uint8_t>(size >> shift));
+  put32(file, static_cast<std::uint32_t>(claimed));
   file.insert(file.end(), actual, 0x2a);
 }
 
@@ -142,18 +140,10 @@ TEST(ExrHeader, ChannelListsStringVectorsAndPreviewsMustFitTheirSize) {
 // OpenEXR allocates its line buffers for the data window when it opens the file: a window beyond the limits
 // is refused from the header, as the reader would refuse the image after opening it.
 TEST(ExrHeader, ADataWindowOrChannelListBeyondTheLimitsIsRefused) {
-  const auto little = [](std::int32_t v) {
-    const auto u = static_cast<std::uint32_t>(v);
-    return Bytes{static_cast<std::uint8_t>(u), static_cast<std::uint8_t>(u >> 8), static_cast<std::uint8_t>(u >> 16),
-                 static_cast<std::uint8_t>(u >> 24)};
-  };
-  const auto with_window = [&](std::int32_t xmax, std::int32_t ymax) {
+  const auto with_window = [](std::int32_t xmax, std::int32_t ymax) {
     Bytes file = start();
     add_attribute(file, "dataWindow", "box2i", 16, 0);
-    for (const std::int32_t v : {0, 0, xmax, ymax}) {
-      const Bytes b = little(v);
-      file.insert(file.end(), b.begin(), b.end());
-    }
+    for (const std::int32_t v : {0, 0, xmax, ymax}) put32(file, static_cast<std::uint32_t>(v));
     file.push_back(0);
     return file;
   };
