@@ -61,13 +61,17 @@ class Fatal : public std::runtime_error {
 inline std::string errno_text(int err) { return std::strerror(err); }
 
 // A scratch folder of this run's own, $TMPDIR/PREFIX-XXXXXX (or under /tmp): a second run, or another user's,
-// never meets this one's files. It stays after the run for its logs; the programs print where it is.
+// never meets this one's files. It stays after the run for its logs; the programs print where it is. Mode
+// 0755, not mkdtemp's 0700: the checks run clients as another user (uid 65534) against sockets inside it.
 inline std::filesystem::path own_scratch(const std::string& prefix) {
   const char* tmp = std::getenv("TMPDIR");
   std::string pattern =
       (std::filesystem::path(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") / (prefix + "-XXXXXX")).string();
   if (::mkdtemp(pattern.data()) == nullptr)
     throw Fatal("cannot create a scratch folder " + pattern + ": " + errno_text(errno));
+  std::filesystem::permissions(pattern, std::filesystem::perms::owner_all | std::filesystem::perms::group_read |
+                                            std::filesystem::perms::group_exec | std::filesystem::perms::others_read |
+                                            std::filesystem::perms::others_exec);
   return pattern;
 }
 
