@@ -99,6 +99,29 @@ std::int64_t signed32(std::span<const std::uint8_t> v, std::size_t at) {
   return static_cast<std::int32_t>(little_endian32(v.data() + at));
 }
 
+// A channel list: entries of a name, NUL and 16 bytes, up to an empty name. How many channels it holds, and
+// what is wrong when it does not end exactly at its declared size (OpenEXR reads it up to its terminator).
+struct ChannelList {
+  std::int64_t channels = 0;
+  std::optional<std::string> problem;
+};
+
+ChannelList channel_list(std::span<const std::uint8_t> v) {
+  ChannelList list;
+  std::size_t at = 0;
+  while (at < v.size() && v[at] != 0) {
+    const auto nul = std::find(v.begin() + static_cast<std::ptrdiff_t>(at), v.end(), 0);
+    at = static_cast<std::size_t>(nul - v.begin()) + 1 + 16;
+    if (nul == v.end() || at > v.size()) {
+      list.problem = "a channel runs past the attribute's size";
+      return list;
+    }
+    ++list.channels;
+  }
+  if (at + 1 != v.size()) list.problem = "the channel list does not end at the attribute's size";
+  return list;
+}
+
 // Why the value `v` (its declared size) of an attribute of type `type` is not what OpenEXR would read in that
 // many bytes: the types OpenEXR reads with sizes of their own (a channel list up to its terminator, a string
 // vector's strings, a preview's pixels, which it allocates at the size they claim) must end exactly where the
@@ -108,16 +131,7 @@ std::optional<std::string> value_problem(const std::string& type, std::span<cons
     if (v.size() == *fixed) return std::nullopt;
     return "size " + std::to_string(v.size()) + ", not " + std::to_string(*fixed);
   }
-  if (type == "chlist") {  // entries of a name, NUL, and 16 bytes; an empty name ends the list
-    std::size_t at = 0;
-    while (at < v.size() && v[at] != 0) {
-      const auto nul = std::find(v.begin() + static_cast<std::ptrdiff_t>(at), v.end(), 0);
-      at = static_cast<std::size_t>(nul - v.begin()) + 1 + 16;
-      if (nul == v.end() || at > v.size()) return std::string("a channel runs past the attribute's size");
-    }
-    if (at + 1 != v.size()) return std::string("the channel list does not end at the attribute's size");
-    return std::nullopt;
-  }
+  if (type == "chlist") return channel_list(v).problem;
   if (type == "stringvector") {  // strings of a 4-byte length and that many bytes, up to the size
     std::size_t at = 0;
     while (at < v.size()) {
@@ -161,11 +175,7 @@ std::optional<std::string> beyond_limits(const std::string& attribute, const std
     }
   }
   if (type == "chlist") {
-    std::int64_t channels = 0;
-    for (std::size_t at = 0; at < v.size() && v[at] != 0; ++channels) {
-      at = static_cast<std::size_t>(std::find(v.begin() + static_cast<std::ptrdiff_t>(at), v.end(), 0) - v.begin()) +
-           1 + 16;
-    }
+    const std::int64_t channels = channel_list(v).channels;
     if (channels > limits.max_channels) {
       return "image has " + std::to_string(channels) + " channels, more than the limit of " +
              std::to_string(limits.max_channels);
