@@ -44,7 +44,7 @@ struct SuiteConfig {
   StabilitySettings settings;
 };
 
-SuiteConfig make_config(bool small) {
+SuiteConfig make_suite_config(bool small) {
   SuiteConfig c;
   const EngineOptions exact{}, bilinear{Traversal::exact, Sampling::bilinear, 16};
   if (small) {
@@ -86,7 +86,7 @@ void write_modes(const fs::path& path, const std::vector<const FailureMode*>& mo
 int run_stability(const StabilityOptions& o) {
   const Clock::time_point t_start = Clock::now();
   const fs::path outdir(o.outdir);
-  const SuiteConfig config = make_config(o.small);
+  const SuiteConfig config = make_suite_config(o.small);
   std::vector<const FailureMode*> modes;
   for (const FailureMode& m : failure_modes()) {
     if (o.modes.empty() || std::find(o.modes.begin(), o.modes.end(), m.name) != o.modes.end()) modes.push_back(&m);
