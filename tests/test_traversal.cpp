@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <stdexcept>
 
 #include "core/engine/method_curvature.hpp"
 #include "core/engine/method_depth.hpp"
@@ -308,6 +309,38 @@ TEST(Traversal, TopmostRegionGoverns) {
   EXPECT_EQ(scene.owner({150, 50}), 1u);
   EXPECT_EQ(scene.owner({250, 50}), 0u);
   EXPECT_FALSE(scene.owner({450, 50}).has_value());
+}
+
+// A walk through a region that a later one overlaps looks up each texel's owner; one through a region nothing
+// overlaps does not need to (Scene::covered).
+TEST(Traversal, AWalkThroughACoveredRegionHandsOverToTheRegionAbove) {
+  std::vector<Region> regions;
+  regions.push_back(gradient_region({0, 0, 400, 100}, {0.5f, 0.0f}));
+  regions.push_back(gradient_region({100, 40, 100, 20}, {1.0f, 0.0f}));
+  regions.push_back(gradient_region({600, 0, 50, 50}, {1.0f, 0.0f}));
+  const Scene scene = scene_of(std::move(regions));
+  EXPECT_TRUE(scene.covered(0));
+  EXPECT_FALSE(scene.covered(1));
+  EXPECT_FALSE(scene.covered(2));
+  CursorState cursor = cursor_at({50.5, 50.5});
+  Recorder rec;
+  advance(scene, cursor, {600.0, 0.0}, &rec);  // uphill all the way: it ends near x = 273
+  ASSERT_GT(cursor.position.x, 250.0);
+  int on_top = 0;
+  for (const StepRecord& step : rec.steps) {
+    const bool inside_top = step.texel.x >= 100 && step.texel.x < 200;
+    EXPECT_EQ(step.region, inside_top ? &scene.regions()[1] : &scene.regions()[0]) << "texel x " << step.texel.x;
+    on_top += inside_top ? 1 : 0;
+  }
+  EXPECT_EQ(on_top, 100);
+}
+
+TEST(Scene, EveryFieldMustMatchTheRegion) {
+  Region region = gradient_region({0, 0, 10, 10}, {0.5f, 0.0f});
+  region.fields.depth = DepthField(9, 10);  // not read by the curvature method, but the walk indexes every field alike
+  std::vector<Region> regions;
+  regions.push_back(std::move(region));
+  EXPECT_THROW(scene_of(std::move(regions)), std::invalid_argument);
 }
 
 TEST(Traversal, FlatOutsideIsCrossedInOneJump) {

@@ -36,6 +36,18 @@ void check_region(const Region& region) {
   if (needs.depth && !matches(region.fields.depth, region.rect)) {
     throw std::invalid_argument(who + "the method needs a depth field matching the region's size");
   }
+  // A field the method may read without needing it must match too: the walk reads every field of a region at
+  // one index (core/engine/field.hpp, FieldTexel).
+  if ((region.fields.gradient && !matches(region.fields.gradient, region.rect)) ||
+      (region.fields.depth && !matches(region.fields.depth, region.rect))) {
+    throw std::invalid_argument(who + "a field does not match the region's size");
+  }
+}
+
+// Whether two boxes share a texel.
+bool overlap(Rect a, Rect b) {
+  return std::int64_t{a.x} < std::int64_t{b.x} + b.w && std::int64_t{b.x} < std::int64_t{a.x} + a.w &&
+         std::int64_t{a.y} < std::int64_t{b.y} + b.h && std::int64_t{b.y} < std::int64_t{a.y} + a.h;
 }
 
 // Loaders repair invalid texels; this keeps the no-NaN promise for scenes built any other way.
@@ -61,6 +73,12 @@ Scene::Scene(std::vector<Region> regions) : regions_(std::move(regions)) {
     region.method->prepare(region.fields);
     has_effects_ = has_effects_ || !region.effects.empty();
     per_region_options_ = per_region_options_ || region.options.has_value();
+  }
+  covered_.assign(regions_.size(), 0);
+  for (std::size_t i = 0; i < regions_.size(); ++i) {
+    for (std::size_t j = i + 1; j < regions_.size() && covered_[i] == 0; ++j) {
+      covered_[i] = overlap(regions_[i].rect, regions_[j].rect) ? 1 : 0;
+    }
   }
   if (per_region_options_) set_options(options_);  // the tables the regions' own options need
 }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -52,6 +53,10 @@ class Scene {
     return std::nullopt;
   }
 
+  // Whether a later region overlaps region i: only then can a texel of its box belong to another region, and
+  // a walk through it must look up the owner of each texel it enters.
+  bool covered(std::size_t i) const { return covered_[i] != 0; }
+
   std::size_t bytes() const;  // fields, effects and direction tables
 
   // How advance() walks this scene (core/engine/engine_options.hpp); default: exact, nearest. Regions with
@@ -75,6 +80,7 @@ class Scene {
 
  private:
   std::vector<Region> regions_;
+  std::vector<std::uint8_t> covered_;  // per region: covered(i)
   bool has_effects_ = false;
   bool per_region_options_ = false;  // some region has options of its own
   EngineOptions options_;
