@@ -43,6 +43,18 @@ struct Grid {
   std::size_t bytes() const { return values.capacity() * sizeof(T); }
 };
 
+// A texel of a region's fields and its place in their row-major order (y * width + x): what a walk that
+// keeps the index as it steps hands a method's reading, which then needs no multiplication.
+struct FieldTexel {
+  Texel local;
+  std::size_t index = 0;
+};
+
+template <typename T>
+FieldTexel field_texel(const Grid<T>& grid, Texel local) {
+  return {local, static_cast<std::size_t>(local.y) * static_cast<std::size_t>(grid.width) + local.x};
+}
+
 using GradientField = Grid<Gradient>;  // from a normal map, or derived from depth
 using DepthField = Grid<float>;        // height h in screen px (toward the viewer)
 using NormalImage = Grid<Normal>;      // decoded unit normals, only while loading

@@ -36,7 +36,18 @@ inline BilinearCell bilinear_cell(std::int32_t width, std::int32_t height, Vec2 
 
 // How many rows ahead of the texel it reads a walk asks the cache for: each step along y enters a new row, which
 // is not in the cache yet, and a walk reaches the row this many y-steps later.
-inline constexpr std::ptrdiff_t kRowsAhead = 3;
+inline constexpr std::ptrdiff_t kRowsAhead = 8;
+
+// Bytes from a texel to the one a walk along m reaches kRowsAhead rows later: that many rows along y and, as the
+// walk moves along x meanwhile, kRowsAhead |m_x| / |m_y| texels along x (at most a row's width). A motion with
+// no y component enters no new row: 0.
+inline std::ptrdiff_t bytes_ahead(Vec2 m, std::int32_t width, std::size_t texel_bytes) {
+  if (m.y == 0.0) return 0;
+  const double along_x = std::min(static_cast<double>(kRowsAhead) * std::abs(m.x / m.y), static_cast<double>(width));
+  const auto x = static_cast<std::ptrdiff_t>(along_x + 0.5) * (m.x < 0.0 ? -1 : 1);
+  const std::ptrdiff_t y = kRowsAhead * width * (m.y < 0.0 ? -1 : 1);
+  return (x + y) * static_cast<std::ptrdiff_t>(texel_bytes);
+}
 
 // Asks the cache for the line `bytes` away from `texel` (a texel rows ahead of the walk). Integer arithmetic:
 // the address may lie outside the field, which a prefetch never reads.

@@ -28,6 +28,7 @@ struct Texel {
 
 constexpr bool operator==(Texel a, Texel b) { return a.x == b.x && a.y == b.y; }
 constexpr bool operator!=(Texel a, Texel b) { return !(a == b); }
+constexpr Texel operator+(Texel a, Texel b) { return {a.x + b.x, a.y + b.y}; }
 
 // Texel containing a point; a point on a boundary belongs to the texel on its +x/+y side.
 inline Texel texel_at(Vec2 p) {

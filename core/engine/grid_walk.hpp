@@ -56,6 +56,8 @@ inline RaySpan ray_box(Vec2 origin, Vec2 d, Vec2 lo, Vec2 hi, double t_lo, doubl
 inline Vec2 corner(const Region& region) {
   return {static_cast<double>(region.rect.x), static_cast<double>(region.rect.y)};
 }
+// The same as a texel: a region-local texel plus it is the screen texel.
+inline Texel corner_texel(const Region& region) { return {region.rect.x, region.rect.y}; }
 
 // What `method` reads at texel t for the motion direction m, from the fields of the region that owns t (the
 // flat surface's sample outside every region): the texel's value, or with `at` (screen px inside t) the

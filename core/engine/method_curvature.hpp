@@ -13,6 +13,7 @@
 #include "core/engine/field_sampling.hpp"
 #include "core/engine/method.hpp"
 #include "core/engine/method_registry.hpp"
+#include "core/engine/pair_math.hpp"
 
 namespace ph {
 
@@ -103,38 +104,51 @@ class CurvatureMethod final : public Method {
     Leg(const RegionFields* fields, Vec2 m)
         : field_(fields != nullptr && fields->gradient ? &*fields->gradient : nullptr),
           m_(m),
+          mx_(splat(m.x)),
+          my_(splat(m.y)),
           ox_(m.x > 0.0 ? -1 : (m.x < 0.0 ? 1 : 0)),
           oy_(m.y > 0.0 ? -1 : (m.y < 0.0 ? 1 : 0)),
           row_(field_ != nullptr ? static_cast<std::ptrdiff_t>(oy_) * field_->width : 0),
           w_x_(std::abs(m.x) * (1.0 - std::abs(m.y))),
           w_y_((1.0 - std::abs(m.x)) * std::abs(m.y)),
           w_xy_(std::abs(m.x) * std::abs(m.y)),
-          ahead_(-kRowsAhead * row_ * static_cast<std::ptrdiff_t>(sizeof(Gradient))) {}
+          ahead_(field_ != nullptr ? bytes_ahead(m, field_->width, sizeof(Gradient)) : 0) {}
 
     PH_ALWAYS_INLINE TexelSample sample(Texel local) const {
+      return sample(field_ != nullptr ? field_texel(*field_, local) : FieldTexel{local});
+    }
+    PH_ALWAYS_INLINE TexelSample sample(FieldTexel at) const {
       if (field_ == nullptr) return {0.0, 0.0, 0.0, 0.0};
       const GradientField& f = *field_;
-      const Gradient* texel = &f.values[static_cast<std::size_t>(local.y) * f.width + local.x];
+      const Texel local = at.local;
+      const Gradient* texel = &f.values[at.index];
       prefetch_ahead(texel, ahead_);
-      const double t = slope_along(texel[0], m_);
-      const double a = projected(t);
       // One unsigned compare per axis: a neighbour at -1 wraps to above the width.
       const auto nx = static_cast<std::uint32_t>(local.x + ox_), ny = static_cast<std::uint32_t>(local.y + oy_);
-      if (nx >= static_cast<std::uint32_t>(f.width) || ny >= static_cast<std::uint32_t>(f.height)) [[unlikely]]
-        return {a, t, kNoBehind, kNoBehind};
+      if (nx >= static_cast<std::uint32_t>(f.width) || ny >= static_cast<std::uint32_t>(f.height)) [[unlikely]] {
+        const double t = slope_along(texel[0], m_);
+        return {projected(t), t, kNoBehind, kNoBehind};
+      }
+      // The four slopes two at a time: the texel's and its x-neighbour's, the y-neighbour's and the diagonal's.
+      const Double2 here_x = slopes_along(texel, texel + ox_, mx_, my_);
+      const Double2 y_diagonal = slopes_along(texel + row_, texel + row_ + ox_, mx_, my_);
+      const double t = here_x[0];
       // Differences first: a constant field gives exactly t behind, so a plane keeps delta-beta exactly 0.
-      const double tb = t + w_x_ * (slope_along(texel[ox_], m_) - t) + w_y_ * (slope_along(texel[row_], m_) - t) +
-                        w_xy_ * (slope_along(texel[row_ + ox_], m_) - t);
-      return {a, t, projected(tb), slope_angle_change(tb, t)};
+      const double tb = t + w_x_ * (here_x[1] - t) + w_y_ * (y_diagonal[0] - t) + w_xy_ * (y_diagonal[1] - t);
+      // Both projections at once: one square root and one division for the two.
+      const Double2 slopes{t, tb};
+      const Double2 a = -slopes / sqrt2(splat(1.0) + slopes * slopes);
+      return {a[0], t, a[1], slope_angle_change(tb, t)};
     }
 
    private:
     const GradientField* field_;
     Vec2 m_;
+    Double2 mx_, my_;          // m.x and m.y in both lanes (slopes_along)
     std::int32_t ox_, oy_;     // offsets to the neighbours behind; 0 along an axis the motion does not move along
     std::ptrdiff_t row_;       // offset to the neighbour behind along y
     double w_x_, w_y_, w_xy_;  // bilinear weights of the neighbours behind along x, along y, diagonally
-    std::ptrdiff_t ahead_;     // bytes to the texel kRowsAhead rows ahead along y (prefetch_ahead)
+    std::ptrdiff_t ahead_;     // bytes to the texel the walk reaches kRowsAhead rows ahead (prefetch_ahead)
   };
   Leg leg(const RegionFields* fields, Vec2 m) const { return Leg(fields, m); }
   TexelSample sample(const RegionFields* fields, Texel local, Vec2 m) const override {

@@ -71,12 +71,16 @@ class DepthMethod final : public Method {
           row_(field_ != nullptr ? static_cast<std::ptrdiff_t>(oy_) * field_->width : 0),
           wx_(std::abs(direction.x)),
           wy_(std::abs(direction.y)),
-          ahead_(-kRowsAhead * row_ * static_cast<std::ptrdiff_t>(sizeof(float))) {}
+          ahead_(field_ != nullptr ? bytes_ahead(direction, field_->width, sizeof(float)) : 0) {}
 
     PH_ALWAYS_INLINE TexelSample sample(Texel local) const {
+      return sample(field_ != nullptr ? field_texel(*field_, local) : FieldTexel{local});
+    }
+    PH_ALWAYS_INLINE TexelSample sample(FieldTexel at) const {
       if (field_ == nullptr) return {0.0, kNoBehind};
       const DepthField& f = *field_;
-      const float* texel = &f.values[static_cast<std::size_t>(local.y) * f.width + local.x];
+      const Texel local = at.local;
+      const float* texel = &f.values[at.index];
       prefetch_ahead(texel, ahead_);
       const double here = *texel;
       // One unsigned compare per axis: a neighbour at -1 wraps to above the width.
@@ -92,7 +96,7 @@ class DepthMethod final : public Method {
     std::int32_t ox_, oy_;  // offsets to the upwind neighbours; 0 along an axis the motion does not move along
     std::ptrdiff_t row_;    // offset to the upwind neighbour along y
     double wx_, wy_;        // |m_x|, |m_y|
-    std::ptrdiff_t ahead_;  // bytes to the texel kRowsAhead rows ahead along y (prefetch_ahead)
+    std::ptrdiff_t ahead_;  // bytes to the texel the walk reaches kRowsAhead rows ahead (prefetch_ahead)
   };
   Leg leg(const RegionFields* fields, Vec2 direction) const { return Leg(fields, direction); }
   TexelSample sample(const RegionFields* fields, Texel local, Vec2 direction) const override {

@@ -68,12 +68,15 @@ class HybridMethod final : public Method {
           marks_(fields != nullptr && fields->discontinuity && fields->depth ? &*fields->discontinuity : nullptr) {}
 
     PH_ALWAYS_INLINE TexelSample sample(Texel local) const {
-      if (marks_ != nullptr && marks_->values[static_cast<std::size_t>(local.y) * marks_->width + local.x])
-          [[unlikely]] {
-        const TexelSample d = depth_.sample(local);
+      return marks_ != nullptr ? sample(field_texel(*marks_, local)) : curvature_.sample(local);
+    }
+    // Every field of a region has the region's size, so one index serves the marks, the depths and the gradients.
+    PH_ALWAYS_INLINE TexelSample sample(FieldTexel at) const {
+      if (marks_ != nullptr && marks_->values[at.index]) [[unlikely]] {
+        const TexelSample d = depth_.sample(at);
         if (!std::isnan(d.v1)) return {0.0, 0.0, kDepthStep, 0.0, d.v0, d.v1};
       }
-      return curvature_.sample(local);
+      return curvature_.sample(at);
     }
 
    private:

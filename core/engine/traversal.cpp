@@ -53,6 +53,10 @@ class Walker {
     budget_ = budget;
     bool first = true;
     while (budget_ > 0.0) {
+      if (steps_ > kMaxStepsPerFrame) {
+        budget_ = 0.0;  // unreachable for a valid scene (a ray crosses each region once); never spin
+        break;
+      }
       const std::optional<std::size_t> owner = scene_.owner(texel_);
       const DirectionLut* lut = nullptr;
       if constexpr (Mode == WalkMode::lut) lut = owner ? scene_.direction_lut(*owner) : nullptr;
@@ -134,23 +138,16 @@ class Walker {
     }
   }
 
+  // The C/D of a step, shown to the observer if there is one (step_through has written the members it reads).
   template <typename M>
   PH_ALWAYS_INLINE double step_cd(const Region& region, const M& method, const TexelSample& from, const TexelSample& to,
                                   bool entered) {
     const double step_px = Mode == WalkMode::bilinear ? step_px_ : 1.0;
-    if (observer_ == nullptr) return count_step(method.cd(from, to, step_px, nullptr), entered);
+    if (observer_ == nullptr) [[likely]]
+      return method.cd(from, to, step_px, nullptr);
     StepDetail detail;
     const double cd = method.cd(from, to, step_px, &detail);
     observe_step(cd, detail, entered, region);
-    return count_step(cd, entered);
-  }
-
-  // The bookkeeping of every step: the frame's C/D range, the step count, whether C/D stayed 1.
-  PH_ALWAYS_INLINE double count_step(double cd, bool entered) {
-    all_unit_ = all_unit_ && cd == 1.0;
-    result_.cd_min = std::min(result_.cd_min, cd);
-    result_.cd_max = std::max(result_.cd_max, cd);
-    if (entered) ++result_.steps;
     return cd;
   }
 
@@ -177,17 +174,14 @@ class Walker {
       const auto leg = method.leg(&region.fields, m_);
       // The texel the walk came from is sampled only where cd() pairs with it (a region's border, for the
       // methods that read along the motion): otherwise that sample was a sixth of a typical frame's work.
-      TexelSample previous;
-      bool first = true;
-      step_through(index, first_leg, [&](bool entered) PH_ALWAYS_INLINE {
-        const TexelSample here = leg.sample(region.local(texel_));
-        if (first) [[unlikely]] {
-          first = false;
-          if (reads_from(method, here)) previous = sample_from(method);
-        }
-        const double cd = step_cd(region, method, previous, here, entered);
-        previous = here;
-        return cd;
+      // Inside the leg it is the texel before, whose owner is this region, so its sample is what the leg's
+      // was (sample_owner reads it through the same method and fields).
+      step_through<false>(index, first_leg, [&](bool entered, FieldTexel at, Texel from) PH_ALWAYS_INLINE {
+        const TexelSample here = leg.sample(at);
+        TexelSample previous{};
+        if (reads_from(method, here)) [[unlikely]]
+          previous = sample_owner(scene_, method, from + corner_texel(region), m_);
+        return step_cd(region, method, previous, here, entered);
       });
     } else {
       TexelSample previous = sample_from(method);
@@ -196,7 +190,7 @@ class Walker {
       const Vec2 m = m_;
       // Inlined, so that the samples stay in registers: an out-of-line call per step cost the depth method a
       // fifth of its typical frame.
-      step_through(index, first_leg, [&, m](bool entered) PH_ALWAYS_INLINE {
+      step_through<true>(index, first_leg, [&, m](bool entered, FieldTexel, Texel) PH_ALWAYS_INLINE {
         const TexelSample here = sample_here(region, method, m);
         const double cd = step_cd(region, method, previous, here, entered);
         previous = here;
@@ -209,52 +203,103 @@ class Walker {
   void walk_region_lut(std::size_t index, const DirectionLut& lut, bool first_leg) {
     lut_k_ = lut.direction_index(m_);  // per table: regions may quantise into different numbers of directions
     const Region& region = scene_.regions()[index];
-    step_through(index, first_leg, [&](bool entered) PH_ALWAYS_INLINE { return lut_cd(region, lut, entered); });
+    step_through<true>(index, first_leg,
+                       [&](bool entered, FieldTexel, Texel) PH_ALWAYS_INLINE { return lut_cd(region, lut, entered); });
   }
 
-  // C/D of the current texel from a direction table, with the bookkeeping of step_cd.
+  // C/D of the current texel from a direction table, shown to the observer as step_cd does.
   double lut_cd(const Region& region, const DirectionLut& lut, bool entered) {
     const double cd = lut.cd(lut_k_, region.local(texel_));
     if (observer_ != nullptr) observe_step(cd, empty_step_detail(), entered, region);
-    return count_step(cd, entered);
+    return cd;
   }
 
   // The texel-stepping loop: spends the budget texel by texel while the texels belong to region `index`,
-  // each at the C/D that cd_here(entered) gives for the texel the walk is in (called once per texel, in
-  // order, so it may keep the previous texel's sample).
-  template <typename CdHere>
+  // each at the C/D that cd_here(entered, at, from) gives for the texel the walk is in (`at`: its place in the
+  // region's fields; `from`: the texel before it, region-local). It is called once per texel, in order, so it
+  // may keep the previous texel's sample. The walk's state is kept in locals, the texels region-local with
+  // their index into the fields, and written back to the members where the loop ends: the stores of the
+  // bookkeeping through result_ may alias the members, so GCC kept every member in memory, a load and a store
+  // each per step. With Members, cd_here reads the members (the texel, the boundary distances), and they are
+  // written before each call; otherwise only for an observer.
+  template <bool Members, typename CdHere>
   PH_ALWAYS_INLINE void step_through(std::size_t index, bool first_leg, CdHere&& cd_here) {
     const Region& region = scene_.regions()[index];
-    double cd = cd_here(!first_leg);
-    const bool topmost = index + 1 == scene_.regions().size();
+    const bool covered = scene_.covered(index);
+    const Texel corner = corner_texel(region);
+    Texel local = region.local(texel_), from = region.local(from_);
+    // Every field of the region is rect.w texels wide: a step along y moves the index by a row.
+    std::ptrdiff_t at = static_cast<std::ptrdiff_t>(local.y) * region.rect.w + local.x;
+    const std::ptrdiff_t row_step = static_cast<std::ptrdiff_t>(sy_) * region.rect.w;
+    double t = t_, tmx = tmx_, tmy = tmy_, budget = budget_;
+    // The x- and y-steps the walk can take before it leaves the region's box (it starts inside).
+    std::int32_t x_left = steps_inside(local.x, region.rect.w, sx_);
+    std::int32_t y_left = steps_inside(local.y, region.rect.h, sy_);
+    double cd_lo = kInf, cd_hi = -kInf;
+    std::uint32_t entered_steps = 0;
+    std::uint64_t steps = 0;
+    const auto write_back = [&]() PH_ALWAYS_INLINE {
+      texel_ = local + corner;
+      from_ = from + corner;
+      t_ = t;
+      tmx_ = tmx;
+      tmy_ = tmy;
+    };
+    const auto evaluate = [&](bool entered) PH_ALWAYS_INLINE {
+      if (Members || observer_ != nullptr) write_back();
+      const double cd = cd_here(entered, FieldTexel{local, static_cast<std::size_t>(at)}, from);
+      cd_lo = std::min(cd_lo, cd);
+      cd_hi = std::max(cd_hi, cd);
+      entered_steps += entered ? 1 : 0;
+      return cd;
+    };
+    double cd = evaluate(!first_leg);
+    bool left = false;
     for (;;) {
-      const double t_next = std::min(tmx_, tmy_);
-      const double cost = cd * (t_next - t_);
-      if (cost >= budget_) {
-        t_ += budget_ / cd;
-        budget_ = 0.0;
-        return;
+      const double t_next = std::min(tmx, tmy);
+      const double cost = cd * (t_next - t);
+      if (cost >= budget) {
+        t += budget / cd;
+        budget = 0.0;
+        break;
       }
-      budget_ -= cost;
-      t_ = t_next;
-      if (++steps_ > kMaxStepsPerFrame) {
-        budget_ = 0.0;  // unreachable for a valid scene (a ray crosses each region once); never spin
-        return;
-      }
-      from_ = texel_;
-      if (tmx_ <= tmy_) {
-        texel_.x += sx_;
-        tmx_ += tdx_;
+      budget -= cost;
+      t = t_next;
+      ++steps;
+      from = local;
+      if (tmx <= tmy) {
+        local.x += sx_;
+        at += sx_;
+        tmx += tdx_;
+        left = --x_left < 0;
       } else {
-        texel_.y += sy_;
-        tmy_ += tdy_;
+        local.y += sy_;
+        at += row_step;
+        tmy += tdy_;
+        left = --y_left < 0;
       }
-      if (!region.rect.contains(texel_) || (!topmost && scene_.owner(texel_) != index)) {
-        restart_at(position());
-        return;  // another region or the flat outside takes over
+      if (left || (covered && scene_.owner(local + corner) != index)) [[unlikely]] {
+        left = true;  // another region or the flat outside takes over
+        break;
       }
-      cd = cd_here(true);
+      cd = evaluate(true);
     }
+    write_back();
+    budget_ = budget;
+    steps_ += steps;
+    // Every C/D was 1 exactly when the least and the largest were (the methods' C/D is never NaN).
+    all_unit_ = all_unit_ && cd_lo >= 1.0 && cd_hi <= 1.0;
+    result_.cd_min = std::min(result_.cd_min, cd_lo);
+    result_.cd_max = std::max(result_.cd_max, cd_hi);
+    result_.steps += entered_steps;
+    if (left) restart_at(position());
+  }
+
+  // How many steps along one axis stay inside [0, size) from `cell` (inside it), moving by `step`.
+  static std::int32_t steps_inside(std::int32_t cell, std::int32_t size, int step) {
+    if (step > 0) return size - 1 - cell;
+    if (step < 0) return cell;
+    return std::numeric_limits<std::int32_t>::max();
   }
 
   // The display-travel interval [t0, t1) in which the ray is within a box's range on one axis. Which
