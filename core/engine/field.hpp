@@ -43,16 +43,22 @@ struct Grid {
   std::size_t bytes() const { return values.capacity() * sizeof(T); }
 };
 
-// A texel of a region's fields and its place in their row-major order (y * width + x): what a walk that
-// keeps the index as it steps hands a method's reading, which then needs no multiplication.
+// A texel of a region's fields as a method's reading along a motion needs it: its place in their row-major
+// order (y * width + x), and whether its neighbours behind along the motion (one texel against the motion's
+// sign along each axis it moves along) lie in the region too. A walk keeps both as it steps, so the reading
+// needs no multiplication and no bounds check.
 struct FieldTexel {
-  Texel local;
   std::size_t index = 0;
+  bool behind_inside = false;
 };
 
-template <typename T>
-FieldTexel field_texel(const Grid<T>& grid, Texel local) {
-  return {local, static_cast<std::size_t>(local.y) * static_cast<std::size_t>(grid.width) + local.x};
+// The same worked out from the texel (region-local, inside a width x height field) and the offsets to the
+// neighbours behind (-1, 0 or 1 per axis).
+inline FieldTexel field_texel(Texel local, std::int32_t width, std::int32_t height, std::int32_t ox, std::int32_t oy) {
+  // One unsigned compare per axis: a neighbour at -1 wraps to above the width.
+  const auto nx = static_cast<std::uint32_t>(local.x + ox), ny = static_cast<std::uint32_t>(local.y + oy);
+  return {static_cast<std::size_t>(local.y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(local.x),
+          nx < static_cast<std::uint32_t>(width) && ny < static_cast<std::uint32_t>(height)};
 }
 
 using GradientField = Grid<Gradient>;  // from a normal map, or derived from depth

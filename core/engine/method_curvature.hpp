@@ -41,7 +41,8 @@ PH_ALWAYS_INLINE inline double curvature_cd_of_change(const CurvatureParams& p, 
                                                       double theta1_minus_theta2, StepDetail* detail) {
   // Eq. 1: cos(alpha) is the mean of the projected normals; delta-beta = acos(a1) - acos(a2) = theta1 - theta2.
   const double cos_alpha = 0.5 * (a1 + a2);
-  const double delta_beta = p.delta_beta_sign * theta1_minus_theta2 * (180.0 / std::numbers::pi);
+  // One product on the step's chain: the sign is exactly +-1, so this is (sign * change) * 180/pi to the bit.
+  const double delta_beta = theta1_minus_theta2 * (p.delta_beta_sign * (180.0 / std::numbers::pi));
   // Eq. 3 with the limits that keep Eq. 2 meaningful (k >= 1).
   const double kmax = std::clamp(p.kmax_prime * (1.0 + delta_beta), p.kmax_lo, p.kmax_hi);
   const double kmin = std::clamp(p.kmin_prime * (1.0 - delta_beta), p.kmin_lo, p.kmin_hi);
@@ -114,18 +115,16 @@ class CurvatureMethod final : public Method {
           w_xy_(std::abs(m.x) * std::abs(m.y)),
           ahead_(field_ != nullptr ? bytes_ahead(m, field_->width, sizeof(Gradient)) : 0) {}
 
-    PH_ALWAYS_INLINE TexelSample sample(Texel local) const {
-      return sample(field_ != nullptr ? field_texel(*field_, local) : FieldTexel{local});
+    // Where the texel lies in the field, for sample(FieldTexel).
+    FieldTexel at(Texel local) const {
+      return field_ != nullptr ? field_texel(local, field_->width, field_->height, ox_, oy_) : FieldTexel{};
     }
+    PH_ALWAYS_INLINE TexelSample sample(Texel local) const { return sample(at(local)); }
     PH_ALWAYS_INLINE TexelSample sample(FieldTexel at) const {
       if (field_ == nullptr) return {0.0, 0.0, 0.0, 0.0};
-      const GradientField& f = *field_;
-      const Texel local = at.local;
-      const Gradient* texel = &f.values[at.index];
+      const Gradient* texel = &field_->values[at.index];
       prefetch_ahead(texel, ahead_);
-      // One unsigned compare per axis: a neighbour at -1 wraps to above the width.
-      const auto nx = static_cast<std::uint32_t>(local.x + ox_), ny = static_cast<std::uint32_t>(local.y + oy_);
-      if (nx >= static_cast<std::uint32_t>(f.width) || ny >= static_cast<std::uint32_t>(f.height)) [[unlikely]] {
+      if (!at.behind_inside) [[unlikely]] {
         const double t = slope_along(texel[0], m_);
         return {projected(t), t, kNoBehind, kNoBehind};
       }
@@ -137,7 +136,7 @@ class CurvatureMethod final : public Method {
       const double tb = t + w_x_ * (here_x[1] - t) + w_y_ * (y_diagonal[0] - t) + w_xy_ * (y_diagonal[1] - t);
       // Both projections at once: one square root and one division for the two.
       const Double2 slopes{t, tb};
-      const Double2 a = -slopes / sqrt2(splat(1.0) + slopes * slopes);
+      const Double2 a = -slopes / sqrt2(kOnes + slopes * slopes);
       return {a[0], t, a[1], slope_angle_change(tb, t)};
     }
 

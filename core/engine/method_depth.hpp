@@ -73,19 +73,17 @@ class DepthMethod final : public Method {
           wy_(std::abs(direction.y)),
           ahead_(field_ != nullptr ? bytes_ahead(direction, field_->width, sizeof(float)) : 0) {}
 
-    PH_ALWAYS_INLINE TexelSample sample(Texel local) const {
-      return sample(field_ != nullptr ? field_texel(*field_, local) : FieldTexel{local});
+    // Where the texel lies in the field, for sample(FieldTexel).
+    FieldTexel at(Texel local) const {
+      return field_ != nullptr ? field_texel(local, field_->width, field_->height, ox_, oy_) : FieldTexel{};
     }
+    PH_ALWAYS_INLINE TexelSample sample(Texel local) const { return sample(at(local)); }
     PH_ALWAYS_INLINE TexelSample sample(FieldTexel at) const {
       if (field_ == nullptr) return {0.0, kNoBehind};
-      const DepthField& f = *field_;
-      const Texel local = at.local;
-      const float* texel = &f.values[at.index];
+      const float* texel = &field_->values[at.index];
       prefetch_ahead(texel, ahead_);
       const double here = *texel;
-      // One unsigned compare per axis: a neighbour at -1 wraps to above the width.
-      const auto nx = static_cast<std::uint32_t>(local.x + ox_), ny = static_cast<std::uint32_t>(local.y + oy_);
-      if (nx >= static_cast<std::uint32_t>(f.width) || ny >= static_cast<std::uint32_t>(f.height)) [[unlikely]]
+      if (!at.behind_inside) [[unlikely]]
         return {here, kNoBehind};
       // Differences first: a constant field gives exactly 0, so a flat region stays exactly C/D 1.
       return {here, wx_ * (here - texel[ox_]) + wy_ * (here - texel[row_])};

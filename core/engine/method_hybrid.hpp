@@ -67,9 +67,8 @@ class HybridMethod final : public Method {
           depth_(fields, m),
           marks_(fields != nullptr && fields->discontinuity && fields->depth ? &*fields->discontinuity : nullptr) {}
 
-    PH_ALWAYS_INLINE TexelSample sample(Texel local) const {
-      return marks_ != nullptr ? sample(field_texel(*marks_, local)) : curvature_.sample(local);
-    }
+    // The curvature reading's: every field of the region has its size, and the neighbours behind are the same.
+    PH_ALWAYS_INLINE TexelSample sample(Texel local) const { return sample(curvature_.at(local)); }
     // Every field of a region has the region's size, so one index serves the marks, the depths and the gradients.
     PH_ALWAYS_INLINE TexelSample sample(FieldTexel at) const {
       if (marks_ != nullptr && marks_->values[at.index]) [[unlikely]] {

@@ -21,6 +21,7 @@ using Float2 = float __attribute__((vector_size(8)));
 static_assert(sizeof(Gradient) == sizeof(Float2), "a gradient is two floats, loaded as one pair");
 
 PH_ALWAYS_INLINE inline Double2 splat(double v) { return Double2{v, v}; }
+inline constexpr Double2 kOnes = {1.0, 1.0};
 
 // The square root of each lane (a vector extension has no square root of its own).
 PH_ALWAYS_INLINE inline Double2 sqrt2(Double2 v) {

@@ -138,12 +138,13 @@ class Walker {
     }
   }
 
-  // The C/D of a step, shown to the observer if there is one (step_through has written the members it reads).
+  // The C/D of a step, shown to the observer if there is one (`observed`; step_through has then written the
+  // members it reads).
   template <typename M>
   PH_ALWAYS_INLINE double step_cd(const Region& region, const M& method, const TexelSample& from, const TexelSample& to,
-                                  bool entered) {
+                                  bool entered, bool observed) {
     const double step_px = Mode == WalkMode::bilinear ? step_px_ : 1.0;
-    if (observer_ == nullptr) [[likely]]
+    if (!observed) [[likely]]
       return method.cd(from, to, step_px, nullptr);
     StepDetail detail;
     const double cd = method.cd(from, to, step_px, &detail);
@@ -176,13 +177,14 @@ class Walker {
       // methods that read along the motion): otherwise that sample was a sixth of a typical frame's work.
       // Inside the leg it is the texel before, whose owner is this region, so its sample is what the leg's
       // was (sample_owner reads it through the same method and fields).
-      step_through<false>(index, first_leg, [&](bool entered, FieldTexel at, Texel from) PH_ALWAYS_INLINE {
-        const TexelSample here = leg.sample(at);
-        TexelSample previous{};
-        if (reads_from(method, here)) [[unlikely]]
-          previous = sample_owner(scene_, method, from + corner_texel(region), m_);
-        return step_cd(region, method, previous, here, entered);
-      });
+      step_through<false>(index, first_leg,
+                          [&](bool entered, FieldTexel at, const auto& from, bool observed) PH_ALWAYS_INLINE {
+                            const TexelSample here = leg.sample(at);
+                            TexelSample previous{};
+                            if (reads_from(method, here)) [[unlikely]]
+                              previous = sample_owner(scene_, method, from() + corner_texel(region), m_);
+                            return step_cd(region, method, previous, here, entered, observed);
+                          });
     } else {
       TexelSample previous = sample_from(method);
       // A copy the compiler can keep in registers: what a method derives from the direction is then computed
@@ -190,12 +192,13 @@ class Walker {
       const Vec2 m = m_;
       // Inlined, so that the samples stay in registers: an out-of-line call per step cost the depth method a
       // fifth of its typical frame.
-      step_through<true>(index, first_leg, [&, m](bool entered, FieldTexel, Texel) PH_ALWAYS_INLINE {
-        const TexelSample here = sample_here(region, method, m);
-        const double cd = step_cd(region, method, previous, here, entered);
-        previous = here;
-        return cd;
-      });
+      step_through<true>(index, first_leg,
+                         [&, m](bool entered, FieldTexel, const auto&, bool observed) PH_ALWAYS_INLINE {
+                           const TexelSample here = sample_here(region, method, m);
+                           const double cd = step_cd(region, method, previous, here, entered, observed);
+                           previous = here;
+                           return cd;
+                         });
     }
   }
 
@@ -203,8 +206,9 @@ class Walker {
   void walk_region_lut(std::size_t index, const DirectionLut& lut, bool first_leg) {
     lut_k_ = lut.direction_index(m_);  // per table: regions may quantise into different numbers of directions
     const Region& region = scene_.regions()[index];
-    step_through<true>(index, first_leg,
-                       [&](bool entered, FieldTexel, Texel) PH_ALWAYS_INLINE { return lut_cd(region, lut, entered); });
+    step_through<true>(index, first_leg, [&](bool entered, FieldTexel, const auto&, bool) PH_ALWAYS_INLINE {
+      return lut_cd(region, lut, entered);
+    });
   }
 
   // C/D of the current texel from a direction table, shown to the observer as step_cd does.
@@ -215,42 +219,56 @@ class Walker {
   }
 
   // The texel-stepping loop: spends the budget texel by texel while the texels belong to region `index`,
-  // each at the C/D that cd_here(entered, at, from) gives for the texel the walk is in (`at`: its place in the
-  // region's fields; `from`: the texel before it, region-local). It is called once per texel, in order, so it
-  // may keep the previous texel's sample. The walk's state is kept in locals, the texels region-local with
-  // their index into the fields, and written back to the members where the loop ends: the stores of the
-  // bookkeeping through result_ may alias the members, so GCC kept every member in memory, a load and a store
-  // each per step. With Members, cd_here reads the members (the texel, the boundary distances), and they are
-  // written before each call; otherwise only for an observer.
+  // each at the C/D that cd_here(entered, at, from, observed) gives for the texel the walk is in (`at`: its place in
+  // the region's fields; `from()`: the texel before it, region-local). It is called once per texel, in order, so it may
+  // keep the previous texel's sample. The walk's state is kept in locals and written back to the members where the loop
+  // ends: the stores of the bookkeeping through result_ may alias the members, so GCC kept every member in memory, a
+  // load and a store each per step. A step only moves the field index, one boundary distance and the count of steps
+  // left along its axis to the region's edge; the texel, the one before it and whether the neighbours behind lie in the
+  // region follow from the counts. With Members, cd_here reads the members (the texel, the boundary distances), and
+  // they are written before each call; otherwise only for an observer.
   template <bool Members, typename CdHere>
   PH_ALWAYS_INLINE void step_through(std::size_t index, bool first_leg, CdHere&& cd_here) {
     const Region& region = scene_.regions()[index];
     const bool covered = scene_.covered(index);
-    const Texel corner = corner_texel(region);
-    Texel local = region.local(texel_), from = region.local(from_);
+    const bool observed = observer_ != nullptr;
+    const Texel corner = corner_texel(region), start = region.local(texel_), start_from = region.local(from_);
     // Every field of the region is rect.w texels wide: a step along y moves the index by a row.
-    std::ptrdiff_t at = static_cast<std::ptrdiff_t>(local.y) * region.rect.w + local.x;
+    std::ptrdiff_t at = static_cast<std::ptrdiff_t>(start.y) * region.rect.w + start.x;
     const std::ptrdiff_t row_step = static_cast<std::ptrdiff_t>(sy_) * region.rect.w;
     double t = t_, tmx = tmx_, tmy = tmy_, budget = budget_;
-    // The x- and y-steps the walk can take before it leaves the region's box (it starts inside).
-    std::int32_t x_left = steps_inside(local.x, region.rect.w, sx_);
-    std::int32_t y_left = steps_inside(local.y, region.rect.h, sy_);
+    // The x- and y-steps the walk can take before it leaves the region's box (it starts inside), and how many
+    // may be left at most for the neighbour behind along that axis to be inside too (not on the first column
+    // or row the motion meets; any number along an axis the motion does not move along).
+    std::int32_t x_left = steps_inside(start.x, region.rect.w, sx_);
+    std::int32_t y_left = steps_inside(start.y, region.rect.h, sy_);
+    const std::int32_t x_first = x_left, y_first = y_left;
+    const std::int32_t x_behind = sx_ != 0 ? region.rect.w - 2 : std::numeric_limits<std::int32_t>::max();
+    const std::int32_t y_behind = sy_ != 0 ? region.rect.h - 2 : std::numeric_limits<std::int32_t>::max();
     double cd_lo = kInf, cd_hi = -kInf;
-    std::uint32_t entered_steps = 0;
     std::uint64_t steps = 0;
+    bool last_along_x = false;
+    const auto local = [&]() PH_ALWAYS_INLINE {
+      return Texel{start.x + sx_ * (x_first - x_left), start.y + sy_ * (y_first - y_left)};
+    };
+    const auto from = [&]() PH_ALWAYS_INLINE {
+      if (steps == 0) return start_from;
+      const Texel here = local();
+      return last_along_x ? Texel{here.x - sx_, here.y} : Texel{here.x, here.y - sy_};
+    };
     const auto write_back = [&]() PH_ALWAYS_INLINE {
-      texel_ = local + corner;
-      from_ = from + corner;
+      texel_ = local() + corner;
+      from_ = from() + corner;
       t_ = t;
       tmx_ = tmx;
       tmy_ = tmy;
     };
     const auto evaluate = [&](bool entered) PH_ALWAYS_INLINE {
-      if (Members || observer_ != nullptr) write_back();
-      const double cd = cd_here(entered, FieldTexel{local, static_cast<std::size_t>(at)}, from);
+      if (Members || observed) write_back();
+      const FieldTexel here{static_cast<std::size_t>(at), x_left <= x_behind && y_left <= y_behind};
+      const double cd = cd_here(entered, here, from, observed);
       cd_lo = std::min(cd_lo, cd);
       cd_hi = std::max(cd_hi, cd);
-      entered_steps += entered ? 1 : 0;
       return cd;
     };
     double cd = evaluate(!first_leg);
@@ -266,19 +284,17 @@ class Walker {
       budget -= cost;
       t = t_next;
       ++steps;
-      from = local;
-      if (tmx <= tmy) {
-        local.x += sx_;
+      last_along_x = tmx <= tmy;
+      if (last_along_x) {
         at += sx_;
         tmx += tdx_;
         left = --x_left < 0;
       } else {
-        local.y += sy_;
         at += row_step;
         tmy += tdy_;
         left = --y_left < 0;
       }
-      if (left || (covered && scene_.owner(local + corner) != index)) [[unlikely]] {
+      if (left || (covered && scene_.owner(local() + corner) != index)) [[unlikely]] {
         left = true;  // another region or the flat outside takes over
         break;
       }
@@ -291,7 +307,8 @@ class Walker {
     all_unit_ = all_unit_ && cd_lo >= 1.0 && cd_hi <= 1.0;
     result_.cd_min = std::min(result_.cd_min, cd_lo);
     result_.cd_max = std::max(result_.cd_max, cd_hi);
-    result_.steps += entered_steps;
+    // Every texel of the leg but its first was entered, and the first too unless the frame started in it.
+    result_.steps += static_cast<std::uint32_t>(steps - (left ? 1 : 0)) + (first_leg ? 0 : 1);
     if (left) restart_at(position());
   }
 
