@@ -47,6 +47,9 @@ struct Rect {
   constexpr bool operator==(const Rect&) const = default;
 };
 
+// The cursor model never leaves [-kWorldLimitPx, kWorldLimitPx]^2, so texel indices always fit.
+inline constexpr double kWorldLimitPx = 1.0e9;
+
 // Time of an input event, microseconds on the source's clock. The core never reads a clock itself.
 using TimeUs = std::int64_t;
 

@@ -9,6 +9,7 @@
 
 #include "core/engine/fast_math.hpp"
 #include "core/engine/field.hpp"
+#include "core/engine/geometry.hpp"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -20,8 +21,41 @@ using Double2 = double __attribute__((vector_size(16)));
 using Float2 = float __attribute__((vector_size(8)));
 static_assert(sizeof(Gradient) == sizeof(Float2), "a gradient is two floats, loaded as one pair");
 
+using Mask2 = long long __attribute__((vector_size(16)));  // a comparison of two Double2: all ones or zero per lane
 PH_ALWAYS_INLINE inline Double2 splat(double v) { return Double2{v, v}; }
 inline constexpr Double2 kOnes = {1.0, 1.0};
+
+// A point or displacement as a pair, in one load.
+static_assert(sizeof(Vec2) == sizeof(Double2), "a Vec2 is two doubles, loaded as one pair");
+PH_ALWAYS_INLINE inline Double2 load2(const Vec2& v) {
+  Double2 pair;
+  std::memcpy(&pair, &v, sizeof pair);
+  return pair;
+}
+
+// |v| of each lane: the sign bit cleared.
+PH_ALWAYS_INLINE inline Double2 abs2(Double2 v) {
+  return Double2(Mask2(v) & Mask2{0x7fffffffffffffffLL, 0x7fffffffffffffffLL});
+}
+
+// Whether both lanes of a comparison hold.
+PH_ALWAYS_INLINE inline bool all_true(Mask2 m) {
+#if defined(__SSE2__)
+  return _mm_movemask_pd(__m128d(m)) == 3;
+#else
+  return m[0] != 0 && m[1] != 0;
+#endif
+}
+
+// Whether 0 <= v < end in both lanes (false for NaN).
+PH_ALWAYS_INLINE inline bool all_within(Double2 v, Double2 end) {
+#if defined(__SSE2__)
+  const __m128d x = __m128d(v);
+  return _mm_movemask_pd(_mm_and_pd(_mm_cmpge_pd(x, _mm_setzero_pd()), _mm_cmplt_pd(x, __m128d(end)))) == 3;
+#else
+  return v[0] >= 0.0 && v[1] >= 0.0 && v[0] < end[0] && v[1] < end[1];
+#endif
+}
 
 // The square root of each lane (a vector extension has no square root of its own).
 PH_ALWAYS_INLINE inline Double2 sqrt2(Double2 v) {

@@ -80,6 +80,9 @@ Scene::Scene(std::vector<Region> regions) : regions_(std::move(regions)) {
       covered_[i] = overlap(regions_[i].rect, regions_[j].rect) ? 1 : 0;
     }
   }
+  std::vector<Rect> boxes;
+  for (const Region& region : regions_) boxes.push_back(region.rect);
+  flat_tiles_ = FlatTiles(boxes);
   if (per_region_options_) set_options(options_);  // the tables the regions' own options need
 }
 
@@ -89,7 +92,7 @@ std::size_t Scene::bytes() const {
     total += region.fields.bytes();
     for (const EffectPtr& effect : region.effects) total += effect->bytes();
   }
-  return total + lut_bytes();
+  return total + lut_bytes() + flat_tiles_.bytes();
 }
 
 void Scene::set_options(const EngineOptions& options) {

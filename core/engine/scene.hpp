@@ -12,6 +12,7 @@
 #include "core/engine/effect.hpp"
 #include "core/engine/engine_options.hpp"
 #include "core/engine/field.hpp"
+#include "core/engine/flat_tiles.hpp"
 #include "core/engine/geometry.hpp"
 #include "core/engine/method.hpp"
 
@@ -57,7 +58,10 @@ class Scene {
   // a walk through it must look up the owner of each texel it enters.
   bool covered(std::size_t i) const { return covered_[i] != 0; }
 
-  std::size_t bytes() const;  // fields, effects and direction tables
+  // Where a frame surely meets no region, judged from a coarse grid without the region list (FlatTiles).
+  const FlatTiles& flat_tiles() const { return flat_tiles_; }
+
+  std::size_t bytes() const;  // fields, effects, direction tables and the flat tiles
 
   // How advance() walks this scene (core/engine/engine_options.hpp); default: exact, nearest. Regions with
   // options of their own keep them. Every region that walks with direction_lut (its own options or these) and
@@ -81,6 +85,7 @@ class Scene {
  private:
   std::vector<Region> regions_;
   std::vector<std::uint8_t> covered_;  // per region: covered(i)
+  FlatTiles flat_tiles_;
   bool has_effects_ = false;
   bool per_region_options_ = false;  // some region has options of its own
   EngineOptions options_;

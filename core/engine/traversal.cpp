@@ -587,9 +587,9 @@ FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserv
 
 }  // namespace
 
-// Without SLP vectorisation, as flat_frame, which is inline here: a frame outside every region then makes no call.
-PH_NO_SLP FrameResult advance(const Scene& scene, CursorState& cursor, Vec2 motor, TimeUs time,
-                              StepObserver* observer) {
+// Without SLP vectorisation, as flat_frame, which is inline here: a flat frame near a region then makes no call.
+PH_NO_SLP FrameResult advance_near_regions(const Scene& scene, CursorState& cursor, Vec2 motor, TimeUs time,
+                                           StepObserver* observer) {
   if (!is_finite(motor) || (motor.x == 0.0 && motor.y == 0.0)) return {};
   if (!scene.has_effects() && crosses_only_flat(scene, cursor, motor)) return flat_frame(cursor, motor);
   return advance_through_regions(scene, cursor, motor, time, observer);
