@@ -8,6 +8,7 @@
 #include "core/engine/fast_math.hpp"
 #include "core/engine/grid_walk.hpp"
 #include "core/engine/methods.hpp"
+#include "core/engine/pair_math.hpp"
 #include "core/engine/traversal_variants.hpp"
 
 namespace ph {
@@ -25,6 +26,13 @@ struct Entry {
   bool via_x = true;
 };
 
+// Where a walk leaves the cursor: a CursorState without the effects' state, which the walk does not touch (copying
+// that too was a tenth of a typical frame's bookkeeping).
+struct EndPlace {
+  Vec2 position;
+  Texel texel, came_from;
+};
+
 // The variants that walk the exact texel sequence (core/engine/engine_options.hpp): nearest is the default
 // engine; bilinear samples each texel at the midpoint of the ray's chord through it; lut takes each
 // texel's C/D from the region's direction table. Each is its own instantiation, so the default's loop
@@ -34,22 +42,13 @@ enum class WalkMode { nearest, bilinear, lut };
 template <WalkMode Mode>
 class Walker {
  public:
+  // The display travel per texel along x and y is 1 / |m|, +inf along an axis the motion does not move along (1 / 0):
+  // both in one division.
   Walker(const Scene& scene, CursorState& cursor, Vec2 m, StepObserver* observer, FrameResult& result)
-      : scene_(scene),
-        m_(m),
-        observer_(observer),
-        result_(result),
-        sx_(sign_of(m.x)),
-        sy_(sign_of(m.y)),
-        tdx_(m.x != 0.0 ? 1.0 / std::abs(m.x) : kInf),
-        tdy_(m.y != 0.0 ? 1.0 / std::abs(m.y) : kInf),
-        texel_(cursor.texel),
-        from_(cursor.came_from) {
-    restart_at(cursor.position);
-  }
+      : Walker(scene, cursor, m, observer, result, kOnes / abs2(Double2{m.x, m.y})) {}
 
-  // Walks `budget` px of motor travel; returns the end state.
-  CursorState run(double budget) {
+  // Walks `budget` px of motor travel; returns where the cursor ends.
+  EndPlace run(double budget) {
     budget_ = budget;
     bool first = true;
     while (budget_ > 0.0) {
@@ -76,6 +75,21 @@ class Walker {
   bool all_unit() const { return all_unit_; }
 
  private:
+  Walker(const Scene& scene, CursorState& cursor, Vec2 m, StepObserver* observer, FrameResult& result,
+         Double2 texel_travel)
+      : scene_(scene),
+        m_(m),
+        observer_(observer),
+        result_(result),
+        sx_(sign_of(m.x)),
+        sy_(sign_of(m.y)),
+        tdx_(texel_travel[0]),
+        tdy_(texel_travel[1]),
+        texel_(cursor.texel),
+        from_(cursor.came_from) {
+    restart_at(cursor.position);
+  }
+
   Vec2 position() const { return origin_ + m_ * t_; }
 
   // Starts a straight leg at p inside (or on the boundary of) the current texel.
@@ -386,11 +400,11 @@ class Walker {
     restart_at(at);
   }
 
-  CursorState end_state() const {
+  EndPlace end_state() const {
     Vec2 p = position();
     p.x = std::clamp(p.x, static_cast<double>(texel_.x), static_cast<double>(texel_.x) + 1.0);
     p.y = std::clamp(p.y, static_cast<double>(texel_.y), static_cast<double>(texel_.y) + 1.0);
-    return {p, texel_, from_, {}};
+    return {p, texel_, from_};
   }
 
   const Scene& scene_;
@@ -502,9 +516,9 @@ template <WalkMode Mode>
 CursorState walk_texels(const Scene& scene, CursorState& cursor, Vec2 m, double d, StepObserver* observer,
                         FrameResult& result, bool& all_unit) {
   Walker<Mode> walker(scene, cursor, m, observer, result);
-  const CursorState end = walker.run(d);
+  const EndPlace end = walker.run(d);
   all_unit = walker.all_unit();
-  return end;
+  return {end.position, end.texel, end.came_from, {}};
 }
 
 [[gnu::noinline]] CursorState walk_variant(const Scene& scene, const EngineOptions& options, CursorState& cursor,
@@ -530,7 +544,8 @@ FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserv
   FrameResult result;
   double d = fast_length(motor.x, motor.y);
   // Divide rather than multiply by 1/d: for a denormal d, 1/d overflows and the walk would never advance.
-  const Vec2 m{motor.x / d, motor.y / d};
+  const Double2 direction = Double2{motor.x, motor.y} / splat(d);
+  const Vec2 m{direction[0], direction[1]};
   if (!is_finite(m)) return result;
   if (d > kMaxMotorPx) {
     d = kMaxMotorPx;
@@ -540,14 +555,16 @@ FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserv
   result.cd_max = -kInf;
   const Vec2 start = cursor.position;
   bool all_unit = true;
-  CursorState end;
+  EndPlace end;
   const EngineOptions& options = scene.frame_options(cursor.texel);  // the region the frame starts in
   if (options.is_default()) [[likely]] {
     Walker<WalkMode::nearest> walker(scene, cursor, m, observer, result);
     end = walker.run(d);
     all_unit = walker.all_unit();
   } else {
-    end = walk_variant(scene, options, cursor, m, d, observer, result, all_unit);  // one branch per frame, out of line
+    // One branch per frame, out of line.
+    const CursorState variant_end = walk_variant(scene, options, cursor, m, d, observer, result, all_unit);
+    end = {variant_end.position, variant_end.texel, variant_end.came_from};
   }
   if (all_unit) {
     // C/D was 1 everywhere: the display moves by the motor displacement itself, with no rounding.
@@ -555,12 +572,12 @@ FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserv
   }
   if (std::abs(end.position.x) > kWorldLimitPx || std::abs(end.position.y) > kWorldLimitPx ||
       !is_finite(end.position)) {
-    end = cursor_at(end.position);
+    const CursorState clamped = cursor_at(end.position);
+    end = {clamped.position, clamped.texel, clamped.came_from};
   }
   if (result.cd_min > result.cd_max) result.cd_min = result.cd_max = 1.0;
   result.display = all_unit && end.position == start + motor ? motor : end.position - start;
-  // Field by field, leaving the effects' state: copying it whole reads back its flag just stored as one byte
-  // (a failed store-to-load forwarding every frame).
+  // Field by field, leaving the effects' state.
   cursor.position = end.position;
   cursor.texel = end.texel;
   cursor.came_from = end.came_from;
