@@ -149,8 +149,10 @@ int Daemon::run() {
     }
     // Control requests last: a frame written into a mouse before a client asked `cursor` is then always
     // in the answer (the mouse's node is readable in the same wake-up).
-    std::stable_partition(events.begin(), events.begin() + n,
-                          [this](const epoll_event& e) { return !(control_ && control_->owns(e.data.fd)); });
+    if (n > 1) {  // (one event, the usual wake-up: nothing to order, and stable_partition would allocate)
+      std::stable_partition(events.begin(), events.begin() + n,
+                            [this](const epoll_event& e) { return !(control_ && control_->owns(e.data.fd)); });
+    }
     for (int i = 0; i < n && !stop_; ++i) {
       const int fd = events[static_cast<std::size_t>(i)].data.fd;
       if (fd == signals_.get()) {
@@ -392,7 +394,12 @@ void Daemon::update_retry_timer() {
 
 // A frame goes through the pipeline, or unchanged through the pass-through device; the route changes
 // only between frames and while no button is held on the device in use, so no press loses its release.
-void Daemon::route(Mouse& mouse, const InputEvent& event) {
+// Inline into the per-frame path (each call there costs, docs/PERFORMANCE.md, "Against a bare re-emitter").
+#if defined(__GNUC__)
+[[gnu::always_inline]]
+#endif
+inline void
+Daemon::route(Mouse& mouse, const InputEvent& event) {
   if (!mouse.mid_frame) {  // a frame starts here: the one place the route may change
     if (passthrough_wanted_ && !mouse.passing && mouse.passthrough_sink && !mouse.sink->holds_keys()) {
       mouse.passing = true;

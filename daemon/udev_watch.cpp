@@ -28,9 +28,8 @@ UdevWatch::UdevWatch() : udev_(udev_new()) {
       udev_monitor_enable_receiving(monitor_.get()) < 0) {
     throw UdevError(fmt::format("cannot listen for input hotplug: {}", std::strerror(errno)));
   }
+  fd_ = udev_monitor_get_fd(monitor_.get());
 }
-
-int UdevWatch::fd() const { return udev_monitor_get_fd(monitor_.get()); }
 
 std::vector<std::string> UdevWatch::event_nodes() const {
   std::unique_ptr<udev_enumerate, UdevUnref> enumerate(udev_enumerate_new(udev_.get()));

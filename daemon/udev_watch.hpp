@@ -35,7 +35,7 @@ class UdevWatch {
   // Starts listening before enumerating, so that no device appears unseen between the two. Throws UdevError.
   UdevWatch();
 
-  int fd() const;
+  int fd() const { return fd_; }  // asked once per wake-up of the event loop: no call into libudev
   bool uses_kernel_events() const { return kernel_events_; }
 
   // /dev/input/event* nodes of the input devices present now, in sysfs order.
@@ -48,6 +48,7 @@ class UdevWatch {
  private:
   std::unique_ptr<udev, UdevUnref> udev_;
   std::unique_ptr<udev_monitor, UdevUnref> monitor_;
+  int fd_ = -1;  // the monitor's
   bool kernel_events_ = false;
 };
 

@@ -2,8 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <iomanip>
+#include <limits>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include "core/engine/fast_math.hpp"
 #include "core/engine/method_curvature.hpp"
@@ -204,6 +208,42 @@ TEST(FastMath, AtanIsFloatAccurateEverywhere) {
   // In degrees, as Eq. 3 uses it: an error of 1e-5 degrees changes k'max (1 + delta-beta) by 4e-5.
   EXPECT_LT(worst * 180.0 / std::numbers::pi, 1.2e-5);
   EXPECT_EQ(fast_atan(0.0), 0.0);
+}
+
+TEST(FastMath, RoundHalfAwayIsStdRoundToTheBit) {
+  auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> values = {0.0,
+                                -0.0,
+                                0.5,
+                                -0.5,
+                                1.5,
+                                -1.5,
+                                2.5,
+                                -2.5,
+                                0.49999999999999994,
+                                -0.49999999999999994,
+                                4503599627370495.5,
+                                -4503599627370495.5,
+                                4503599627370496.0,
+                                9007199254740993.0,
+                                1e300,
+                                -1e300,
+                                5e-324,
+                                -5e-324,
+                                inf,
+                                -inf};
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::uniform_int_distribution<int> exponent(-60, 60);
+  for (int i = 0; i < 200000; ++i) values.push_back(std::ldexp(unit(rng), exponent(rng)));
+  for (int k = -2000; k <= 2000; ++k) {
+    values.push_back(k + 0.5);
+    values.push_back(std::nextafter(k + 0.5, 0.0));
+    values.push_back(std::nextafter(k + 0.5, k + 1.0));
+  }
+  for (double v : values) ASSERT_TRUE(same(round_half_away(v), std::round(v))) << std::setprecision(17) << v;
+  EXPECT_TRUE(std::isnan(round_half_away(nan)));
 }
 
 TEST(FastMath, FloorToIntMatchesFloor) {

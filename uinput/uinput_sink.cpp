@@ -70,6 +70,7 @@ UinputSink::UinputSink(const DeviceDescription& description) {
   const int rc = libevdev_uinput_create_from_device(dev.get(), LIBEVDEV_UINPUT_OPEN_MANAGED, &raw);
   if (rc < 0) throw UinputError(uinput_error_message(rc));
   uidev_.reset(raw);
+  fd_ = libevdev_uinput_get_fd(raw);
 }
 
 UinputSink::~UinputSink() {
@@ -98,7 +99,7 @@ void UinputSink::write(const Frame& frame) {
   const char* data = reinterpret_cast<const char*>(batch_.data());
   std::size_t left = batch_.size() * sizeof(input_event);
   while (left > 0) {
-    const ssize_t n = ::write(libevdev_uinput_get_fd(uidev_.get()), data, left);
+    const ssize_t n = ::write(fd_, data, left);
     if (n < 0 && errno == EINTR) continue;
     // A write can only fail if the device is gone.
     if (n <= 0) throw UinputError(fmt::format("writing to the virtual pointer failed: {}", std::strerror(errno)));

@@ -58,6 +58,7 @@ class UinputSink final : public EventSink {
 
  private:
   LibevdevUinputPtr uidev_;
+  int fd_ = -1;  // uidev_'s, asked once rather than per frame
   HeldKeys held_;
   TimeUs last_time_ = 0;
   std::vector<input_event> batch_;  // the frame being written, kept to reuse its memory

@@ -7,7 +7,6 @@ namespace ph {
 
 namespace {
 
-constexpr double kNormalDpi = 1000.0;
 // libinput's constants (filter-mouse.c); the speed setting moves them as libinput does.
 constexpr double kDefaultThreshold = 0.4;  // units/ms
 constexpr double kMinimumThreshold = 0.2;  // units/ms
@@ -42,13 +41,6 @@ PointerAcceleration::PointerAcceleration(const AccelSettings& settings)
     : settings_(settings),
       curve_(AdaptiveCurve::for_speed(settings.speed)),
       flat_factor_(std::max(0.005, 1.0 + settings.speed)) {}
-
-Vec2 PointerAcceleration::apply(Vec2 counts, TimeUs time) {
-  const Vec2 units = settings_.dpi == kNormalDpi ? counts : counts * (kNormalDpi / settings_.dpi);
-  const double factor = settings_.profile == AccelProfile::adaptive ? adaptive_factor(units, time) : flat_factor_;
-  const Vec2 out = units * factor;
-  return is_finite(out) ? out : Vec2{};
-}
 
 // libinput with a mouse's two trackers: the speed is this frame's delta over the time since the frame
 // before (+1 µs); after a pause, over the pause's limit. The factor is the profile averaged between the

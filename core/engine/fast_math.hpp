@@ -43,6 +43,21 @@ inline std::int32_t floor_to_int(double v) {
   return i - (v < static_cast<double>(i) ? 1 : 0);
 }
 
+// std::round (halves away from zero) without the libm call (baseline x86-64 has no rounding instruction): the
+// same value for every double, the sign of a zero included. From 2^52 on every double is whole.
+inline double round_half_away(double v) {
+  if (!(std::abs(v) < 4503599627370496.0)) return v;                       // whole already, or NaN or infinite
+  const double whole = static_cast<double>(static_cast<std::int64_t>(v));  // toward zero
+  const double rest = v - whole;                                           // exact
+  double rounded = whole;
+  if (rest >= 0.5) {
+    rounded += 1.0;
+  } else if (rest <= -0.5) {
+    rounded -= 1.0;
+  }
+  return std::copysign(rounded, v);
+}
+
 // Length of a vector; falls back to hypot only where the squares could overflow or underflow to 0
 // (a motion under 1e-162 px would otherwise have length 0 and be lost).
 inline double fast_length(double x, double y) {

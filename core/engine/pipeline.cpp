@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/engine/fast_math.hpp"
+
 namespace ph {
 
 namespace {
@@ -10,7 +12,7 @@ namespace {
 bool is_motion(const InputEvent& e) { return e.type == ev::kRel && (e.code == ev::kRelX || e.code == ev::kRelY); }
 
 // Sum of the frame's REL_X and REL_Y (a frame normally holds at most one of each).
-void sum_motion(const Frame& frame, std::int64_t& dx, std::int64_t& dy) {
+PH_ALWAYS_INLINE inline void sum_motion(const Frame& frame, std::int64_t& dx, std::int64_t& dy) {
   dx = dy = 0;
   for (const InputEvent& e : frame.events) {
     if (!is_motion(e)) continue;
@@ -25,15 +27,20 @@ std::int32_t saturate(double v) {
 
 TimeUs frame_time(const Frame& frame) { return frame.events.empty() ? 0 : frame.events.back().time; }
 
-// Rewrites a frame's motion: one event per axis that moves, where the input had it (X before Y), none
-// for an axis that does not move. An axis whose output equals its input keeps the input's events.
-Frame rewrite_motion(const Frame& in, std::int64_t in_x, std::int64_t in_y, std::int32_t out_x, std::int32_t out_y,
-                     std::uint16_t type, std::uint16_t code_x, std::uint16_t code_y) {
+// Rewrites a frame's motion into `out` (its storage reused): one event per axis that moves, where the input had it
+// (X before Y), none for an axis that does not move. An axis whose output equals its input keeps the input's events.
+// Inline, as the frame's other steps: in the daemon each call of the frame's path is a cost of its own (docs/
+// PERFORMANCE.md, "Against a bare re-emitter").
+PH_ALWAYS_INLINE inline void rewrite_motion(const Frame& in, std::int64_t in_x, std::int64_t in_y, std::int32_t out_x,
+                                            std::int32_t out_y, std::uint16_t type, std::uint16_t code_x,
+                                            std::uint16_t code_y, Frame& out) {
   const bool keep_x = type == ev::kRel && out_x == in_x;
   const bool keep_y = type == ev::kRel && out_y == in_y;
-  if (keep_x && keep_y) return in;
-  Frame out;
-  out.events.reserve(in.events.size() + 2);
+  out.events.clear();
+  if (keep_x && keep_y) {
+    out.events.insert(out.events.end(), in.events.begin(), in.events.end());
+    return;
+  }
   bool wrote_x = false, wrote_y = false;
   auto write_x = [&](TimeUs t) {
     if (!wrote_x && (type == ev::kAbs || out_x != 0)) out.events.push_back({t, type, code_x, out_x});
@@ -69,7 +76,6 @@ Frame rewrite_motion(const Frame& in, std::int64_t in_x, std::int64_t in_y, std:
       out.events.push_back(e);
     }
   }
-  return out;
 }
 
 }  // namespace
@@ -101,6 +107,7 @@ Pipeline::Pipeline(std::shared_ptr<const Scene> scene, const PipelineConfig& con
     : scene_(scene ? std::move(scene) : std::make_shared<const Scene>()),
       config_(config),
       acceleration_(config.acceleration) {
+  desktop_changed();
   const Rect d = config_.desktop;
   cursor_ = cursor_at(config_.start.value_or(Vec2{d.x + d.w / 2.0, d.y + d.h / 2.0}));
   clamp_to_desktop();
@@ -118,16 +125,24 @@ void Pipeline::move_cursor_to(Vec2 position) {
 void Pipeline::set_desktop(Rect desktop) {
   if (desktop.w <= 0 || desktop.h <= 0) return;
   config_.desktop = desktop;
+  desktop_changed();
   clamp_to_desktop();
+}
+
+void Pipeline::desktop_changed() {
+  const Rect d = config_.desktop;
+  // The last pixel's far edge is excluded.
+  desktop_lo_ = {static_cast<double>(d.x), static_cast<double>(d.y)};
+  desktop_hi_ = {std::nextafter(d.x + d.w, d.x), std::nextafter(d.y + d.h, d.y)};
 }
 
 void Pipeline::clamp_to_desktop() {
   const Rect d = config_.desktop;
   if (d.w <= 0 || d.h <= 0) return;
   // The real pointer stops at the desktop's edge; so does the model (the model and the pointer agree
-  // again whenever the pointer is pushed to an edge). The last pixel's far edge is excluded.
-  const double x = std::clamp(cursor_.position.x, static_cast<double>(d.x), std::nextafter(d.x + d.w, d.x));
-  const double y = std::clamp(cursor_.position.y, static_cast<double>(d.y), std::nextafter(d.y + d.h, d.y));
+  // again whenever the pointer is pushed to an edge).
+  const double x = std::clamp(cursor_.position.x, desktop_lo_.x, desktop_hi_.x);
+  const double y = std::clamp(cursor_.position.y, desktop_lo_.y, desktop_hi_.y);
   if (x != cursor_.position.x || y != cursor_.position.y) {
     const EffectStates effects = cursor_.effects;  // pushing against the edge is still the same hand
     cursor_ = cursor_at({x, y});
@@ -136,6 +151,12 @@ void Pipeline::clamp_to_desktop() {
 }
 
 Frame Pipeline::process(const Frame& in, FrameReport* report) {
+  Frame out;
+  process(in, out, report);
+  return out;
+}
+
+void Pipeline::process(const Frame& in, Frame& out, FrameReport* report) {
   std::int64_t dx = 0, dy = 0;
   sum_motion(in, dx, dy);
   if (report != nullptr) *report = {frame_time(in), saturate(dx), saturate(dy), 0, 0, {}, 1.0, 1.0, false};
@@ -144,23 +165,32 @@ Frame Pipeline::process(const Frame& in, FrameReport* report) {
     const Vec2 counts{static_cast<double>(dx), static_cast<double>(dy)};
     const Vec2 motor = acceleration_.apply(counts, frame_time(in)) * config_.pointer_gain;
     moved = advance(*scene_, cursor_, motor, frame_time(in));
-    clamp_to_desktop();
+    // The real pointer stops at the desktop's edge; so does the model. Out of line only where it must move.
+    if (!(cursor_.position.x >= desktop_lo_.x && cursor_.position.x <= desktop_hi_.x &&
+          cursor_.position.y >= desktop_lo_.y && cursor_.position.y <= desktop_hi_.y)) {
+      clamp_to_desktop();
+    }
   }
   if (report != nullptr) {
     report->cd_min = moved.cd_min;
     report->cd_max = moved.cd_max;
     report->cursor = cursor_.position;
   }
-  if (config_.mode == OutputMode::absolute) return emit_absolute(in, dx, dy, report);
-  if (dx == 0 && dy == 0) return in;
-  return emit_relative(in, dx, dy, moved.display, report);
+  if (config_.mode == OutputMode::absolute) {
+    emit_absolute(in, dx, dy, report, out);
+  } else if (dx == 0 && dy == 0) {
+    out.events.assign(in.events.begin(), in.events.end());
+  } else {
+    emit_relative(in, dx, dy, moved.display, report, out);
+  }
 }
 
-Frame Pipeline::emit_relative(const Frame& in, std::int64_t dx, std::int64_t dy, Vec2 display, FrameReport* report) {
+PH_ALWAYS_INLINE inline void Pipeline::emit_relative(const Frame& in, std::int64_t dx, std::int64_t dy, Vec2 display,
+                                                     FrameReport* report, Frame& out) {
   // Back to device counts; the fractional remainder carries to the next frame (evsieve does the same).
   const double gain = config_.pointer_gain;
   const Vec2 want = carry_ + Vec2{display.x / gain, display.y / gain};
-  const double rx = std::round(want.x), ry = std::round(want.y);
+  const double rx = round_half_away(want.x), ry = round_half_away(want.y);
   carry_ = {want.x - rx, want.y - ry};
   if (!is_finite(carry_)) carry_ = {};
   const std::int32_t out_x = saturate(rx), out_y = saturate(ry);
@@ -168,21 +198,23 @@ Frame Pipeline::emit_relative(const Frame& in, std::int64_t dx, std::int64_t dy,
     report->out_dx = out_x;
     report->out_dy = out_y;
   }
-  return rewrite_motion(in, dx, dy, out_x, out_y, ev::kRel, ev::kRelX, ev::kRelY);
+  rewrite_motion(in, dx, dy, out_x, out_y, ev::kRel, ev::kRelX, ev::kRelY, out);
 }
 
-Frame Pipeline::emit_absolute(const Frame& in, std::int64_t dx, std::int64_t dy, FrameReport* report) {
+void Pipeline::emit_absolute(const Frame& in, std::int64_t dx, std::int64_t dy, FrameReport* report, Frame& out) {
   const std::int32_t x = static_cast<std::int32_t>(std::floor(cursor_.position.x));
   const std::int32_t y = static_cast<std::int32_t>(std::floor(cursor_.position.y));
   if (report != nullptr) {
     report->out_dx = x - abs_x_;
     report->out_dy = y - abs_y_;
   }
-  if (dx == 0 && dy == 0) return in;
-  Frame out = rewrite_motion(in, dx, dy, abs_value_of_pixel(x), abs_value_of_pixel(y), ev::kAbs, ev::kAbsX, ev::kAbsY);
+  if (dx == 0 && dy == 0) {
+    out.events.assign(in.events.begin(), in.events.end());
+    return;
+  }
+  rewrite_motion(in, dx, dy, abs_value_of_pixel(x), abs_value_of_pixel(y), ev::kAbs, ev::kAbsX, ev::kAbsY, out);
   abs_x_ = x;
   abs_y_ = y;
-  return out;
 }
 
 Frame Pipeline::pass_dropped(const Frame& in, FrameReport* report) const {
@@ -202,12 +234,16 @@ Frame Pipeline::pass_dropped(const Frame& in, FrameReport* report) const {
   return out;
 }
 
-void FrameProcessor::push(const InputEvent& event, FrameReport* report, bool* frame_done) {
-  if (frame_done != nullptr) *frame_done = false;
-  if (event.type == ev::kSyn && event.code == ev::kSynDropped) dropping_ = true;
+void FrameProcessor::push_sync(const InputEvent& event, FrameReport* report, bool* frame_done) {
+  if (event.code == ev::kSynDropped) dropping_ = true;
   pending_.events.push_back(event);
   if (event.type != ev::kSyn || event.code != ev::kSynReport) return;
-  sink_.write(dropping_ ? pipeline_.pass_dropped(pending_, report) : pipeline_.process(pending_, report));
+  if (dropping_) {
+    sink_.write(pipeline_.pass_dropped(pending_, report));
+  } else {
+    pipeline_.process(pending_, out_, report);  // into a frame kept from frame to frame: no allocation
+    sink_.write(out_);
+  }
   dropping_ = false;
   pending_.events.clear();
   if (frame_done != nullptr) *frame_done = true;

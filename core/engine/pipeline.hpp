@@ -75,6 +75,8 @@ class Pipeline {
 
   // Rescales one complete frame (ending in SYN_REPORT). Frames without motion come back unchanged.
   Frame process(const Frame& in, FrameReport* report = nullptr);
+  // The same into `out` (its events replaced; its storage reused, so a frame kept for this allocates nothing).
+  void process(const Frame& in, Frame& out, FrameReport* report = nullptr);
 
   // A frame that follows SYN_DROPPED: passed through as it is (less REL_X/REL_Y in absolute mode); its
   // motion is not applied to the model.
@@ -85,14 +87,16 @@ class Pipeline {
 
  private:
   // dx, dy: the frame's summed REL_X/REL_Y counts, as process() found them.
-  Frame emit_relative(const Frame& in, std::int64_t dx, std::int64_t dy, Vec2 display, FrameReport* report);
-  Frame emit_absolute(const Frame& in, std::int64_t dx, std::int64_t dy, FrameReport* report);
+  void emit_relative(const Frame& in, std::int64_t dx, std::int64_t dy, Vec2 display, FrameReport* report, Frame& out);
+  void emit_absolute(const Frame& in, std::int64_t dx, std::int64_t dy, FrameReport* report, Frame& out);
+  void desktop_changed();  // the bounds of the desktop below, for clamp_to_desktop()
   void clamp_to_desktop();
 
   std::shared_ptr<const Scene> scene_;
   PipelineConfig config_;
   CursorState cursor_;
   PointerAcceleration acceleration_;
+  Vec2 desktop_lo_, desktop_hi_;        // the model's range: the desktop, less its last pixels' far edges
   Vec2 carry_;                          // fractional remainder of relative output, per axis
   std::int32_t abs_x_ = 0, abs_y_ = 0;  // last emitted absolute position
 };
@@ -104,13 +108,24 @@ class FrameProcessor {
  public:
   FrameProcessor(Pipeline& pipeline, EventSink& sink) : pipeline_(pipeline), sink_(sink) {}
 
-  void push(const InputEvent& event, FrameReport* report = nullptr, bool* frame_done = nullptr);
+  // Inline up to the frame's end: the events before it only join the frame.
+  void push(const InputEvent& event, FrameReport* report = nullptr, bool* frame_done = nullptr) {
+    if (frame_done != nullptr) *frame_done = false;
+    if (event.type == ev::kSyn) [[unlikely]] {
+      push_sync(event, report, frame_done);
+      return;
+    }
+    pending_.events.push_back(event);
+  }
   void finish();
 
  private:
+  void push_sync(const InputEvent& event, FrameReport* report, bool* frame_done);
+
   Pipeline& pipeline_;
   EventSink& sink_;
   Frame pending_;
+  Frame out_;  // the processed frame, its storage kept from frame to frame
   bool dropping_ = false;
 };
 
