@@ -138,7 +138,7 @@ void Daemon::take_present_mice() {
   for (const std::string& node : udev_.event_nodes()) consider(node);
 }
 
-int Daemon::run() {
+[[gnu::hot]] int Daemon::run() {
   notifier_.ready(status_line());
   std::array<epoll_event, 16> events{};
   while (!stop_) {
@@ -303,7 +303,7 @@ void Daemon::let_go_of_all(std::string_view why) {
 
 // The per-frame path: one read() of what the mouse queued, the frames through the pipeline, one write()
 // each; the time is the kernel's stamp on the events (CLOCK_MONOTONIC, steady_clock's), not a clock read.
-void Daemon::on_mouse_readable(int fd) {
+[[gnu::hot]] void Daemon::on_mouse_readable(int fd) {
   const auto it = std::find_if(mice_.begin(), mice_.end(), [fd](const auto& m) {
     return m.second->frames != nullptr && m.second->device->fd() == fd;
   });
@@ -527,9 +527,7 @@ void Daemon::on_resync_tick() {
 // The pixel the desktop shows the cursor on: floor of the model's position, what absolute output emits.
 // Not the traversal's texel: a model stopped on a pixel's left or top edge after moving right or down is
 // still in the texel before it, and the helper would report the pixel itself.
-Texel Daemon::cursor_pixel() const { return texel_at(pipeline_->cursor().position); }
-
-void Daemon::remember_emitted(SteadyTime now) {
+[[gnu::hot]] void Daemon::remember_emitted(SteadyTime now) {
   const Texel pixel = cursor_pixel();
   if (emitted_.empty() || emitted_.back().second != pixel) emitted_.emplace_back(now, pixel);
   while (emitted_.size() > kEmittedAlwaysKept && now - emitted_.front().first > kEmittedMemory) emitted_.pop_front();

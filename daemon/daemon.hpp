@@ -81,7 +81,7 @@ class Daemon final : private ControlHandler {
   void watch_untaken(const std::string& node, std::unique_ptr<EvdevDevice> device);
   void on_untaken_readable(int fd);
   void on_resync_tick();
-  Texel cursor_pixel() const;
+  Texel cursor_pixel() const { return texel_at(pipeline_->cursor().position); }
   void start_holding();
   void release_held();
   void remember_emitted(SteadyTime now);

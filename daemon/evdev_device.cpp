@@ -152,7 +152,7 @@ void EvdevDevice::resync(std::vector<InputEvent>& events, TimeUs time) {
   events.push_back({time, ev::kSyn, ev::kSynReport, 0});
 }
 
-ReadStatus EvdevDevice::read_batch(std::vector<InputEvent>& events) {
+[[gnu::hot]] ReadStatus EvdevDevice::read_batch(std::vector<InputEvent>& events) {
   events.clear();
   std::array<input_event, 64> batch;
   for (;;) {

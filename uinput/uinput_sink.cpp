@@ -83,7 +83,7 @@ UinputSink::~UinputSink() {
   std::this_thread::sleep_for(kReleaseGrace);
 }
 
-void UinputSink::write(const Frame& frame) {
+[[gnu::hot]] void UinputSink::write(const Frame& frame) {
   batch_.clear();
   for (const InputEvent& e : frame.events) {
     // SYN_DROPPED describes the source's buffer, not an event of the stream: it is not written.

@@ -156,7 +156,7 @@ Frame Pipeline::process(const Frame& in, FrameReport* report) {
   return out;
 }
 
-void Pipeline::process(const Frame& in, Frame& out, FrameReport* report) {
+[[gnu::hot]] void Pipeline::process(const Frame& in, Frame& out, FrameReport* report) {
   std::int64_t dx = 0, dy = 0;
   sum_motion(in, dx, dy);
   if (report != nullptr) *report = {frame_time(in), saturate(dx), saturate(dy), 0, 0, {}, 1.0, 1.0, false};
@@ -234,7 +234,7 @@ Frame Pipeline::pass_dropped(const Frame& in, FrameReport* report) const {
   return out;
 }
 
-void FrameProcessor::push_sync(const InputEvent& event, FrameReport* report, bool* frame_done) {
+[[gnu::hot]] void FrameProcessor::push_sync(const InputEvent& event, FrameReport* report, bool* frame_done) {
   if (event.code == ev::kSynDropped) dropping_ = true;
   pending_.events.push_back(event);
   if (event.type != ev::kSyn || event.code != ev::kSynReport) return;
