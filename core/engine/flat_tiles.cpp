@@ -17,7 +17,8 @@ FlatTiles::FlatTiles(std::span<const Rect> boxes) {
   }
   // A tile is marked when it meets a box widened by a tile and 2 px. A motion of at most a tile from a point of an
   // unmarked tile then stays over 2 px from every box (the margin covers the rounding of the tile's index), and so
-  // does one from a point off the grid, which reaches a tile past the widest box.
+  // does one from a point off the grid, which reaches a tile past the widest box. The grid starts two tiles and
+  // 2 px before the boxes, so its first column and row are never marked (surely_flat() relies on it).
   for (double tile = kMinTilePx; tile <= kMaxTilePx; tile *= 2.0) {
     const double reach = 2.0 * tile + 2.0;
     const double columns = std::ceil((x1 - x0 + 2.0 * reach) / tile), rows = std::ceil((y1 - y0 + 2.0 * reach) / tile);
@@ -29,8 +30,8 @@ FlatTiles::FlatTiles(std::span<const Rect> boxes) {
     tile_ = splat(tile);
     inverse_tile_ = splat(1.0 / tile);
     origin_ = Double2{x0 - reach, y0 - reach};
-    size_ = Double2{columns, rows};
-    columns_ = static_cast<std::int32_t>(columns);
+    columns_ = static_cast<std::uint32_t>(columns);
+    rows_ = static_cast<std::uint32_t>(rows);
     const auto width = static_cast<std::size_t>(columns_);
     near_.assign(width * static_cast<std::size_t>(rows), 0);
     const double widen = tile + 2.0;

@@ -47,16 +47,6 @@ PH_ALWAYS_INLINE inline bool all_true(Mask2 m) {
 #endif
 }
 
-// Whether 0 <= v < end in both lanes (false for NaN).
-PH_ALWAYS_INLINE inline bool all_within(Double2 v, Double2 end) {
-#if defined(__SSE2__)
-  const __m128d x = __m128d(v);
-  return _mm_movemask_pd(_mm_and_pd(_mm_cmpge_pd(x, _mm_setzero_pd()), _mm_cmplt_pd(x, __m128d(end)))) == 3;
-#else
-  return v[0] >= 0.0 && v[1] >= 0.0 && v[0] < end[0] && v[1] < end[1];
-#endif
-}
-
 // The square root of each lane (a vector extension has no square root of its own).
 PH_ALWAYS_INLINE inline Double2 sqrt2(Double2 v) {
 #if defined(__SSE2__)
