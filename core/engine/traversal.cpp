@@ -608,7 +608,11 @@ FrameResult walk(const Scene& scene, CursorState& cursor, Vec2 motor, StepObserv
 PH_NO_SLP FrameResult advance_near_regions(const Scene& scene, CursorState& cursor, Vec2 motor, TimeUs time,
                                            StepObserver* observer) {
   if (!is_finite(motor) || (motor.x == 0.0 && motor.y == 0.0)) return {};
-  if (!scene.has_effects() && crosses_only_flat(scene, cursor, motor)) return flat_frame(cursor, motor);
+  // A frame that starts in a region meets it (the cursor lies in its texel's closed box): the box test of every
+  // region is only for the frames that start outside them all.
+  if (!scene.has_effects() && !scene.owner(cursor.texel) && crosses_only_flat(scene, cursor, motor)) {
+    return flat_frame(cursor, motor);
+  }
   return advance_through_regions(scene, cursor, motor, time, observer);
 }
 
