@@ -1,6 +1,7 @@
 // Cheap replacements for libm functions on the per-texel path, with their accuracy stated.
 #pragma once
 
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -35,6 +36,15 @@ PH_ALWAYS_INLINE inline double fast_atan(double x) {
   const double poly = (((8.05374449538e-2 * z - 1.38776856032e-1) * z + 1.99777106478e-1) * z - 3.33329491539e-1);
   const double result = base + (poly * z * r + r);
   return x < 0.0 ? -result : result;
+}
+
+// -1, 0 or 1, without a branch: the sign of a frame's motion is random from frame to frame.
+inline int sign_of(double v) { return static_cast<int>(v > 0.0) - static_cast<int>(v < 0.0); }
+
+// a where `pick`, else b, without a branch (a select the data decides once per frame, as the sign of the motion).
+inline double pick_double(bool pick, double a, double b) {
+  const std::uint64_t mask = std::uint64_t{0} - static_cast<std::uint64_t>(pick);
+  return std::bit_cast<double>((std::bit_cast<std::uint64_t>(a) & mask) | (std::bit_cast<std::uint64_t>(b) & ~mask));
 }
 
 // floor for |v| < 2^31 without libm (floor is a ~40-instruction call on baseline x86-64).

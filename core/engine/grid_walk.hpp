@@ -13,8 +13,6 @@
 
 namespace ph {
 
-inline int sign_of(double v) { return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0); }
-
 // Index of the grid cell a coordinate lies in, taking a coordinate on a cell boundary to belong to the
 // cell the motion came from (so a stop exactly on a boundary stays in the texel that was being walked).
 inline std::int32_t cell_behind(double v, int step) { return step > 0 ? -floor_to_int(-v) - 1 : floor_to_int(v); }

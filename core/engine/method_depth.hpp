@@ -66,8 +66,8 @@ class DepthMethod final : public Method {
    public:
     Leg(const RegionFields* fields, Vec2 direction)
         : field_(fields != nullptr && fields->depth ? &*fields->depth : nullptr),
-          ox_(direction.x > 0.0 ? -1 : (direction.x < 0.0 ? 1 : 0)),
-          oy_(direction.y > 0.0 ? -1 : (direction.y < 0.0 ? 1 : 0)),
+          ox_(-sign_of(direction.x)),
+          oy_(-sign_of(direction.y)),
           row_(field_ != nullptr ? static_cast<std::ptrdiff_t>(oy_) * field_->width : 0),
           wx_(std::abs(direction.x)),
           wy_(std::abs(direction.y)),

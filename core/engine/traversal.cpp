@@ -99,8 +99,9 @@ class Walker {
     p.y = std::clamp(p.y, static_cast<double>(texel_.y), static_cast<double>(texel_.y) + 1.0);
     origin_ = p;
     t_ = 0.0;
-    tmx_ = sx_ > 0 ? (texel_.x + 1.0 - p.x) * tdx_ : (sx_ < 0 ? (p.x - texel_.x) * tdx_ : kInf);
-    tmy_ = sy_ > 0 ? (texel_.y + 1.0 - p.y) * tdy_ : (sy_ < 0 ? (p.y - texel_.y) * tdy_ : kInf);
+    // Without a branch on the signs (random from frame to frame): the same values.
+    tmx_ = pick_double(sx_ == 0, kInf, pick_double(sx_ > 0, texel_.x + 1.0 - p.x, p.x - texel_.x) * tdx_);
+    tmy_ = pick_double(sy_ == 0, kInf, pick_double(sy_ > 0, texel_.y + 1.0 - p.y, p.y - texel_.y) * tdy_);
   }
 
   // Midpoint of the chord of the current line through a texel's box (the texel's centre when the line
@@ -328,9 +329,8 @@ class Walker {
 
   // How many steps along one axis stay inside [0, size) from `cell` (inside it), moving by `step`.
   static std::int32_t steps_inside(std::int32_t cell, std::int32_t size, int step) {
-    if (step > 0) return size - 1 - cell;
-    if (step < 0) return cell;
-    return std::numeric_limits<std::int32_t>::max();
+    const std::int32_t moving = step > 0 ? size - 1 - cell : cell;  // selects, not branches: the sign is random
+    return step == 0 ? std::numeric_limits<std::int32_t>::max() : moving;
   }
 
   // The display-travel interval [t0, t1) in which the ray is within a box's range on one axis. Which
