@@ -1,5 +1,5 @@
-// advance()'s frames far from every region (core/engine/traversal.hpp): the cursor moves by the motor with C/D 1,
-// both axes at once, inline in the caller.
+// A frame on the flat outside (core/engine/traversal.hpp): the cursor moves by the motor with C/D 1, no walk; one
+// axis at a time for the traversal's own flat frames, both axes at once for advance()'s frames far from every region.
 #pragma once
 
 #include <cstddef>
@@ -10,9 +10,34 @@
 
 namespace ph {
 
+// A frame that meets no region and no effect: C/D 1 all the way, no walk.
+// Written component by component, and the texel stored whole: reading back a texel just stored as two halves
+// costs a failed store-to-load forwarding each time. So does GCC's packing of the motor's two doubles (two
+// registers) into one through the stack to add them as a pair, hence no SLP vectorisation here (gcc 12: about
+// a third of a flat frame's time).
+#if defined(__GNUC__) && !defined(__clang__)
+#define PH_NO_SLP [[gnu::optimize("no-tree-slp-vectorize")]]
+#else
+#define PH_NO_SLP
+#endif
+PH_NO_SLP PH_ALWAYS_INLINE inline FrameResult flat_frame(CursorState& cursor, Vec2 motor) {
+  const double ex = cursor.position.x + motor.x, ey = cursor.position.y + motor.y;
+  Texel t = cursor.texel;
+  if (motor.x != 0.0) t.x = cell_behind_predictable(ex, motor.x);
+  if (motor.y != 0.0) t.y = cell_behind_predictable(ey, motor.y);
+  cursor.texel = t;
+  cursor.came_from = t;
+  cursor.position.x = ex;
+  cursor.position.y = ey;
+  FrameResult result;
+  result.display.x = motor.x;
+  result.display.y = motor.y;
+  return result;
+}
+
 #if defined(__SSE2__)
-// The frame as the walk would make it on the flat outside, for a motor that is finite and not zero: the cursor
-// moves by the motor, each axis's texel is the cell behind the motion (cell_behind_predictable), an axis without
+// flat_frame with both axes at once, for advance()'s frames far from every region, a motor finite and not zero: the
+// cursor moves by the motor, each axis's texel is the cell behind the motion (cell_behind_predictable), an axis without
 // motion keeping its texel, and came_from is the texel; display = motor, C/D 1. Without a branch, and the
 // position and both texels each read and written whole (a store read back in halves cannot be forwarded).
 PH_ALWAYS_INLINE inline FrameResult flat_frame_pair(CursorState& cursor, Double2 motor) {
@@ -37,14 +62,7 @@ PH_ALWAYS_INLINE inline FrameResult flat_frame_pair(CursorState& cursor, Double2
 }
 #else
 PH_ALWAYS_INLINE inline FrameResult flat_frame_pair(CursorState& cursor, Double2 motor) {
-  const double ex = cursor.position.x + motor[0], ey = cursor.position.y + motor[1];
-  if (motor[0] != 0.0) cursor.texel.x = cell_behind_predictable(ex, motor[0]);
-  if (motor[1] != 0.0) cursor.texel.y = cell_behind_predictable(ey, motor[1]);
-  cursor.came_from = cursor.texel;
-  cursor.position = {ex, ey};
-  FrameResult result;
-  result.display = {motor[0], motor[1]};
-  return result;
+  return flat_frame(cursor, {motor[0], motor[1]});
 }
 #endif
 

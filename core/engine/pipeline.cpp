@@ -237,7 +237,7 @@ Frame Pipeline::pass_dropped(const Frame& in, FrameReport* report) const {
 [[gnu::hot]] void FrameProcessor::push_sync(const InputEvent& event, FrameReport* report, bool* frame_done) {
   if (event.code == ev::kSynDropped) dropping_ = true;
   pending_.events.push_back(event);
-  if (event.type != ev::kSyn || event.code != ev::kSynReport) return;
+  if (event.code != ev::kSynReport) return;  // push() hands over only EV_SYN events
   if (dropping_) {
     sink_.write(pipeline_.pass_dropped(pending_, report));
   } else {

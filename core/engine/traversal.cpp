@@ -482,31 +482,6 @@ double apply_effects(const Scene& scene, CursorState& cursor, Vec2& motor, TimeU
   return before > 0.0 ? after / before : 1.0;
 }
 
-// A frame that meets no region and no effect: C/D 1 all the way, no walk.
-// Written component by component, and the texel stored whole: reading back a texel just stored as two halves
-// costs a failed store-to-load forwarding each time. So does GCC's packing of the motor's two doubles (two
-// registers) into one through the stack to add them as a pair, hence no SLP vectorisation here (gcc 12: about
-// a third of a flat frame's time).
-#if defined(__GNUC__) && !defined(__clang__)
-#define PH_NO_SLP [[gnu::optimize("no-tree-slp-vectorize")]]
-#else
-#define PH_NO_SLP
-#endif
-PH_NO_SLP PH_ALWAYS_INLINE inline FrameResult flat_frame(CursorState& cursor, Vec2 motor) {
-  const double ex = cursor.position.x + motor.x, ey = cursor.position.y + motor.y;
-  Texel t = cursor.texel;
-  if (motor.x != 0.0) t.x = cell_behind_predictable(ex, motor.x);
-  if (motor.y != 0.0) t.y = cell_behind_predictable(ey, motor.y);
-  cursor.texel = t;
-  cursor.came_from = t;
-  cursor.position.x = ex;
-  cursor.position.y = ey;
-  FrameResult result;
-  result.display.x = motor.x;
-  result.display.y = motor.y;
-  return result;
-}
-
 // The same out of line, for the frames the effects moved off every region (advance() has it inline).
 PH_NO_SLP [[gnu::noinline]] FrameResult flat_frame_after_effects(CursorState& cursor, Vec2 motor) {
   return flat_frame(cursor, motor);
