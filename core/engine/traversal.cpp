@@ -269,7 +269,8 @@ class Walker {
     const auto from = [&]() PH_ALWAYS_INLINE {
       if (steps == 0) return start_from;
       const Texel here = local();
-      return last_along_x ? Texel{here.x - sx_, here.y} : Texel{here.x, here.y - sy_};
+      const std::int32_t along_x = static_cast<std::int32_t>(last_along_x);  // arithmetic: the last axis is random
+      return Texel{here.x - sx_ * along_x, here.y - sy_ * (1 - along_x)};
     };
     const auto write_back = [&]() PH_ALWAYS_INLINE {
       texel_ = local() + corner;
@@ -329,7 +330,9 @@ class Walker {
 
   // How many steps along one axis stay inside [0, size) from `cell` (inside it), moving by `step`.
   static std::int32_t steps_inside(std::int32_t cell, std::int32_t size, int step) {
-    const std::int32_t moving = step > 0 ? size - 1 - cell : cell;  // selects, not branches: the sign is random
+    // Arithmetic, not a select: GCC made a branch of the select, and the sign of the motion is random.
+    const std::int32_t forward = static_cast<std::int32_t>(step > 0);
+    const std::int32_t moving = cell + forward * (size - 1 - 2 * cell);
     return step == 0 ? std::numeric_limits<std::int32_t>::max() : moving;
   }
 
