@@ -269,12 +269,19 @@ class Walker {
     const auto from = [&]() PH_ALWAYS_INLINE {
       if (steps == 0) return start_from;
       const Texel here = local();
-      const std::int32_t along_x = static_cast<std::int32_t>(last_along_x);  // arithmetic: the last axis is random
-      return Texel{here.x - sx_ * along_x, here.y - sy_ * (1 - along_x)};
+      return last_along_x ? Texel{here.x - sx_, here.y} : Texel{here.x, here.y - sy_};
     };
     const auto write_back = [&]() PH_ALWAYS_INLINE {
-      texel_ = local() + corner;
-      from_ = from() + corner;
+      const Texel here = local();
+      texel_ = here + corner;
+      if (steps == 0) {
+        from_ = start_from + corner;
+      } else {
+        // from() by arithmetic: the axis of the leg's last step is random. (The same in from() itself, which
+        // cd_here may call in the loop, made the curvature walk's flicks slower.)
+        const std::int32_t along_x = static_cast<std::int32_t>(last_along_x);
+        from_ = Texel{here.x - sx_ * along_x, here.y - sy_ * (1 - along_x)} + corner;
+      }
       t_ = t;
       tmx_ = tmx;
       tmy_ = tmy;
