@@ -14,6 +14,15 @@
 #define PH_ALWAYS_INLINE
 #endif
 
+// Whether the engine uses its SSE2 forms (x86-64), or the portable ones that any other CPU compiles; both give the
+// same bits. PH_PORTABLE_MATH (CMake option of the same name) asks for the portable ones on x86-64 too, so that they
+// are compiled and tested (the sanitizer build does).
+#if defined(__SSE2__) && !defined(PH_PORTABLE_MATH)
+#define PH_SSE2 1
+#else
+#define PH_SSE2 0
+#endif
+
 namespace ph {
 
 // atan to about 2e-7 rad (float accuracy) at a third of libm's cost: reduction to |r| <= tan(pi/8) and

@@ -35,7 +35,7 @@ PH_NO_SLP PH_ALWAYS_INLINE inline FrameResult flat_frame(CursorState& cursor, Ve
   return result;
 }
 
-#if defined(__SSE2__)
+#if PH_SSE2
 // flat_frame with both axes at once, for advance()'s frames far from every region, a motor finite and not zero: the
 // cursor moves by the motor, each axis's texel is the cell behind the motion (cell_behind_predictable), an axis without
 // motion keeping its texel, and came_from is the texel; display = motor, C/D 1. Without a branch, and the

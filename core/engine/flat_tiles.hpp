@@ -53,7 +53,7 @@ class FlatTiles {
   // q's two lanes truncated toward 0, as unsigned: a lane below 0 (but above -1, which truncates to 0), past 2^31 or
   // NaN gives at least 2^31.
   PH_ALWAYS_INLINE static std::array<std::uint32_t, 2> whole_parts(Double2 q) {
-#if defined(__SSE2__)
+#if PH_SSE2
     const __m128i cells = _mm_cvttpd_epi32(__m128d(q));  // 0x80000000 where out of range or NaN
     return {static_cast<std::uint32_t>(_mm_cvtsi128_si32(cells)),
             static_cast<std::uint32_t>(_mm_cvtsi128_si32(_mm_shuffle_epi32(cells, 0x01)))};

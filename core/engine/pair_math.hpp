@@ -11,7 +11,7 @@
 #include "core/engine/field.hpp"
 #include "core/engine/geometry.hpp"
 
-#if defined(__SSE2__)
+#if PH_SSE2
 #include <emmintrin.h>
 #endif
 
@@ -40,7 +40,7 @@ PH_ALWAYS_INLINE inline Double2 abs2(Double2 v) {
 
 // Whether both lanes of a comparison hold.
 PH_ALWAYS_INLINE inline bool all_true(Mask2 m) {
-#if defined(__SSE2__)
+#if PH_SSE2
   return _mm_movemask_pd(__m128d(m)) == 3;
 #else
   return m[0] != 0 && m[1] != 0;
@@ -49,7 +49,7 @@ PH_ALWAYS_INLINE inline bool all_true(Mask2 m) {
 
 // The square root of each lane (a vector extension has no square root of its own).
 PH_ALWAYS_INLINE inline Double2 sqrt2(Double2 v) {
-#if defined(__SSE2__)
+#if PH_SSE2
   return Double2(_mm_sqrt_pd(__m128d(v)));
 #else
   return Double2{std::sqrt(v[0]), std::sqrt(v[1])};
@@ -59,7 +59,7 @@ PH_ALWAYS_INLINE inline Double2 sqrt2(Double2 v) {
 // The slopes along the direction (mx, my in both lanes) of two gradients: g.x * m.x + g.y * m.y of each, in
 // double, as the scalar expression computes it.
 PH_ALWAYS_INLINE inline Double2 slopes_along(const Gradient* a, const Gradient* b, Double2 mx, Double2 my) {
-#if defined(__SSE2__)
+#if PH_SSE2
   // One load and one conversion per gradient (GCC makes two of each from the generic form).
   const Double2 da = Double2(_mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(a)))));
   const Double2 db = Double2(_mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b)))));
