@@ -138,16 +138,14 @@ void Pipeline::desktop_changed() {
 
 void Pipeline::clamp_to_desktop() {
   const Rect d = config_.desktop;
-  if (d.w <= 0 || d.h <= 0) return;
+  if (d.w <= 0 || d.h <= 0 || on_desktop(cursor_.position)) return;
   // The real pointer stops at the desktop's edge; so does the model (the model and the pointer agree
   // again whenever the pointer is pushed to an edge).
   const double x = std::clamp(cursor_.position.x, desktop_lo_.x, desktop_hi_.x);
   const double y = std::clamp(cursor_.position.y, desktop_lo_.y, desktop_hi_.y);
-  if (x != cursor_.position.x || y != cursor_.position.y) {
-    const EffectStates effects = cursor_.effects;  // pushing against the edge is still the same hand
-    cursor_ = cursor_at({x, y});
-    cursor_.effects = effects;
-  }
+  const EffectStates effects = cursor_.effects;  // pushing against the edge is still the same hand
+  cursor_ = cursor_at({x, y});
+  cursor_.effects = effects;
 }
 
 Frame Pipeline::process(const Frame& in, FrameReport* report) {
@@ -166,10 +164,7 @@ Frame Pipeline::process(const Frame& in, FrameReport* report) {
     const Vec2 motor = acceleration_.apply(counts, frame_time(in)) * config_.pointer_gain;
     moved = advance(*scene_, cursor_, motor, frame_time(in));
     // The real pointer stops at the desktop's edge; so does the model. Out of line only where it must move.
-    if (!(cursor_.position.x >= desktop_lo_.x && cursor_.position.x <= desktop_hi_.x &&
-          cursor_.position.y >= desktop_lo_.y && cursor_.position.y <= desktop_hi_.y)) {
-      clamp_to_desktop();
-    }
+    if (!on_desktop(cursor_.position)) clamp_to_desktop();
   }
   if (report != nullptr) {
     report->cd_min = moved.cd_min;

@@ -90,6 +90,10 @@ class Pipeline {
   void emit_relative(const Frame& in, std::int64_t dx, std::int64_t dy, Vec2 display, FrameReport* report, Frame& out);
   void emit_absolute(const Frame& in, std::int64_t dx, std::int64_t dy, FrameReport* report, Frame& out);
   void desktop_changed();  // the bounds of the desktop below, for clamp_to_desktop()
+  // Whether p lies in the model's range (inline: the frame's path asks it before it calls clamp_to_desktop()).
+  bool on_desktop(Vec2 p) const {
+    return p.x >= desktop_lo_.x && p.x <= desktop_hi_.x && p.y >= desktop_lo_.y && p.y <= desktop_hi_.y;
+  }
   void clamp_to_desktop();
 
   std::shared_ptr<const Scene> scene_;
