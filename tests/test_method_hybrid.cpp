@@ -93,6 +93,29 @@ TEST(HybridMethod, TakesTheDepthCdAtACliffTheNormalsDoNotShow) {
   for (const auto& [x, cd] : row_cds(curvature, 5.0, 60.0)) EXPECT_EQ(cd, 1.0) << x;
 }
 
+// The cliff with its normals made from the heights by Sobel, as a generator does: slopes of h/2 on the two texels of
+// its edge. The normals explain half of the 10 px, so the edge is still a discontinuity; the texels beside the band,
+// level with it but flat, are marked too: the curvature method pairs each texel with the ones behind it and would feel
+// the smeared normals there as a wall.
+TEST(HybridMethod, TakesTheDepthCdBesideAStepWhoseNormalsAGeneratorSmeared) {
+  const auto smeared = [] {
+    RegionFields fields = cliff_fields();
+    for (int y = 0; y < 16; ++y) fields.gradient->at(31, y).x = fields.gradient->at(32, y).x = 5.0f;
+    return fields;
+  };
+  const Scene scene = one_region(smeared(), {0, 0, 64, 16}, std::make_shared<HybridMethod>(HybridParams{}));
+  const DiscontinuityField& marks = *scene.regions()[0].fields.discontinuity;
+  for (int x = 0; x < 64; ++x) EXPECT_EQ(marks.at(x, 8), x >= 30 && x <= 33 ? 1 : 0) << x;
+  const DepthParams depth;
+  for (const auto& [x, cd] : row_cds(scene, 5.0, 60.0)) EXPECT_EQ(cd, x == 32 ? depth.kmax : 1.0) << x;
+  for (const auto& [x, cd] : row_cds(scene, 60.0, 5.0)) EXPECT_EQ(cd, x == 31 ? 1.0 / depth.kmin : 1.0) << x;
+  // The curvature method on the same fields: a wall over the band and the texel after it.
+  const Scene curvature = one_region(smeared(), {0, 0, 64, 16}, std::make_shared<CurvatureMethod>(CurvatureParams{}));
+  double largest = 0.0;
+  for (const auto& [x, cd] : row_cds(curvature, 5.0, 60.0)) largest = std::max(largest, cd);
+  EXPECT_GT(largest, 10.0);
+}
+
 TEST(HybridMethod, ASlopeTheNormalsExplainIsNoDiscontinuity) {
   // A ramp of 2 px per px along x with matching normals, and a 0.4 px step (below discontinuity_px).
   RegionFields fields;
@@ -282,7 +305,7 @@ TEST(HybridMethod, NarrowsTheBandToTheNoiseAFloatMapShows) {
 // A grating at the texel period, aliased to heights alternating by 1 px under flat normals, and a single texel
 // sticking out: changes taken back within a texel are no discontinuity. A step whose normals a generator smeared
 // over four texels (the Sobel filter across a diagonal step: slopes h/8, 3h/8, 3h/8, h/8) still is one, its
-// outer texels marked too (their slopes claim h/8 where the heights are flat).
+// outer texels marked too (their slopes claim h/8 where the heights are flat), and the flat texels beside them.
 TEST(HybridMethod, MarksStepsButNotHeightsThatAlternateOrSpike) {
   RegionFields fields;
   fields.gradient = GradientField(48, 4, Gradient{});
@@ -296,7 +319,7 @@ TEST(HybridMethod, MarksStepsButNotHeightsThatAlternateOrSpike) {
     for (int i = 0; i < 4; ++i) fields.gradient->at(34 + i, y).x = smeared[i];
   }
   prepare_hybrid_fields(HybridParams{}, fields);
-  for (int x = 0; x < 48; ++x) EXPECT_EQ(fields.discontinuity->at(x, 2), x >= 34 && x <= 37 ? 1 : 0) << x;
+  for (int x = 0; x < 48; ++x) EXPECT_EQ(fields.discontinuity->at(x, 2), x >= 33 && x <= 38 ? 1 : 0) << x;
 }
 
 TEST(HybridMethod, NeverGivesNanOrLeavesItsBounds) {

@@ -123,7 +123,7 @@ TEST(ToolStability, SmallRunWritesEveryModeMethodAndVariantWithinItsBounds) {
       {"jump", "hybrid", {0.55, 0.4, 8, 0.09, 5}},
       {"terraces", "curvature", {8.3, 1.5, 3.4e+02, 0.001, 2.2e+02}},
       {"terraces", "depth", {0.3, 0.79, 6, 0.001, 8.5}},
-      {"terraces", "hybrid", {5.6, 1.4, 2.2e+02, 0.001, 33}},
+      {"terraces", "hybrid", {3.1, 1.1, 1.2e+02, 0.001, 33}},
       {"cliff", "curvature", {1.3, 0.77, 8.8, 0.025, 13}},
       {"cliff", "depth", {0.085, 0.4, 2.8, 0.052, 4.9}},
       {"cliff", "hybrid", {1.3, 0.77, 8.8, 0.025, 13}},

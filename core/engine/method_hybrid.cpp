@@ -122,6 +122,34 @@ DiscontinuityField find_discontinuities(const GradientField& g, const DepthField
 // noise-like (within the universal threshold of its robust sigma) and that is no discontinuity takes their
 // inverse-variance mean, each field's variance estimated from its own residual: noisy normals over a clean depth
 // map become the depth map's slopes, clean normals over a coarse depth map stay as they are.
+// The marks and those of their 8 neighbours whose normals differ from the mark's while their heights do not (each by
+// more than `threshold`, px of height and px per px of slope): a generator smears a step's normals over the
+// texels of its edge, and curvature's reading of the texel beside them, which pairs its normal with those of the
+// texels behind it (any of its 8 neighbours, by the direction of the motion), would feel the smeared normals as a
+// wall where the heights are level. Depth's C/D there is the height change along the motion: the step's where the
+// motion crosses it, none beside it.
+DiscontinuityField with_smeared_neighbours(const DiscontinuityField& marks, const GradientField& g, const DepthField& d,
+                                           double threshold) {
+  const std::int32_t w = marks.width, h = marks.height;
+  DiscontinuityField out = marks;
+  for (std::int32_t y = 0; y < h; ++y) {
+    for (std::int32_t x = 0; x < w; ++x) {
+      if (marks.at(x, y) == 0) continue;
+      const Gradient gm = g.at(x, y);
+      const double hm = d.at(x, y);
+      for (std::int32_t v = std::max(0, y - 1); v <= std::min(h - 1, y + 1); ++v) {
+        for (std::int32_t u = std::max(0, x - 1); u <= std::min(w - 1, x + 1); ++u) {
+          const Gradient gn = g.at(u, v);
+          const bool level = std::abs(d.at(u, v) - hm) <= threshold;
+          const bool flatter = std::hypot(gm.x, gm.y) - std::hypot(gn.x, gn.y) > threshold;
+          if (level && flatter) out.at(u, v) = 1;
+        }
+      }
+    }
+  }
+  return out;
+}
+
 void fuse_with_depth_gradient(const DepthField& depth, const DiscontinuityField& marks, double noise_slope,
                               GradientField& g) {
   const GradientField from_depth = gradient_from_depth(depth);
@@ -185,8 +213,10 @@ void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields) {
   if (!fields.gradient || fields.discontinuity) return;  // prepared once: a scene built again keeps its fields
   GradientField& g = *fields.gradient;
   const bool has_depth = fields.depth && fields.depth->width == g.width && fields.depth->height == g.height;
-  fields.discontinuity = has_depth ? find_discontinuities(g, *fields.depth, params.discontinuity_px)
-                                   : DiscontinuityField(g.width, g.height, 0);
+  fields.discontinuity = has_depth
+                             ? with_smeared_neighbours(find_discontinuities(g, *fields.depth, params.discontinuity_px),
+                                                       g, *fields.depth, params.discontinuity_px)
+                             : DiscontinuityField(g.width, g.height, 0);
   if (params.noise_slope <= 0.0) return;
   if (has_depth) fuse_with_depth_gradient(*fields.depth, *fields.discontinuity, params.noise_slope, g);
   smooth_within_band(params, has_depth ? &*fields.depth : nullptr, g);

@@ -35,10 +35,10 @@ struct HybridParams {
 
 std::string validate(const HybridParams& params);
 
-// Marks the discontinuities, pulls noisy normals toward the depth map's slopes where the two disagree by
-// noise-like amounts (not at a step), then smooths `fields.gradient` within the noise band, as
-// HybridMethod::prepare does (exposed for tests). Without a depth field no texel is a discontinuity, nothing is
-// fused and the band is the same everywhere.
+// Marks the discontinuities (and the flat texels beside a step whose normals a generator smeared), pulls noisy normals
+// toward the depth map's slopes where the two disagree by noise-like amounts (not at a step), then smooths
+// `fields.gradient` within the noise band, as HybridMethod::prepare does (exposed for tests). Without a depth field no
+// texel is a discontinuity, nothing is fused and the band is the same everywhere.
 void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields);
 
 class HybridMethod final : public Method {
