@@ -15,6 +15,7 @@
 
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
+#include "core/engine/engine_options.hpp"
 #include "core/engine/methods.hpp"
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
@@ -114,6 +115,24 @@ TEST(HybridMethod, TakesTheDepthCdBesideAStepWhoseNormalsAGeneratorSmeared) {
   double largest = 0.0;
   for (const auto& [x, cd] : row_cds(curvature, 5.0, 60.0)) largest = std::max(largest, cd);
   EXPECT_GT(largest, 10.0);
+}
+
+// With bilinear sampling too: a marked texel takes depth's reading, and the texel after it pairs with flat values,
+// not with the smeared normals.
+TEST(HybridMethod, BilinearSamplingTakesTheDepthCdAtSteps) {
+  EngineOptions bilinear;
+  bilinear.sampling = Sampling::bilinear;
+  for (const float smear : {0.0f, 5.0f}) {
+    RegionFields fields = cliff_fields();
+    for (int y = 0; y < 16; ++y) fields.gradient->at(31, y).x = fields.gradient->at(32, y).x = smear;
+    Scene scene = one_region(fields, {0, 0, 64, 16}, std::make_shared<HybridMethod>(HybridParams{}));
+    scene.set_options(bilinear);
+    const DepthParams depth;
+    for (const auto& [x, cd] : row_cds(scene, 5.0, 60.0))
+      EXPECT_EQ(cd, x == 32 ? depth.kmax : 1.0) << smear << " " << x;
+    for (const auto& [x, cd] : row_cds(scene, 60.0, 5.0))
+      EXPECT_EQ(cd, x == 31 ? 1.0 / depth.kmin : 1.0) << smear << " " << x;
+  }
 }
 
 TEST(HybridMethod, ASlopeTheNormalsExplainIsNoDiscontinuity) {

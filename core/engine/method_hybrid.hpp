@@ -87,7 +87,13 @@ class HybridMethod final : public Method {
   TexelSample sample(const RegionFields* fields, Texel local, Vec2 m) const override {
     return Leg(fields, m).sample(local);
   }
+  // Bilinear sampling: curvature's interpolated sample, and on a discontinuity texel depth's reading as above (its
+  // v0 and v1 flat, so that the next texel, which pairs with this sample, does not pair with a step's smeared normals).
   TexelSample sample_at(const RegionFields* fields, Texel local, Vec2 at, Vec2 m) const override {
+    if (fields != nullptr && fields->discontinuity && fields->depth && marked(*fields->discontinuity, local)) {
+      const TexelSample d = depth_.sample(fields, local, m);
+      if (!std::isnan(d.v1)) return {0.0, 0.0, kDepthStep, 0.0, d.v0, d.v1};
+    }
     return curvature_.sample_at(fields, local, at, m);
   }
   // The analytic surfaces of the ground truth are continuous: the curvature method's exact sample.
@@ -110,6 +116,10 @@ class HybridMethod final : public Method {
   const HybridParams& params() const { return params_; }
 
  private:
+  static bool marked(const DiscontinuityField& marks, Texel t) {
+    return t.x >= 0 && t.y >= 0 && t.x < marks.width && t.y < marks.height && marks.at(t.x, t.y) != 0;
+  }
+
   // v2 of a discontinuity texel's sample (curvature's v2 is finite or NaN, never infinite).
   static constexpr double kDepthStep = std::numeric_limits<double>::infinity();
 
