@@ -117,13 +117,8 @@ DiscontinuityField find_discontinuities(const GradientField& g, const DepthField
   return marks;
 }
 
-// The normals and the depth map's central differences are two estimates of the same slopes. Where the normals
-// disagree with the heights by more than the map's rounding (`noise_slope`), each texel whose disagreement is
-// noise-like (within the universal threshold of its robust sigma) and that is no discontinuity takes their
-// inverse-variance mean, each field's variance estimated from its own residual: noisy normals over a clean depth
-// map become the depth map's slopes, clean normals over a coarse depth map stay as they are.
-// The marks and those of their 8 neighbours whose normals differ from the mark's while their heights do not (each by
-// more than `threshold`, px of height and px per px of slope): a generator smears a step's normals over the
+// The marks and those of their 8 neighbours that are level with a mark (heights within `threshold` px) but flatter
+// than it (the length of the gradient less by more than `threshold`): a generator smears a step's normals over the
 // texels of its edge, and curvature's reading of the texel beside them, which pairs its normal with those of the
 // texels behind it (any of its 8 neighbours, by the direction of the motion), would feel the smeared normals as a
 // wall where the heights are level. Depth's C/D there is the height change along the motion: the step's where the
@@ -150,6 +145,11 @@ DiscontinuityField with_smeared_neighbours(const DiscontinuityField& marks, cons
   return out;
 }
 
+// The normals and the depth map's central differences are two estimates of the same slopes. Where the normals
+// disagree with the heights by more than the map's rounding (`noise_slope`), each texel whose disagreement is
+// noise-like (within the universal threshold of its robust sigma) and that is no discontinuity takes their
+// inverse-variance mean, each field's variance estimated from its own residual: noisy normals over a clean depth
+// map become the depth map's slopes, clean normals over a coarse depth map stay as they are.
 void fuse_with_depth_gradient(const DepthField& depth, const DiscontinuityField& marks, double noise_slope,
                               GradientField& g) {
   const GradientField from_depth = gradient_from_depth(depth);
