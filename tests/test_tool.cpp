@@ -643,6 +643,20 @@ TEST(Tool, CheckConfig) {
     EXPECT_TRUE(q.err.empty()) << q.err;
   }
   {
+    SCOPED_TRACE("hybrid: the texels it takes the depth C/D at");
+    std::string text = read_text(paths.scene);
+    const std::size_t at = text.find("method = \"curvature\"");
+    ASSERT_NE(at, std::string::npos) << text;
+    text.replace(at, std::string("method = \"curvature\"").size(), "method = \"hybrid\"");
+    std::ofstream(dir / "hybrid.toml", std::ios::binary) << text;
+    // The target's rim, where its truncated Gaussian steps down by about 1 px (docs/METHODS.md, "Hybrid").
+    const ToolResult r = run_tool("check-config " + quote(dir / "hybrid.toml"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(contains(r.out, "hybrid")) << r.out;
+    EXPECT_TRUE(contains(r.out, "steps: 1132 texels (0.45 %) take the depth C/D")) << r.out;
+    EXPECT_FALSE(contains(run_tool("check-config " + quote(scene), dir).out, "steps:"));  // curvature: no such line
+  }
+  {
     SCOPED_TRACE("bad setting");
     std::ofstream(dir / "bad.toml", std::ios::binary) << "[daemon]\noutput = \"abs\"\n";
     const ToolResult r = run_tool("check-config --quiet " + quote(dir / "bad.toml"), dir);

@@ -2,11 +2,14 @@
 #include <fmt/core.h>
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <iterator>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "config/daemon_config.hpp"
 #include "config/scene_file.hpp"
@@ -20,6 +23,18 @@ struct CheckConfigOptions {
   std::string file{kDefaultSceneFile};
   bool quiet = false;
 };
+
+// What the hybrid method found at load (docs/METHODS.md, "Hybrid"): the texels that take the depth C/D, which
+// `discontinuity_px` tunes.
+std::string steps_line(const RegionFields& fields) {
+  if (!fields.depth) return "none can be found without a depth map";
+  const std::vector<std::uint8_t>& marks = fields.discontinuity->values;
+  const auto marked =
+      static_cast<std::size_t>(std::count_if(marks.begin(), marks.end(), [](auto m) { return m != 0; }));
+  const double share = marks.empty() ? 0.0 : 100.0 * static_cast<double>(marked) / static_cast<double>(marks.size());
+  return fmt::format("{} texels ({:.2f} %) take the depth C/D at height steps the normals do not explain", marked,
+                     share);
+}
 
 std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadReport& report) {
   fmt::memory_buffer out;
@@ -56,6 +71,7 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
                    r.rect.y, r.rect.w, r.rect.h, r.method, effects, bytes,
                    fr.normals.invalid_texels + fr.depth.invalid_texels);
     if (i < report.variants.size()) fmt::format_to(to, "      traversal: {}\n", report.variants[i]);
+    if (region.fields.discontinuity) fmt::format_to(to, "      steps: {}\n", steps_line(region.fields));
   }
   return fmt::to_string(out);
 }
