@@ -131,12 +131,12 @@ DiscontinuityField with_smeared_neighbours(const DiscontinuityField& marks, cons
     for (std::int32_t x = 0; x < w; ++x) {
       if (marks.at(x, y) == 0) continue;
       const Gradient gm = g.at(x, y);
-      const double hm = d.at(x, y);
+      const double hm = d.at(x, y), steepness = std::hypot(gm.x, gm.y);
       for (std::int32_t v = std::max(0, y - 1); v <= std::min(h - 1, y + 1); ++v) {
         for (std::int32_t u = std::max(0, x - 1); u <= std::min(w - 1, x + 1); ++u) {
           const Gradient gn = g.at(u, v);
           const bool level = std::abs(d.at(u, v) - hm) <= threshold;
-          const bool flatter = std::hypot(gm.x, gm.y) - std::hypot(gn.x, gn.y) > threshold;
+          const bool flatter = steepness - std::hypot(gn.x, gn.y) > threshold;
           if (level && flatter) out.at(u, v) = 1;
         }
       }
