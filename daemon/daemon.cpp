@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/epoll.h>
+#include <sys/eventfd.h>
 #include <sys/signalfd.h>
 #include <sys/timerfd.h>
 #include <unistd.h>
@@ -99,10 +100,11 @@ Daemon::Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& no
   watchdog_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
   resync_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
   hold_timer_ = UniqueFd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
-  if (!signals_ || !epoll_ || !retry_timer_ || !watchdog_timer_ || !resync_timer_ || !hold_timer_)
+  mice_ended_ = UniqueFd(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC));
+  if (!signals_ || !epoll_ || !retry_timer_ || !watchdog_timer_ || !resync_timer_ || !hold_timer_ || !mice_ended_)
     fail_system("cannot set up the event loop");
   for (int fd : {signals_.get(), udev_.fd(), retry_timer_.get(), watchdog_timer_.get(), resync_timer_.get(),
-                 hold_timer_.get(), reloader_.fd()})
+                 hold_timer_.get(), reloader_.fd(), mice_ended_.get()})
     watch(epoll_.get(), fd);
   if (const auto interval = ServiceNotifier::watchdog_interval()) {
     set_timer(watchdog_timer_.get(), static_cast<long>(interval->count()) * 1000);
@@ -117,11 +119,15 @@ Daemon::Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& no
             p.acceleration.speed);
   if (!control_path.empty()) start_control(control_path);
   if (udev_.uses_kernel_events()) log_.info("no udev daemon running; listening to kernel uevents for hotplug");
+  const std::lock_guard lock(state_);  // the readers start with the first mouse taken
   take_present_mice();
   if (mice_.empty()) log_.notice("no mouse to take yet; waiting for one to be plugged in");
 }
 
-Daemon::~Daemon() = default;
+Daemon::~Daemon() {
+  const std::lock_guard lock(state_);
+  mice_.clear();  // the readers stop first, while everything they hand frames to is still there
+}
 
 void Daemon::start_pipeline() { pipeline_ = std::make_unique<Pipeline>(config_.scene, config_.pipeline); }
 
@@ -147,9 +153,14 @@ void Daemon::take_present_mice() {
       if (errno == EINTR) continue;
       fail_system("epoll_wait failed");
     }
-    // Control requests last: a frame written into a mouse before a client asked `cursor` is then always
-    // in the answer (the mouse's node is readable in the same wake-up).
-    if (n > 1) {  // (one event, the usual wake-up: nothing to order, and stable_partition would allocate)
+    std::unique_lock lock(state_);
+    // A control request is answered after every frame written into a mouse before it was asked: the mice's
+    // readers hand on what they had queued first, and the requests go last among what woke the loop.
+    if (control_ && std::any_of(events.begin(), events.begin() + n,
+                                [this](const epoll_event& e) { return control_->owns(e.data.fd); })) {
+      lock.unlock();
+      sync_mice();  // (only this thread adds or removes mice)
+      lock.lock();
       std::stable_partition(events.begin(), events.begin() + n,
                             [this](const epoll_event& e) { return !(control_ && control_->owns(e.data.fd)); });
     }
@@ -172,18 +183,20 @@ void Daemon::take_present_mice() {
         release_held();
       } else if (fd == reloader_.fd()) {
         on_reload_ended();
+      } else if (fd == mice_ended_.get()) {
+        drain_timer(fd);  // (an eventfd reads as a counter too)
+        on_mice_ended();
       } else if (fd == resync_timer_.get()) {
         drain_timer(fd);
         on_resync_tick();
       } else if (control_ && control_->owns(fd)) {
         control_->on_readable(fd, *this);
-      } else if (std::any_of(untaken_.begin(), untaken_.end(), [fd](const auto& u) { return u.second->fd() == fd; })) {
-        on_untaken_readable(fd);
       } else {
-        on_mouse_readable(fd);
+        on_untaken_readable(fd);
       }
     }
   }
+  const std::lock_guard lock(state_);
   notifier_.stopping();
   let_go_of_all("stopping");
   log_.info("stopped");
@@ -268,7 +281,19 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
   }
   mouse.frames = std::make_unique<FrameProcessor>(*pipeline_, *mouse.sink);
   if (passthrough_wanted_) make_passthrough_sink(node, mouse);
-  watch(epoll_.get(), device.fd());
+  try {
+    device.set_blocking(true);  // its reader waits in read()
+  } catch (const DeviceError& e) {
+    log_.warning("{}; leaving it to the desktop", e.what());
+    passed_over_.insert(node);
+    let_go(node, "");
+    return;
+  }
+  mouse.reader = std::make_unique<MouseReader>(
+      [d = &device](std::vector<InputEvent>& events, Wait wait) { return d->read_batch(events, wait); }, state_,
+      [this, node, m = &mouse](const std::vector<InputEvent>& events, ReadStatus status, const std::string& error) {
+        on_mouse_batch(node, *m, events, status, error);
+      });
   log_.info("took {} {}; emitting through {} \"{}\"", node, quoted_name(device), mouse.sink->devnode(),
             output_device(device.description(), pipeline_->config()).name);
   notifier_.status(status_line());
@@ -287,9 +312,10 @@ void Daemon::let_go(const std::string& node, std::string_view why) {
   }
   Mouse& mouse = *it->second;
   const bool taken = mouse.frames != nullptr;
-  if (taken) ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, mouse.device->fd(), nullptr);
   if (taken && !why.empty()) log_.info("let go of {} {} ({})", node, quoted_name(*mouse.device), why);
-  mice_.erase(it);  // releases held buttons on the virtual device, destroys it, ungrabs
+  std::erase_if(ended_, [&mouse](const auto& e) { return e.second == &mouse; });
+  // Stops its reader, releases held buttons on the virtual device, destroys it, ungrabs.
+  mice_.erase(it);
   if (taken) notifier_.status(status_line());
   update_retry_timer();
 }
@@ -301,18 +327,15 @@ void Daemon::let_go_of_all(std::string_view why) {
   passed_over_.clear();
 }
 
-// The per-frame path: one read() of what the mouse queued, the frames through the pipeline, one write()
-// each; the time is the kernel's stamp on the events (CLOCK_MONOTONIC, steady_clock's), not a clock read.
-[[gnu::hot]] void Daemon::on_mouse_readable(int fd) {
-  const auto it = std::find_if(mice_.begin(), mice_.end(), [fd](const auto& m) {
-    return m.second->frames != nullptr && m.second->device->fd() == fd;
-  });
-  if (it == mice_.end()) return;
-  Mouse& mouse = *it->second;
+// The per-frame path, on the mouse's reader thread with the state lock held: what one read() gave, the frames
+// through the pipeline, one write() each; the time is the kernel's stamp on the events (CLOCK_MONOTONIC,
+// steady_clock's), not a clock read.
+[[gnu::hot]] void Daemon::on_mouse_batch(const std::string& node, Mouse& mouse, const std::vector<InputEvent>& events,
+                                         ReadStatus status, const std::string& error) {
+  if (mouse.ending) return;
   try {
-    const ReadStatus status = mouse.device->read_batch(batch_);
-    if (!batch_.empty()) {
-      const SteadyTime now{std::chrono::microseconds(batch_.front().time)};
+    if (!events.empty()) {
+      const SteadyTime now{std::chrono::microseconds(events.front().time)};
       // Motion after a pause: whatever happened meanwhile (a warp, another pointer), ask where the cursor is.
       if (now - last_motion_ > kPauseBeforeQuery && control_ && control_->has_helper()) {
         control_->query_helper();
@@ -321,19 +344,45 @@ void Daemon::let_go_of_all(std::string_view why) {
       }
       last_motion_ = now;
       if (holding_) {
-        for (const InputEvent& e : batch_) held_events_.emplace_back(it->first, e);
+        for (const InputEvent& e : events) held_events_.emplace_back(node, e);
       } else {
-        for (const InputEvent& e : batch_) route(mouse, e);
+        for (const InputEvent& e : events) route(mouse, e);
       }
       remember_emitted(now);
     }
-    if (status == ReadStatus::gone) let_go(std::string(it->first), "unplugged");
-  } catch (const DeviceError& e) {
-    log_.warning("{}", e.what());
-    let_go(std::string(it->first), "read error");
+    if (status == ReadStatus::gone) {
+      if (!error.empty()) log_.warning("{}", error);
+      ask_let_go(node, mouse, error.empty() ? "unplugged" : "read error");
+    }
   } catch (const UinputError& e) {
     log_.error("{}", e.what());
-    let_go(std::string(it->first), "virtual device failed");
+    ask_let_go(node, mouse, "virtual device failed");
+  }
+}
+
+// A reader cannot let go of its own mouse (that stops and waits for it): the event loop does.
+void Daemon::ask_let_go(const std::string& node, Mouse& mouse, std::string why) {
+  mouse.ending = true;
+  mouse.why_ending = std::move(why);
+  ended_.emplace_back(node, &mouse);
+  const std::uint64_t one = 1;
+  [[maybe_unused]] const ssize_t n = ::write(mice_ended_.get(), &one, sizeof one);
+}
+
+void Daemon::on_mice_ended() {
+  std::vector<std::pair<std::string, const Mouse*>> ended;
+  ended.swap(ended_);
+  for (const auto& [node, mouse] : ended) {
+    const auto it = mice_.find(node);
+    if (it == mice_.end() || it->second.get() != mouse) continue;  // let go of since, and the node taken again
+    const std::string why = it->second->why_ending;
+    let_go(node, why);
+  }
+}
+
+void Daemon::sync_mice() {
+  for (const auto& [node, mouse] : mice_) {
+    if (mouse->reader) mouse->reader->sync();
   }
 }
 

@@ -1,12 +1,14 @@
-// pseudohapticd's event loop: one epoll over the grabbed mice, the udev monitor, a signalfd, timers and
-// the reload worker's eventfd. Every mouse it takes gets its own virtual device and frame assembler; all share one
-// pipeline, so one cursor model, however many mice move it (docs/METHODS.md, "Cursor and output").
+// pseudohapticd's event loop: one epoll over the udev monitor, a signalfd, timers, the reload worker's eventfd,
+// the control socket and the pointers it does not take. Every mouse it takes gets its own reader thread, virtual
+// device and frame assembler; all share one pipeline, so one cursor model, however many mice move it
+// (docs/METHODS.md, "Cursor and output"). The readers and the loop take turns under one lock (`state_`).
 #pragma once
 
 #include <chrono>
 #include <deque>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <string>
@@ -16,6 +18,7 @@
 #include "daemon/control_server.hpp"
 #include "daemon/evdev_device.hpp"
 #include "daemon/log.hpp"
+#include "daemon/mouse_reader.hpp"
 #include "daemon/scene_reloader.hpp"
 #include "daemon/service_notifier.hpp"
 #include "daemon/udev_watch.hpp"
@@ -48,8 +51,8 @@ class Daemon final : private ControlHandler {
 
  private:
   // A mouse the daemon has opened: waiting for its buttons to be released, or taken (grabbed, with its
-  // virtual device and frame assembler). Members are destroyed in reverse: the assembler, then the
-  // virtual device (which releases held buttons), then the grab and the node.
+  // virtual device and frame assembler). Members are destroyed in reverse: the reader thread, the
+  // assembler, then the virtual device (which releases held buttons), then the grab and the node.
   struct Mouse {
     std::unique_ptr<EvdevDevice> device;
     std::unique_ptr<UinputSink> sink;
@@ -61,6 +64,9 @@ class Daemon final : private ControlHandler {
     bool passing = false;
     bool mid_frame = false;  // events of a frame have been routed, its SYN_REPORT not yet
     bool told_waiting = false;
+    bool ending = false;  // its reader asked the loop to let go of it, for this reason
+    std::string why_ending;
+    std::unique_ptr<MouseReader> reader;  // once taken
   };
 
   using SteadyTime = std::chrono::steady_clock::time_point;
@@ -91,7 +97,11 @@ class Daemon final : private ControlHandler {
   void try_take(const std::string& node, Mouse& mouse);
   void let_go(const std::string& node, std::string_view why);
   void let_go_of_all(std::string_view why);
-  void on_mouse_readable(int fd);
+  void on_mouse_batch(const std::string& node, Mouse& mouse, const std::vector<InputEvent>& events, ReadStatus status,
+                      const std::string& error);
+  void ask_let_go(const std::string& node, Mouse& mouse, std::string why);
+  void on_mice_ended();
+  void sync_mice();
   void on_hotplug();
   void on_signal();
   void on_retry_tick();
@@ -102,6 +112,8 @@ class Daemon final : private ControlHandler {
   std::string status_line() const;
   void log_notes(const Configuration& configuration) const;
 
+  // Held by the event loop while it handles what woke it and by a mouse's reader while it hands on a batch.
+  std::timed_mutex state_;
   ConfigChoice choice_;
   const Logger& log_;
   const ServiceNotifier& notifier_;
@@ -110,6 +122,8 @@ class Daemon final : private ControlHandler {
   std::unique_ptr<Pipeline> pipeline_;
   UdevWatch udev_;
   UniqueFd epoll_, signals_, retry_timer_, watchdog_timer_, resync_timer_, hold_timer_;
+  UniqueFd mice_ended_;  // an eventfd: a reader found its mouse gone; ended_ says which
+  std::vector<std::pair<std::string, const Mouse*>> ended_;
   LogindSessions sessions_;
   SceneReloader reloader_;  // SIGHUP's load, on a worker thread
   SteadyTime reload_started_{};
@@ -126,7 +140,6 @@ class Daemon final : private ControlHandler {
   // Motion after a pause waits for the helper's answer (at most kHoldForHelperNs): events by node.
   bool holding_ = false;
   std::vector<std::pair<std::string, InputEvent>> held_events_;
-  std::vector<InputEvent> batch_;                       // what one read of a mouse gave, kept to reuse its memory
   std::map<std::string, std::unique_ptr<Mouse>> mice_;  // by node
   std::map<std::string, int> unopened_;                 // node -> tries left (not yet accessible)
   std::set<std::string> passed_over_;                   // not a pointer, not matched, ours, busy

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <linux/input.h>
+#include <poll.h>
 #include <sys/ioctl.h>
 #include <unistd.h>
 
@@ -135,12 +136,33 @@ EvdevDevice::KeyBits EvdevDevice::keys_down_now() const {
   return down;
 }
 
+void EvdevDevice::set_blocking(bool blocking) {
+  const int flags = ::fcntl(fd_, F_GETFL);
+  if (flags < 0 || ::fcntl(fd_, F_SETFL, blocking ? flags & ~O_NONBLOCK : flags | O_NONBLOCK) < 0)
+    throw DeviceError(
+        fmt::format("{}: cannot set the node {}blocking: {}", node_, blocking ? "" : "non-", std::strerror(errno)),
+        errno);
+  blocking_ = blocking;
+}
+
+ssize_t EvdevDevice::read_some(void* buffer, std::size_t size, Wait wait) {
+  if (blocking_ && wait == Wait::no) {
+    pollfd queued{fd_, POLLIN, 0};
+    if (::poll(&queued, 1, 0) == 0) {
+      errno = EAGAIN;
+      return -1;
+    }
+    // Readable, or an error (unplugged): either way read() does not wait.
+  }
+  return ::read(fd_, buffer, size);
+}
+
 // After SYN_DROPPED the kernel's buffer holds only part of the stream: everything still in it is dropped
 // (as libevdev does) and the keys whose state changed in the lost part are reported from EVIOCGKEY.
 void EvdevDevice::resync(std::vector<InputEvent>& events, TimeUs time) {
   std::array<input_event, 64> discard;
   // Bounded, like libevdev's drain: a device cannot fill the buffer faster than this empties it.
-  for (int i = 0; i < 16 && ::read(fd_, discard.data(), sizeof discard) > 0; ++i) {
+  for (int i = 0; i < 16 && read_some(discard.data(), sizeof discard, Wait::no) > 0; ++i) {
   }
   const KeyBits now = keys_down_now();
   const KeyBits changed = now ^ keys_;
@@ -152,12 +174,13 @@ void EvdevDevice::resync(std::vector<InputEvent>& events, TimeUs time) {
   events.push_back({time, ev::kSyn, ev::kSynReport, 0});
 }
 
-[[gnu::hot]] ReadStatus EvdevDevice::read_batch(std::vector<InputEvent>& events) {
+[[gnu::hot]] ReadStatus EvdevDevice::read_batch(std::vector<InputEvent>& events, Wait wait) {
   events.clear();
   std::array<input_event, 64> batch;
   for (;;) {
-    const ssize_t n = ::read(fd_, batch.data(), sizeof batch);
+    const ssize_t n = read_some(batch.data(), sizeof batch, wait);
     if (n < 0) {
+      if (errno == EINTR && wait == Wait::yes) return ReadStatus::ok;  // woken to look at something else
       if (errno == EINTR) continue;
       if (errno == EAGAIN) return ReadStatus::ok;
       if (errno == ENODEV) return ReadStatus::gone;
@@ -175,6 +198,7 @@ void EvdevDevice::resync(std::vector<InputEvent>& events, TimeUs time) {
     }
     // Less than a full batch: the kernel had no more, and a second read() would only say EAGAIN.
     if (count < batch.size()) return ReadStatus::ok;
+    wait = Wait::no;  // more was queued than one batch: the rest, without waiting for new events
   }
 }
 

@@ -26,6 +26,9 @@ class DeviceError : public std::runtime_error {
 // What a frame of reading found.
 enum class ReadStatus { ok, gone };
 
+// Whether a read may wait for the device's next events (see EvdevDevice::set_blocking).
+enum class Wait { no, yes };
+
 class EvdevDevice {
  public:
   // Opens a /dev/input/eventN node (non-blocking). Events carry CLOCK_MONOTONIC times, so that a change of
@@ -55,13 +58,19 @@ class EvdevDevice {
   void ungrab();
   bool grabbed() const { return grabbed_; }
 
+  // The node is opened non-blocking. A thread that does nothing but wait for this device sets it blocking,
+  // so that it waits in read() itself (the cheapest wake-up, docs/PERFORMANCE.md); reads that must not
+  // wait then ask poll() first.
+  void set_blocking(bool blocking);
+
   // Replaces `events` with every event that can be read now, in order, read straight from the node in
   // batches (one read() when the kernel holds less than a batch: what a bare re-emitter does). A
   // SYN_DROPPED is handed on, then what the kernel's buffer still held is discarded and the buttons whose
   // state differs from the stream's (EVIOCGKEY) follow as events, ending in SYN_REPORT: the same shape as
   // a recording's dropped frame, which FrameProcessor passes through without applying its motion.
-  // Returns gone when the device was unplugged.
-  ReadStatus read_batch(std::vector<InputEvent>& events);
+  // Returns gone when the device was unplugged. Wait::yes on a blocking node: the first read() waits for
+  // events; a signal that interrupts it returns ok with no events.
+  ReadStatus read_batch(std::vector<InputEvent>& events, Wait wait = Wait::no);
   // The same, one event at a time.
   ReadStatus read_available(const std::function<void(const InputEvent&)>& on_event);
 
@@ -70,12 +79,15 @@ class EvdevDevice {
   using KeyBits = std::bitset<kKeyCount>;
 
   KeyBits keys_down_now() const;
+  // One read() of the node; on a blocking node without `wait`, -1 and EAGAIN when nothing is queued.
+  ssize_t read_some(void* buffer, std::size_t size, Wait wait);
   void resync(std::vector<InputEvent>& events, TimeUs time);
 
   std::string node_;
   int fd_ = -1;
   LibevdevPtr dev_;
   bool grabbed_ = false;
+  bool blocking_ = false;
   KeyBits keys_;  // the keys and buttons down as the events read so far say
   std::vector<InputEvent> scratch_;
 };
