@@ -10,7 +10,8 @@
 //                    into seconds per step. The value is in seconds; the console prints it with an SI
 //                    prefix ("12.3ns"). It includes the per-frame overhead spread over the frame's steps.
 // latency/typical/... times each frame of the typical stream on its own and reports the median and 99th percentile
-// of those times (median_ns, p99_ns) and the cost of an empty timed interval (clock_ns), which both include.
+// of those times (median_ns, p99_ns) and the cost of an empty timed interval (clock_ns), which both include, and the
+// same quantiles of the texel steps a frame takes (median_steps, p99_steps): whether a slow frame did more work.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -246,13 +247,14 @@ void run_frame_latency(benchmark::State& state, std::span<const ph::Scene* const
   ph::CursorState cursor = start_cursor;
   std::size_t scene_index = 0;
   std::size_t frame = 0;
-  std::vector<double> frame_ns, clock_ns;
+  std::vector<double> frame_ns, clock_ns, frame_steps;
   for (auto _ : state) {
     const auto t0 = Clock::now();
     const ph::FrameResult result = ph::advance(*scenes[scene_index], cursor, motions[frame & kStreamMask]);
     const auto t1 = Clock::now();
     benchmark::DoNotOptimize(result);
     frame_ns.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count());
+    frame_steps.push_back(static_cast<double>(result.steps));
     if ((frame & 15) == 0) {
       const auto c0 = Clock::now();
       const auto c1 = Clock::now();
@@ -273,6 +275,8 @@ void run_frame_latency(benchmark::State& state, std::span<const ph::Scene* const
   state.counters["median_ns"] = quantile(frame_ns, 0.5);
   state.counters["p99_ns"] = quantile(frame_ns, 0.99);
   state.counters["clock_ns"] = quantile(clock_ns, 0.5);
+  state.counters["median_steps"] = quantile(frame_steps, 0.5);
+  state.counters["p99_steps"] = quantile(frame_steps, 0.99);
 }
 
 // With several scenes, the next takes over after this many flicks: a 0.5 s run then covers all 24 targets
