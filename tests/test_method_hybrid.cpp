@@ -135,6 +135,97 @@ TEST(HybridMethod, BilinearSamplingTakesTheDepthCdAtSteps) {
   }
 }
 
+// The C/D of each texel the row y = 8.5 crosses from x0 to x1 (px), as first walked in, keyed by texel x; unlike
+// row_cds, also the texel where a region begins (the walk starts a leg there: not "entered").
+std::vector<std::pair<int, double>> texel_cds(const Scene& scene, double x0, double x1) {
+  std::vector<std::pair<int, double>> out;
+  for (const auto& [x, cd] : [&] {
+         Recorder recorder;
+         CursorState cursor = cursor_at({x0, 8.5});
+         const Vec2 m{x1 > x0 ? 1.0 : -1.0, 0.0};
+         for (int i = 0; i < 1000 && (x1 - cursor.position.x) * m.x > 0.0; ++i)
+           advance(scene, cursor, m * 0.5, &recorder);
+         std::vector<std::pair<int, double>> all;
+         for (const StepRecord& s : recorder.steps) all.emplace_back(s.texel.x, s.cd);
+         return all;
+       }()) {
+    if (out.empty() || out.back().first != x) out.emplace_back(x, cd);
+  }
+  return out;
+}
+
+// A region of flat normals and a constant height, on the flat desktop or over another region.
+RegionFields plateau_fields(int w, int h, float height) {
+  RegionFields fields;
+  fields.gradient = GradientField(w, h, Gradient{});
+  fields.depth = DepthField(w, h, height);
+  return fields;
+}
+
+Region region_of(std::string name, RegionFields fields, Rect rect, MethodPtr method) {
+  Region region;
+  region.name = std::move(name);
+  region.rect = rect;
+  region.fields = std::move(fields);
+  region.method = std::move(method);
+  return region;
+}
+
+// A region raised above the desktop, with flat normals: the depth method feels its border (the desktop counts as
+// height 0 there), the hybrid does not look for a step against the desktop, which has no depth map: a surface whose
+// border stands off its depth map's zero (the accuracy set's interrogation surfaces, at +-25 px) is not a cliff.
+TEST(HybridMethod, LeavesTheBorderWithTheDesktopToTheCurvatureMethod) {
+  const auto raised = [](MethodPtr method) {
+    return one_region(plateau_fields(32, 16, 2.0f), {20, 0, 32, 16}, method);
+  };
+  for (const auto& [x, cd] : texel_cds(raised(std::make_shared<HybridMethod>(HybridParams{})), 5.0, 60.0))
+    EXPECT_EQ(cd, 1.0) << x;
+  const std::vector<std::pair<int, double>> depth =
+      texel_cds(raised(std::make_shared<DepthMethod>(DepthParams{})), 5.0, 60.0);
+  ASSERT_FALSE(depth.empty());
+  EXPECT_EQ(depth.front(), std::make_pair(20, DepthParams{}.kmax));
+}
+
+// A region whose surface rises from its border with the slope its normals show: the border is explained, and the
+// C/D there is the curvature method's, whatever the height of the border texel.
+TEST(HybridMethod, LeavesARegionBorderTheNormalsExplainToTheCurvatureMethod) {
+  RegionFields ramp;
+  ramp.gradient = GradientField(32, 16, Gradient{1.5f, 0.0f});
+  ramp.depth = DepthField(32, 16, 0.0f);
+  for (int y = 0; y < 16; ++y) {
+    for (int x = 0; x < 32; ++x) ramp.depth->at(x, y) = 1.5f * (static_cast<float>(x) + 0.5f);
+  }
+  RegionFields same = ramp;
+  same.depth.reset();
+  const Scene hybrid = one_region(std::move(ramp), {20, 0, 32, 16}, std::make_shared<HybridMethod>(HybridParams{}));
+  const Scene curvature =
+      one_region(std::move(same), {20, 0, 32, 16}, std::make_shared<CurvatureMethod>(CurvatureParams{}));
+  const auto expected = texel_cds(curvature, 5.0, 45.0);
+  const auto got = texel_cds(hybrid, 5.0, 45.0);
+  ASSERT_EQ(got.size(), expected.size());
+  ASSERT_FALSE(got.empty());
+  for (std::size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i], expected[i]) << got[i].first;
+  EXPECT_NE(got.front().second, DepthParams{}.kmax);  // the border texel, x = 20: not depth's cap
+}
+
+// Two overlapping regions: crossing into the upper one where it lies 3 px above the one below is a step; where the
+// two are level it is not.
+TEST(HybridMethod, TakesTheDepthCdWhereARegionOverlapsAnotherBelowIt) {
+  const DepthParams depth;
+  const auto hybrid = std::make_shared<HybridMethod>(HybridParams{});
+  for (const float upper : {3.0f, 1.0f}) {
+    std::vector<Region> regions;
+    regions.push_back(region_of("below", plateau_fields(40, 16, 1.0f), {0, 0, 40, 16}, hybrid));
+    regions.push_back(region_of("above", plateau_fields(40, 16, upper), {20, 0, 40, 16}, hybrid));
+    const Scene scene(std::move(regions));
+    for (const auto& [x, cd] : texel_cds(scene, 5.0, 50.0)) {
+      const bool step = x == 20 && upper == 3.0f;
+      EXPECT_EQ(cd, step ? depth.kmax : 1.0)  // a 2 px rise: 1 + 3 x 2, capped at kmax
+          << "x " << x << ", upper region at " << upper << " px";
+    }
+  }
+}
+
 TEST(HybridMethod, ASlopeTheNormalsExplainIsNoDiscontinuity) {
   // A ramp of 2 px per px along x with matching normals, and a 0.4 px step (below discontinuity_px).
   RegionFields fields;

@@ -159,7 +159,7 @@ TEST(ToolStability, SmallRunWritesEveryModeMethodAndVariantWithinItsBounds) {
       {"border", "hybrid", {0.21, 0.22, 0.7, 0.027, 0.98}},
       {"overlap", "curvature", {0.001, 0.001, 0.001, 0.001, 0.001}},
       {"overlap", "depth", {0.064, 0.31, 1.8, 0.065, 2.5}},
-      {"overlap", "hybrid", {0.001, 0.001, 0.001, 0.001, 0.001}},
+      {"overlap", "hybrid", {0.3, 0.28, 4.4, 0.056, 0.92}},
   };
   std::size_t checked = 0;
   for (const auto& row : rows) {

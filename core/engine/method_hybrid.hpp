@@ -65,7 +65,8 @@ class HybridMethod final : public Method {
     Leg(const RegionFields* fields, Vec2 m)
         : curvature_(fields, m),
           depth_(fields, m),
-          marks_(fields != nullptr && fields->discontinuity && fields->depth ? &*fields->discontinuity : nullptr) {}
+          marks_(fields != nullptr && fields->discontinuity && fields->depth ? &*fields->discontinuity : nullptr),
+          heights_(fields != nullptr && fields->depth && fields->gradient ? fields : nullptr) {}
 
     // The curvature reading's: every field of the region has its size, and the neighbours behind are the same.
     PH_ALWAYS_INLINE TexelSample sample(Texel local) const { return sample(curvature_.at(local)); }
@@ -75,17 +76,30 @@ class HybridMethod final : public Method {
         const TexelSample d = depth_.sample(at);
         if (!std::isnan(d.v1)) return {0.0, 0.0, kDepthStep, 0.0, d.v0, d.v1};
       }
-      return curvature_.sample(at);
+      TexelSample s = curvature_.sample(at);
+      if (CurvatureMethod::reads_from(s)) [[unlikely]]  // a region's border: cd() looks for a step across it
+        with_height(s, heights_, at.index);
+      return s;
     }
 
    private:
     CurvatureMethod::Leg curvature_;
     DepthMethod::Leg depth_;
     const DiscontinuityField* marks_;  // null: no depth field, so no texel is a discontinuity
+    const RegionFields* heights_;      // null: no depth field, so no step at the region's border can be found
   };
   Leg leg(const RegionFields* fields, Vec2 m) const { return Leg(fields, m); }
+  // Here, and where the walk reads the texel it came from in another region, the sample carries the height (v4) and
+  // the steepest slope (v5) there: with_height. Outside every region it carries none: the desktop has no depth map.
   TexelSample sample(const RegionFields* fields, Texel local, Vec2 m) const override {
-    return Leg(fields, m).sample(local);
+    const Leg leg(fields, m);
+    TexelSample s = leg.sample(local);
+    if (fields == nullptr) return without_height(s);
+    if (s.v2 == kDepthStep) return s;  // a mark carries its own height
+    const std::int32_t w = fields->gradient ? fields->gradient->width : 0;
+    with_height(s, fields->depth && fields->gradient ? fields : nullptr,
+                static_cast<std::size_t>(local.y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(local.x));
+    return s;
   }
   // Bilinear sampling: curvature's interpolated sample, and on a discontinuity texel depth's reading as above (its
   // v0 and v1 flat, so that the next texel, which pairs with this sample, does not pair with a step's smeared normals).
@@ -94,11 +108,11 @@ class HybridMethod final : public Method {
       const TexelSample d = depth_.sample(fields, local, m);
       if (!std::isnan(d.v1)) return {0.0, 0.0, kDepthStep, 0.0, d.v0, d.v1};
     }
-    return curvature_.sample_at(fields, local, at, m);
+    return without_height(curvature_.sample_at(fields, local, at, m));
   }
   // The analytic surfaces of the ground truth are continuous: the curvature method's exact sample.
   TexelSample sample_exact(const SurfacePoint& point, Vec2 m) const override {
-    return curvature_.sample_exact(point, m);
+    return without_height(curvature_.sample_exact(point, m));
   }
   // Whether cd(from, to, ...) reads `from`: as the curvature method, never on a discontinuity texel.
   static bool reads_from(const TexelSample& to) { return to.v2 != kDepthStep && CurvatureMethod::reads_from(to); }
@@ -109,6 +123,8 @@ class HybridMethod final : public Method {
   cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
     if (to.v2 == kDepthStep) [[unlikely]]
       return depth_cd(depth_.params(), 0.0, to.v5, 1.0, detail);
+    if (CurvatureMethod::reads_from(to) && step_between(from, to)) [[unlikely]]
+      return depth_cd(depth_.params(), from.v4, to.v4, 1.0, detail);
     return curvature_.cd(from, to, step_px, detail);
   }
   double cd_lower_bound() const override { return std::min(curvature_.cd_lower_bound(), depth_.cd_lower_bound()); }
@@ -116,6 +132,32 @@ class HybridMethod final : public Method {
   const HybridParams& params() const { return params_; }
 
  private:
+  // A sample of a texel with a height (`fields` has a depth field: null otherwise) carries it in v4 and its steepest
+  // slope, max(|g_x|, |g_y|), in v5; one without has v5 NaN. At a region's border the walk pairs a texel with the
+  // one it came from, in another region or outside every region.
+  static void with_height(TexelSample& s, const RegionFields* fields, std::size_t index) {
+    if (fields == nullptr) {
+      s.v5 = std::numeric_limits<double>::quiet_NaN();
+      return;
+    }
+    const Gradient g = fields->gradient->values[index];
+    s.v4 = fields->depth->values[index];
+    s.v5 = std::max(std::abs(static_cast<double>(g.x)), std::abs(static_cast<double>(g.y)));
+  }
+  static TexelSample without_height(TexelSample s) {
+    s.v5 = std::numeric_limits<double>::quiet_NaN();
+    return s;
+  }
+  // Whether the height changes between two texels on either side of a region's border by more than
+  // `discontinuity_px` beyond the steepest slope either side's normals show: a step the normals cannot show (a region
+  // raised above the region it overlaps), where the depth method's C/D is taken. The walk crosses a border along x
+  // or y, and the gradient's component along that axis is at most the steepest one.
+  bool step_between(const TexelSample& from, const TexelSample& to) const {
+    if (!(to.v5 >= 0.0)) return false;  // (NaN: no height here)
+    const double from_slope = from.v2 == kDepthStep ? std::abs(from.v5) : from.v5;
+    if (!(from_slope >= 0.0)) return false;
+    return std::abs(to.v4 - from.v4) > std::max(from_slope, to.v5) + params_.discontinuity_px;
+  }
   static bool marked(const DiscontinuityField& marks, Texel t) {
     return t.x >= 0 && t.y >= 0 && t.x < marks.width && t.y < marks.height && marks.at(t.x, t.y) != 0;
   }
