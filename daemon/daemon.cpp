@@ -93,6 +93,7 @@ Daemon::Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& no
   // Without /dev/uinput there is nothing to emit through: say so now rather than at the first mouse.
   if (::access("/dev/uinput", R_OK | W_OK) != 0) throw StartupError(uinput_error_message(-errno));
 
+  install_reader_wake_handler();
   const sigset_t handled = daemon_signals();
   signals_ = UniqueFd(::signalfd(-1, &handled, SFD_NONBLOCK | SFD_CLOEXEC));
   epoll_ = UniqueFd(::epoll_create1(EPOLL_CLOEXEC));

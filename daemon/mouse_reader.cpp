@@ -18,9 +18,10 @@ int wake_signal() { return SIGRTMIN; }
 
 extern "C" void on_wake_signal(int) {}
 
-// The signal's disposition is the process's: a handler that does nothing and no SA_RESTART, so that it
-// interrupts read(). Setting it again for each reader changes nothing.
-void install_wake_handler() {
+}  // namespace
+
+// Setting it again for each reader changes nothing.
+void install_reader_wake_handler() {
   struct sigaction action {};
   action.sa_handler = on_wake_signal;
   sigemptyset(&action.sa_mask);
@@ -28,11 +29,9 @@ void install_wake_handler() {
   ::sigaction(wake_signal(), &action, nullptr);
 }
 
-}  // namespace
-
 MouseReader::MouseReader(Read read, std::timed_mutex& state, OnBatch on_batch)
     : read_(std::move(read)), state_(state), on_batch_(std::move(on_batch)) {
-  install_wake_handler();
+  install_reader_wake_handler();
   thread_ = std::thread([this] { run(); });
 }
 

@@ -18,6 +18,11 @@
 
 namespace ph {
 
+// Sets the process's disposition of the signal that wakes a reader (SIGRTMIN): a handler that does nothing, without
+// SA_RESTART, so that it interrupts a read(). The daemon calls it at start: sent from outside, before any mouse is
+// taken, the signal would otherwise end the process. Each reader sets it too.
+void install_reader_wake_handler();
+
 class MouseReader {
  public:
   // Fills `events` from the mouse, waiting for at least one with Wait::yes (a signal that interrupts the wait

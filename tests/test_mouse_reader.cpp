@@ -9,6 +9,7 @@
 #include <array>
 #include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstring>
 #include <mutex>
 #include <stdexcept>
@@ -178,6 +179,17 @@ TEST(MouseReader, AReadErrorEndsTheReadingWithItsMessage) {
   EXPECT_EQ(reads, 1);
   EXPECT_EQ(handed.ends, 1);
   EXPECT_EQ(handed.error, "/dev/input/event9: read failed: Input/output error");
+}
+
+// The daemon installs the handler at start, so that the signal sent from outside before any mouse is taken does not
+// end it (its default action would).
+TEST(MouseReader, TheWakeSignalDoesNothingOnceItsHandlerIsInstalled) {
+  install_reader_wake_handler();
+  EXPECT_EQ(::raise(SIGRTMIN), 0);
+  struct sigaction now {};
+  ASSERT_EQ(::sigaction(SIGRTMIN, nullptr, &now), 0);
+  EXPECT_NE(now.sa_handler, SIG_DFL);
+  EXPECT_EQ(now.sa_flags & SA_RESTART, 0);  // it must interrupt a read()
 }
 
 }  // namespace
