@@ -263,6 +263,7 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
       return;
     }
     device.grab();
+    device.set_blocking(true);  // its reader waits in read()
   } catch (const DeviceError& e) {
     log_.warning("{}; leaving it to the desktop", e.what());
     passed_over_.insert(node);
@@ -282,14 +283,6 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
   }
   mouse.frames = std::make_unique<FrameProcessor>(*pipeline_, *mouse.sink);
   if (passthrough_wanted_) make_passthrough_sink(node, mouse);
-  try {
-    device.set_blocking(true);  // its reader waits in read()
-  } catch (const DeviceError& e) {
-    log_.warning("{}; leaving it to the desktop", e.what());
-    passed_over_.insert(node);
-    let_go(node, "");
-    return;
-  }
   mouse.reader = std::make_unique<MouseReader>(
       [d = &device](std::vector<InputEvent>& events, Wait wait) { return d->read_batch(events, wait); }, state_,
       [this, node, m = &mouse](const std::vector<InputEvent>& events, ReadStatus status, const std::string& error) {
@@ -314,7 +307,6 @@ void Daemon::let_go(const std::string& node, std::string_view why) {
   Mouse& mouse = *it->second;
   const bool taken = mouse.frames != nullptr;
   if (taken && !why.empty()) log_.info("let go of {} {} ({})", node, quoted_name(*mouse.device), why);
-  std::erase_if(ended_, [&mouse](const auto& e) { return e.second == &mouse; });
   // Stops its reader, releases held buttons on the virtual device, destroys it, ungrabs.
   mice_.erase(it);
   if (taken) notifier_.status(status_line());
@@ -333,7 +325,7 @@ void Daemon::let_go_of_all(std::string_view why) {
 // steady_clock's), not a clock read.
 [[gnu::hot]] void Daemon::on_mouse_batch(const std::string& node, Mouse& mouse, const std::vector<InputEvent>& events,
                                          ReadStatus status, const std::string& error) {
-  if (mouse.ending) return;
+  if (!mouse.ending.empty()) return;
   try {
     if (!events.empty()) {
       const SteadyTime now{std::chrono::microseconds(events.front().time)};
@@ -353,32 +345,27 @@ void Daemon::let_go_of_all(std::string_view why) {
     }
     if (status == ReadStatus::gone) {
       if (!error.empty()) log_.warning("{}", error);
-      ask_let_go(node, mouse, error.empty() ? "unplugged" : "read error");
+      ask_let_go(mouse, error.empty() ? "unplugged" : "read error");
     }
   } catch (const UinputError& e) {
     log_.error("{}", e.what());
-    ask_let_go(node, mouse, "virtual device failed");
+    ask_let_go(mouse, "virtual device failed");
   }
 }
 
 // A reader cannot let go of its own mouse (that stops and waits for it): the event loop does.
-void Daemon::ask_let_go(const std::string& node, Mouse& mouse, std::string why) {
-  mouse.ending = true;
-  mouse.why_ending = std::move(why);
-  ended_.emplace_back(node, &mouse);
+void Daemon::ask_let_go(Mouse& mouse, std::string why) {
+  mouse.ending = std::move(why);
   const std::uint64_t one = 1;
   [[maybe_unused]] const ssize_t n = ::write(mice_ended_.get(), &one, sizeof one);
 }
 
 void Daemon::on_mice_ended() {
-  std::vector<std::pair<std::string, const Mouse*>> ended;
-  ended.swap(ended_);
-  for (const auto& [node, mouse] : ended) {
-    const auto it = mice_.find(node);
-    if (it == mice_.end() || it->second.get() != mouse) continue;  // let go of since, and the node taken again
-    const std::string why = it->second->why_ending;
-    let_go(node, why);
+  std::vector<std::pair<std::string, std::string>> ended;  // node, why: let_go changes mice_
+  for (const auto& [node, mouse] : mice_) {
+    if (!mouse->ending.empty()) ended.emplace_back(node, mouse->ending);
   }
+  for (const auto& [node, why] : ended) let_go(node, why);
 }
 
 void Daemon::sync_mice() {

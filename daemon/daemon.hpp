@@ -64,8 +64,7 @@ class Daemon final : private ControlHandler {
     bool passing = false;
     bool mid_frame = false;  // events of a frame have been routed, its SYN_REPORT not yet
     bool told_waiting = false;
-    bool ending = false;  // its reader asked the loop to let go of it, for this reason
-    std::string why_ending;
+    std::string ending;                   // not empty: its reader asked the loop to let go of it, for this reason
     std::unique_ptr<MouseReader> reader;  // once taken
   };
 
@@ -99,7 +98,7 @@ class Daemon final : private ControlHandler {
   void let_go_of_all(std::string_view why);
   void on_mouse_batch(const std::string& node, Mouse& mouse, const std::vector<InputEvent>& events, ReadStatus status,
                       const std::string& error);
-  void ask_let_go(const std::string& node, Mouse& mouse, std::string why);
+  void ask_let_go(Mouse& mouse, std::string why);
   void on_mice_ended();
   void sync_mice();
   void on_hotplug();
@@ -122,8 +121,7 @@ class Daemon final : private ControlHandler {
   std::unique_ptr<Pipeline> pipeline_;
   UdevWatch udev_;
   UniqueFd epoll_, signals_, retry_timer_, watchdog_timer_, resync_timer_, hold_timer_;
-  UniqueFd mice_ended_;  // an eventfd: a reader found its mouse gone; ended_ says which
-  std::vector<std::pair<std::string, const Mouse*>> ended_;
+  UniqueFd mice_ended_;  // an eventfd: a reader found its mouse gone (Mouse::ending says which)
   LogindSessions sessions_;
   SceneReloader reloader_;  // SIGHUP's load, on a worker thread
   SteadyTime reload_started_{};

@@ -69,7 +69,8 @@ class HybridMethod final : public Method {
           heights_(fields != nullptr && fields->depth && fields->gradient ? fields : nullptr) {}
 
     // The curvature reading's: every field of the region has its size, and the neighbours behind are the same.
-    PH_ALWAYS_INLINE TexelSample sample(Texel local) const { return sample(curvature_.at(local)); }
+    FieldTexel at(Texel local) const { return curvature_.at(local); }
+    PH_ALWAYS_INLINE TexelSample sample(Texel local) const { return sample(at(local)); }
     // Every field of a region has the region's size, so one index serves the marks, the depths and the gradients.
     PH_ALWAYS_INLINE TexelSample sample(FieldTexel at) const {
       if (marks_ != nullptr && marks_->values[at.index]) [[unlikely]] {
@@ -93,12 +94,11 @@ class HybridMethod final : public Method {
   // the steepest slope (v5) there: with_height. Outside every region it carries none: the desktop has no depth map.
   TexelSample sample(const RegionFields* fields, Texel local, Vec2 m) const override {
     const Leg leg(fields, m);
-    TexelSample s = leg.sample(local);
+    const FieldTexel at = leg.at(local);
+    TexelSample s = leg.sample(at);
     if (fields == nullptr) return without_height(s);
     if (s.v2 == kDepthStep) return s;  // a mark carries its own height
-    const std::int32_t w = fields->gradient ? fields->gradient->width : 0;
-    with_height(s, fields->depth && fields->gradient ? fields : nullptr,
-                static_cast<std::size_t>(local.y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(local.x));
+    with_height(s, fields->depth && fields->gradient ? fields : nullptr, at.index);
     return s;
   }
   // Bilinear sampling: curvature's interpolated sample, and on a discontinuity texel depth's reading as above (its
