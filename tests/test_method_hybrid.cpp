@@ -432,6 +432,36 @@ TEST(HybridMethod, MarksStepsButNotHeightsThatAlternateOrSpike) {
   for (int x = 0; x < 48; ++x) EXPECT_EQ(fields.discontinuity->at(x, 2), x >= 33 && x <= 38 ? 1 : 0) << x;
 }
 
+// A steep sinusoid of period 4 px with exact heights and normals at the texel centres, sampled where its slope
+// peaks between them: across an edge the height changes by 4.24 px where both texels' slopes say 3.33, which
+// the slopes one texel further out explain (the slope peaks between the centres). The same change as a step
+// between two level treads is still one.
+TEST(HybridMethod, ASmoothReliefNearTheTexelPeriodIsNoDiscontinuity) {
+  const double amplitude = 3.0, k = std::numbers::pi / 2.0;  // period 4 px
+  RegionFields fields;
+  fields.gradient = GradientField(32, 4);
+  fields.depth = DepthField(32, 4);
+  for (int y = 0; y < 4; ++y) {
+    for (int x = 0; x < 32; ++x) {
+      const double phase = k * (x + 0.5);
+      fields.depth->at(x, y) = static_cast<float>(amplitude * std::sin(phase));
+      fields.gradient->at(x, y) = {static_cast<float>(amplitude * k * std::cos(phase)), 0.0f};
+    }
+  }
+  prepare_hybrid_fields(HybridParams{.discontinuity_px = 0.5, .noise_slope = 0.0, .far_noise_gain = 0.0}, fields);
+  for (std::uint8_t mark : fields.discontinuity->values) EXPECT_EQ(mark, 0);
+
+  RegionFields step;
+  step.gradient = GradientField(32, 4, Gradient{});
+  step.depth = DepthField(32, 4, 0.0f);
+  for (int y = 0; y < 4; ++y) {
+    for (int x = 16; x < 32; ++x) step.depth->at(x, y) = static_cast<float>(amplitude * std::sqrt(2.0));
+  }
+  prepare_hybrid_fields(HybridParams{.discontinuity_px = 0.5, .noise_slope = 0.0, .far_noise_gain = 0.0}, step);
+  EXPECT_EQ(step.discontinuity->at(15, 2), 1);
+  EXPECT_EQ(step.discontinuity->at(16, 2), 1);
+}
+
 TEST(HybridMethod, NeverGivesNanOrLeavesItsBounds) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -73,11 +73,16 @@ double gradient_noise(const GradientField& g) { return robust_sigma(differences(
 // sqrt(2 ln n); a difference beyond it times the noise's sigma is a feature, not noise.
 double universal_threshold(std::size_t n) { return std::sqrt(2.0 * std::log(std::max<double>(2.0, n))); }
 
-// How far a height change `dh` over 1 px lies outside the slopes a and b of the two texels, signed: a continuous
-// surface whose slope goes from a to b changes by anything between them (a kink or a rim between the centres
-// included), so only the excess is unexplained.
-double unexplained(double dh, double a, double b) {
-  const double lo = std::min(a, b), hi = std::max(a, b);
+// How far a height change `dh` over 1 px lies outside what the slopes of the two texels explain, signed. A
+// continuous surface whose slope goes from a to b changes by anything between them (a kink or a rim between the
+// centres included). A smooth surface's slope may also peak between the centres, as on a relief near the texel
+// period: over the edge it changes by the mean of its slope there, which the trapezoid rule with its end
+// correction estimates from the slopes one texel further out on each side (a_out before a, b_out after b):
+// (a + b) / 2 - (c_b - c_a) / 12, the curvatures c by central differences of the slopes. That is explained too;
+// only the excess beyond all of these is not.
+double unexplained(double dh, double a_out, double a, double b, double b_out) {
+  const double smooth = 0.5 * (a + b) - ((b_out - b) - (a - a_out)) / 24.0;
+  const double lo = std::min({a, b, smooth}), hi = std::max({a, b, smooth});
   return dh < lo ? dh - lo : (dh > hi ? dh - hi : 0.0);
 }
 
@@ -100,10 +105,14 @@ bool is_step(double before, double e, double after, double threshold) {
 DiscontinuityField find_discontinuities(const GradientField& g, const DepthField& d, double threshold) {
   const std::int32_t w = g.width, h = g.height;
   auto along_x = [&](std::int32_t x, std::int32_t y) {  // the edge between (x, y) and (x + 1, y); 0 outside
-    return x < 0 || x + 1 >= w ? 0.0 : unexplained(d.at(x + 1, y) - d.at(x, y), g.at(x, y).x, g.at(x + 1, y).x);
+    return x < 0 || x + 1 >= w ? 0.0
+                               : unexplained(d.at(x + 1, y) - d.at(x, y), g.at(std::max(x - 1, 0), y).x, g.at(x, y).x,
+                                             g.at(x + 1, y).x, g.at(std::min(x + 2, w - 1), y).x);
   };
   auto along_y = [&](std::int32_t x, std::int32_t y) {  // between (x, y) and (x, y + 1)
-    return y < 0 || y + 1 >= h ? 0.0 : unexplained(d.at(x, y + 1) - d.at(x, y), g.at(x, y).y, g.at(x, y + 1).y);
+    return y < 0 || y + 1 >= h ? 0.0
+                               : unexplained(d.at(x, y + 1) - d.at(x, y), g.at(x, std::max(y - 1, 0)).y, g.at(x, y).y,
+                                             g.at(x, y + 1).y, g.at(x, std::min(y + 2, h - 1)).y);
   };
   DiscontinuityField marks(w, h, 0);
   for (std::int32_t y = 0; y < h; ++y) {
