@@ -97,7 +97,8 @@ class HybridMethod final : public Method {
     const FieldTexel at = leg.at(local);
     TexelSample s = leg.sample(at);
     if (fields == nullptr) return without_height(s);
-    if (s.v2 == kDepthStep) return s;  // a mark carries its own height
+    // A mark carries its own height, and the leg gave a texel at the region's border its height already.
+    if (s.v2 == kDepthStep || CurvatureMethod::reads_from(s)) return s;
     with_height(s, fields->depth && fields->gradient ? fields : nullptr, at.index);
     return s;
   }
