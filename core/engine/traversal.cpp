@@ -244,9 +244,19 @@ class Walker {
   // they are written before each call; otherwise only for an observer.
   template <bool Members, typename CdHere>
   PH_ALWAYS_INLINE void step_through(std::size_t index, bool first_leg, CdHere&& cd_here) {
+    // Two copies of the loop, so that the one without an observer tests for none on no step.
+    if (observer_ != nullptr) [[unlikely]] {
+      step_through_observed<Members, true>(index, first_leg, cd_here);
+    } else {
+      step_through_observed<Members, false>(index, first_leg, cd_here);
+    }
+  }
+
+  template <bool Members, bool Observed, typename CdHere>
+  PH_ALWAYS_INLINE void step_through_observed(std::size_t index, bool first_leg, CdHere& cd_here) {
     const Region& region = scene_.regions()[index];
     const bool covered = scene_.covered(index);
-    const bool observed = observer_ != nullptr;
+    constexpr bool observed = Observed;
     const Texel corner = corner_texel(region), start = region.local(texel_), start_from = region.local(from_);
     // Every field of the region is rect.w texels wide: a step along y moves the index by a row.
     std::ptrdiff_t at = static_cast<std::ptrdiff_t>(start.y) * region.rect.w + start.x;
