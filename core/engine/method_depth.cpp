@@ -30,7 +30,8 @@ DepthParams DepthMethod::parse_params(const ParamReader& reader) {
   return p;
 }
 
-DepthMethod::DepthMethod(const DepthParams& params) : Method(method_tag<DepthMethod>()), params_(params) {
+DepthMethod::DepthMethod(const DepthParams& params)
+    : Method(method_tag<DepthMethod>()), params_(params), lowest_(1.0 / params.kmin) {
   if (auto error = validate(params); !error.empty()) throw std::invalid_argument("depth method: " + error);
 }
 

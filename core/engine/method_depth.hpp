@@ -23,18 +23,26 @@ struct DepthParams {
 
 std::string validate(const DepthParams& params);
 
-// CD = clamp(1 + gain * dh / step, 1 / kmin, kmax). detail may be null.
-PH_ALWAYS_INLINE inline double depth_cd(const DepthParams& p, double h1, double h2, double step_px,
+// CD = clamp(1 + gain * dh / step, lowest, kmax), `lowest` the smallest C/D, 1 / kmin (a method divides once, not on
+// every step). detail may be null.
+PH_ALWAYS_INLINE inline double depth_cd(const DepthParams& p, double lowest, double h1, double h2, double step_px,
                                         StepDetail* detail) {
   const double dh = h2 - h1;
   const double slope = step_px > 0.0 ? dh / step_px : 0.0;
-  double cd = std::clamp(1.0 + p.gain * slope, 1.0 / p.kmin, p.kmax);
-  if (!std::isfinite(cd)) cd = 1.0;  // only for non-finite heights, which scenes never hold
+  double cd = std::clamp(1.0 + p.gain * slope, lowest, p.kmax);
+  // Only for non-finite heights, which scenes never hold: between two finite bounds only NaN stays not finite.
+  if (std::isnan(cd)) cd = 1.0;
   if (detail != nullptr) {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     *detail = {nan, nan, nan, nan, dh};
   }
   return cd;
+}
+
+// The same with 1 / kmin worked out here.
+PH_ALWAYS_INLINE inline double depth_cd(const DepthParams& p, double h1, double h2, double step_px,
+                                        StepDetail* detail) {
+  return depth_cd(p, 1.0 / p.kmin, h1, h2, step_px, detail);
 }
 
 class DepthMethod final : public Method {
@@ -112,10 +120,10 @@ class DepthMethod final : public Method {
   // Whether cd(from, to, ...) reads `from`: only where `to` has no upwind change of its own.
   static bool reads_from(const TexelSample& to) { return std::isnan(to.v1); }
   double cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
-    if (std::isnan(to.v1)) return depth_cd(params_, from.v0, to.v0, step_px, detail);
-    return depth_cd(params_, 0.0, to.v1, 1.0, detail);  // the change along 1 px of the motion
+    if (std::isnan(to.v1)) return depth_cd(params_, lowest_, from.v0, to.v0, step_px, detail);
+    return depth_cd(params_, lowest_, 0.0, to.v1, 1.0, detail);  // the change along 1 px of the motion
   }
-  double cd_lower_bound() const override { return 1.0 / params_.kmin; }
+  double cd_lower_bound() const override { return lowest_; }
   double cd_upper_bound() const override { return params_.kmax; }
   const DepthParams& params() const { return params_; }
 
@@ -125,6 +133,7 @@ class DepthMethod final : public Method {
   static constexpr double kNoBehind = std::numeric_limits<double>::quiet_NaN();
 
   DepthParams params_;
+  double lowest_;  // 1 / kmin, the smallest C/D
 };
 
 }  // namespace ph

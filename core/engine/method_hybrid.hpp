@@ -123,9 +123,9 @@ class HybridMethod final : public Method {
   double
   cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
     if (to.v2 == kDepthStep) [[unlikely]]
-      return depth_cd(depth_.params(), 0.0, to.v5, 1.0, detail);
+      return depth_cd(depth_.params(), depth_.cd_lower_bound(), 0.0, to.v5, 1.0, detail);
     if (CurvatureMethod::reads_from(to) && step_between(from, to)) [[unlikely]]
-      return depth_cd(depth_.params(), from.v4, to.v4, 1.0, detail);
+      return depth_cd(depth_.params(), depth_.cd_lower_bound(), from.v4, to.v4, 1.0, detail);
     return curvature_.cd(from, to, step_px, detail);
   }
   double cd_lower_bound() const override { return std::min(curvature_.cd_lower_bound(), depth_.cd_lower_bound()); }
