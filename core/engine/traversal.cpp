@@ -244,7 +244,7 @@ class Walker {
   // they are written before each call; otherwise only for an observer.
   template <bool Members, typename CdHere>
   PH_ALWAYS_INLINE void step_through(std::size_t index, bool first_leg, CdHere&& cd_here) {
-    // Two copies of the loop, so that the one without an observer tests for none on no step.
+    // Two copies of the loop, chosen once per leg: the one without an observer does not ask for one on every step.
     if (observer_ != nullptr) [[unlikely]] {
       step_through_observed<Members, true>(index, first_leg, cd_here);
     } else {
