@@ -1,7 +1,6 @@
 // Cheap replacements for libm functions on the per-texel path, with their accuracy stated.
 #pragma once
 
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -49,12 +48,6 @@ PH_ALWAYS_INLINE inline double fast_atan(double x) {
 
 // -1, 0 or 1, without a branch: the sign of a frame's motion is random from frame to frame.
 inline int sign_of(double v) { return static_cast<int>(v > 0.0) - static_cast<int>(v < 0.0); }
-
-// a where `pick`, else b, without a branch (a select the data decides once per frame, as the sign of the motion).
-inline double pick_double(bool pick, double a, double b) {
-  const std::uint64_t mask = std::uint64_t{0} - static_cast<std::uint64_t>(pick);
-  return std::bit_cast<double>((std::bit_cast<std::uint64_t>(a) & mask) | (std::bit_cast<std::uint64_t>(b) & ~mask));
-}
 
 // floor for |v| < 2^31 without libm (floor is a ~40-instruction call on baseline x86-64).
 inline std::int32_t floor_to_int(double v) {

@@ -38,6 +38,11 @@ PH_ALWAYS_INLINE inline Double2 abs2(Double2 v) {
   return Double2(Mask2(v) & Mask2{0x7fffffffffffffffLL, 0x7fffffffffffffffLL});
 }
 
+// a in the lanes where m is all ones, b in the others: the bits of one or the other, unchanged.
+PH_ALWAYS_INLINE inline Double2 select2(Mask2 m, Double2 a, Double2 b) {
+  return Double2((Mask2(a) & m) | (Mask2(b) & ~m));
+}
+
 // Whether both lanes of a comparison hold.
 PH_ALWAYS_INLINE inline bool all_true(Mask2 m) {
 #if PH_SSE2

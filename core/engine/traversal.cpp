@@ -83,6 +83,8 @@ class Walker {
         result_(result),
         sx_(sign_of(m.x)),
         sy_(sign_of(m.y)),
+        forward_(Double2{m.x, m.y} > Double2{0.0, 0.0}),
+        still_(Double2{m.x, m.y} == Double2{0.0, 0.0}),
         tdx_(texel_travel[0]),
         tdy_(texel_travel[1]),
         texel_(cursor.texel),
@@ -99,9 +101,14 @@ class Walker {
     p.y = std::clamp(p.y, static_cast<double>(texel_.y), static_cast<double>(texel_.y) + 1.0);
     origin_ = p;
     t_ = 0.0;
-    // Without a branch on the signs (random from frame to frame): the same values.
-    tmx_ = pick_double(sx_ == 0, kInf, pick_double(sx_ > 0, texel_.x + 1.0 - p.x, p.x - texel_.x) * tdx_);
-    tmy_ = pick_double(sy_ == 0, kInf, pick_double(sy_ > 0, texel_.y + 1.0 - p.y, p.y - texel_.y) * tdy_);
+    // Both axes at once and without a branch on the signs (random from frame to frame): along each axis the
+    // distance to the texel's far side times the travel per texel, or +inf along an axis the motion does not move
+    // along.
+    const Double2 at{p.x, p.y}, cell{static_cast<double>(texel_.x), static_cast<double>(texel_.y)};
+    const Double2 travel = select2(forward_, (cell + kOnes) - at, at - cell) * Double2{tdx_, tdy_};
+    const Double2 next = select2(still_, splat(kInf), travel);
+    tmx_ = next[0];
+    tmy_ = next[1];
   }
 
   // Midpoint of the chord of the current line through a texel's box (the texel's centre when the line
@@ -432,7 +439,8 @@ class Walker {
   StepObserver* const observer_;
   FrameResult& result_;
   const int sx_, sy_;
-  const double tdx_, tdy_;  // display travel per texel along x and y
+  const Mask2 forward_, still_;  // per axis: the motion's sign is positive; it is zero
+  const double tdx_, tdy_;       // display travel per texel along x and y
   Texel texel_, from_;
   Vec2 origin_;                     // start of the current straight leg
   double t_ = 0.0;                  // display travel since origin_
