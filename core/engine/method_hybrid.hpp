@@ -70,6 +70,8 @@ class HybridMethod final : public Method {
 
     // The curvature reading's: every field of the region has its size, and the neighbours behind are the same.
     FieldTexel at(Texel local) const { return curvature_.at(local); }
+    // The region's fields where a texel's height can be read (both a depth and a gradient field), else null.
+    const RegionFields* heights() const { return heights_; }
     PH_ALWAYS_INLINE TexelSample sample(Texel local) const { return sample(at(local)); }
     // Every field of a region has the region's size, so one index serves the marks, the depths and the gradients.
     PH_ALWAYS_INLINE TexelSample sample(FieldTexel at) const {
@@ -99,7 +101,7 @@ class HybridMethod final : public Method {
     if (fields == nullptr) return without_height(s);
     // A mark carries its own height, and the leg gave a texel at the region's border its height already.
     if (s.v2 == kDepthStep || CurvatureMethod::reads_from(s)) return s;
-    with_height(s, fields->depth && fields->gradient ? fields : nullptr, at.index);
+    with_height(s, leg.heights(), at.index);
     return s;
   }
   // Bilinear sampling: curvature's interpolated sample, and on a discontinuity texel depth's reading as above (its
