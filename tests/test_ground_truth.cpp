@@ -177,5 +177,53 @@ TEST(GroundTruth, EngineOnAFloatFieldStaysCloseToTheTruth) {
   RecordProperty("worst_end_error_px", std::to_string(worst));
 }
 
+// A plane of slope `slope` along x with a height jump `jump` at x = 0 (flat normals would be slope 0), declared as
+// its breakpoint.
+class SteppedPlane final : public AnalyticSurface {
+ public:
+  // desktop_left: x < 0 lies outside every region (the plane is a region's relief from x = 0 on).
+  SteppedPlane(double slope, double jump, bool desktop_left = false)
+      : slope_(slope), jump_(jump), desktop_left_(desktop_left) {}
+  bool outside_regions(Vec2 p) const override { return desktop_left_ && p.x < 0.0; }
+  double height(Vec2 p) const override { return slope_ * p.x + (p.x >= 0.0 ? jump_ : 0.0); }
+  ExactGradient gradient(Vec2) const override { return {slope_, 0.0}; }
+  void breakpoints(Vec2 p0, Vec2 m, double u0, double u1, std::vector<double>& out) const override {
+    if (m.x == 0.0) return;
+    const double u = -p0.x / m.x;
+    if (u > u0 && u < u1) out.push_back(u);
+  }
+
+ private:
+  double slope_, jump_;
+  bool desktop_left_;
+};
+
+// The hybrid's exact input: where the surface steps between the point 1 px behind and the point by more than
+// discontinuity_px beyond its slopes, depth's C/D of the pair's whole height change (as on a discontinuity texel);
+// elsewhere, a steep slope included, curvature's.
+TEST(GroundTruth, HybridTakesDepthsCdAcrossAStepOnly) {
+  const HybridMethod hybrid{HybridParams{}};
+  const double threshold = hybrid.params().discontinuity_px;
+  const DepthParams& depth = kDepth.params();
+  for (double slope : {0.0, 0.3, 3.0}) {
+    for (double jump : {0.0, 0.4, 2.0, -5.0}) {
+      const SteppedPlane surface(slope, jump);
+      const TruthModel model{&surface, &hybrid};
+      for (double x : {-3.0, -0.5, 0.25, 0.5, 0.99, 1.01, 4.0}) {
+        const bool across = x > 0.0 && x < 1.0;  // the pair (x - 1, x) straddles the jump
+        const double want = across && std::abs(jump) > threshold ? depth_cd(depth, 0.0, slope + jump, 1.0, nullptr)
+                                                                 : cd_of_slopes(kCurvature.params(), slope, slope);
+        EXPECT_NEAR(truth_cd(model, {x, 7.0}, {1.0, 0.0}), want, 1e-9)
+            << "slope " << slope << ", jump " << jump << ", x " << x;
+        // Without a depth map, or where the step is against the desktop, there is no step to find.
+        const double curvature = cd_of_slopes(kCurvature.params(), slope, slope);
+        EXPECT_NEAR(truth_cd({&surface, &hybrid, false}, {x, 7.0}, {1.0, 0.0}), curvature, 1e-9);
+        const SteppedPlane region_from_zero(slope, jump, true);
+        EXPECT_NEAR(truth_cd({&region_from_zero, &hybrid}, {x, 7.0}, {1.0, 0.0}), curvature, 1e-9);
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ph

@@ -120,10 +120,10 @@ TEST(ToolStability, SmallRunWritesEveryModeMethodAndVariantWithinItsBounds) {
   const Bound bounds[] = {
       {"jump", "curvature", {0.001, 0.001, 0.001, 0.001, 0.001}},
       {"jump", "depth", {0.069, 0.4, 3.3, 0.09, 4.6}},
-      {"jump", "hybrid", {0.55, 0.4, 8, 0.09, 5}},
+      {"jump", "hybrid", {0.069, 0.4, 3.3, 0.09, 4.6}},
       {"terraces", "curvature", {8.3, 1.5, 3.4e+02, 0.001, 2.2e+02}},
       {"terraces", "depth", {0.3, 0.79, 6, 0.001, 8.5}},
-      {"terraces", "hybrid", {3.1, 1.1, 1.2e+02, 0.001, 33}},
+      {"terraces", "hybrid", {2.7, 1.1, 61, 0.001, 25}},
       {"cliff", "curvature", {1.3, 0.77, 8.8, 0.025, 13}},
       {"cliff", "depth", {0.085, 0.4, 2.8, 0.052, 4.9}},
       {"cliff", "hybrid", {1.3, 0.77, 8.8, 0.025, 13}},
@@ -159,7 +159,7 @@ TEST(ToolStability, SmallRunWritesEveryModeMethodAndVariantWithinItsBounds) {
       {"border", "hybrid", {0.21, 0.22, 0.7, 0.027, 0.98}},
       {"overlap", "curvature", {0.001, 0.001, 0.001, 0.001, 0.001}},
       {"overlap", "depth", {0.064, 0.31, 1.8, 0.065, 2.5}},
-      {"overlap", "hybrid", {0.3, 0.28, 4.4, 0.056, 0.92}},
+      {"overlap", "hybrid", {0.047, 0.28, 1.3, 0.056, 1.8}},
   };
   std::size_t checked = 0;
   for (const auto& row : rows) {

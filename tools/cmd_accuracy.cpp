@@ -12,7 +12,9 @@
 //   d16, d8  a 16- / 8-bit depth map: codes of (h / relief + 1) / 2, decode_depth; the curvature method takes
 //            central differences of it (gradient_from_depth), as the loader does for a depth-only region.
 //   The depth method reads heights, so it has f32, d16 and d8 only.
-// Ground truth: core/lab/ground_truth.hpp (exact continuous C/D, adaptive Gauss-Kronrod, 1e-9 px), per method.
+// Ground truth: core/lab/ground_truth.hpp (exact continuous C/D, adaptive Gauss-Kronrod, 1e-9 px), per method; for
+// the hybrid, which reads heights only where a depth map is given, one with them (f32, d16, d8) and one without
+// (n16, n8).
 //
 // Shapes: the 24 targets of the curvature paper and the 9 interrogation surfaces of core/lab/surfaces.hpp at 256 px
 // (a square relief, flat outside it; its "radius" for the strokes and the walks is half its size).
@@ -63,6 +65,7 @@
 #include <map>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -119,6 +122,9 @@ std::vector<Storage> storages_for(const Method& method) {
   if (!method.needs().depth) return {Storage::f32, Storage::n16, Storage::n8, Storage::d16, Storage::d8};
   return {Storage::f32, Storage::d16, Storage::d8};
 }
+
+// Whether a storage gives a method that reads heights where they are given a depth map (build_fields).
+bool gives_depth(Storage storage) { return storage != Storage::n16 && storage != Storage::n8; }
 
 // Engine variants: every traversal x sampling the engine accepts (a new enum value is picked up here).
 std::vector<EngineOptions> engine_variants() {
@@ -404,22 +410,26 @@ Workload make_workload(bool small) {
 // The truth for one method: where each stroke ends, and the walks with the truth's cursor every kDriftWindow
 // frames (the walks are steered by the true cursor, so they depend on the method).
 struct MethodTruth {
+  bool depth_given = true;  // TruthModel::depth_given
   std::vector<Vec2> stroke_ends;
   std::vector<Path> walks;
   std::vector<std::vector<Vec2>> walk_marks;
 };
 
-TruthModel model_of(const Workload& w, std::size_t target, const Method& method) {
-  return TruthModel{w.surfaces[target].get(), &method};
+TruthModel model_of(const Workload& w, std::size_t target, const Method& method, bool depth_given) {
+  return TruthModel{w.surfaces[target].get(), &method, depth_given};
 }
 
-MethodTruth compute_truth(const Workload& w, const Method& method) {
+MethodTruth compute_truth(const Workload& w, const Method& method, bool depth_given) {
   MethodTruth truth;
-  for (const Path& p : w.strokes) truth.stroke_ends.push_back(truth_end_of(model_of(w, p.target, method), p));
+  truth.depth_given = depth_given;
+  for (const Path& p : w.strokes) {
+    truth.stroke_ends.push_back(truth_end_of(model_of(w, p.target, method, depth_given), p));
+  }
   for (std::size_t target : w.config.walk_targets) {
     truth.walk_marks.emplace_back();
     truth.walks.push_back(
-        make_walk(w.config, target, model_of(w, target, method), 1000 + target, truth.walk_marks.back()));
+        make_walk(w.config, target, model_of(w, target, method, depth_given), 1000 + target, truth.walk_marks.back()));
   }
   return truth;
 }
@@ -468,7 +478,7 @@ void measure_strokes(const Workload& w, const MethodTruth& truth, const std::vec
   StepLog log;
   for (std::size_t i = 0; i < w.strokes.size(); ++i) {
     const Path& p = w.strokes[i];
-    const TruthModel model = model_of(w, p.target, method);
+    const TruthModel model = model_of(w, p.target, method, truth.depth_given);
     CursorState cursor = cursor_at(p.start);
     for (const Vec2& motor : p.motors) {
       log.steps.clear();
@@ -583,19 +593,26 @@ constexpr double kAutoBudgetsPx[] = {0.25, 2.0, 8.0};
 std::vector<VariantRow> measure_all(const Workload& w, const std::vector<MethodPtr>& methods) {
   std::vector<VariantRow> rows;
   for (const MethodPtr& method : methods) {
-    const Clock::time_point t_truth = Clock::now();
-    const MethodTruth truth = compute_truth(w, *method);
-    fmt::print(stderr, "accuracy: {} ground truth in {:.1f} s\n", method->name(), ms_since(t_truth) / 1000.0);
+    // A method that reads heights only where a depth map is given has a truth with them and one without.
+    std::optional<MethodTruth> truths[2];  // [0]: without a depth map
     for (Storage storage : storages_for(*method)) {
+      const bool depth_given = !method->needs().depth_if_given || gives_depth(storage);
+      std::optional<MethodTruth>& truth = truths[depth_given ? 1 : 0];
+      if (!truth) {
+        const Clock::time_point t_truth = Clock::now();
+        truth = compute_truth(w, *method, depth_given);
+        fmt::print(stderr, "accuracy: {} ground truth{} in {:.1f} s\n", method->name(),
+                   depth_given ? "" : " without a depth map", ms_since(t_truth) / 1000.0);
+      }
       StorageScenes scenes = build_scenes(w, method, storage);
       auto report = [&rows](VariantRow row) {
         fmt::print(stderr, "accuracy: {:<44} end rms {:.3g} px, C/D rms {:.3g}, {:.0f} ns/frame\n", row.variant,
                    row.end_rms, row.cd_rms, row.ns_median);
         rows.push_back(std::move(row));
       };
-      for (const EngineOptions& engine : w.engines) report(measure_variant(w, truth, method, storage, scenes, engine));
+      for (const EngineOptions& engine : w.engines) report(measure_variant(w, *truth, method, storage, scenes, engine));
       if (storage != Storage::f32) continue;  // auto on exact fields only: a point per budget, not a cloud
-      for (double budget : kAutoBudgetsPx) report(measure_auto(w, truth, method, storage, scenes, budget));
+      for (double budget : kAutoBudgetsPx) report(measure_auto(w, *truth, method, storage, scenes, budget));
     }
   }
   return rows;
@@ -624,7 +641,7 @@ void write_fig5(const fs::path& path, const Workload& w, const std::vector<Metho
     const std::int32_t size = shape.size();
     for (const MethodPtr& method : methods) {
       const Scene scene = make_scene(shape, method, build_fields(shape, method->needs(), Storage::f32, {}));
-      const TruthModel model = model_of(w, t, *method);
+      const TruthModel model = model_of(w, t, *method, true);  // f32 fields: the depth map given
       CursorState cursor = cursor_at({0.0, size / 2.0 + 0.5});
       CdError unused;
       StepLog log;

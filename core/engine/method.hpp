@@ -29,6 +29,11 @@ struct TexelSample {
 struct SurfacePoint {
   double height = 0.0;  // px toward the viewer
   Vec2 gradient;        // (dh/dx, dh/dy), y down
+  // For a method that reads both heights and normals, at the second point p of the ground truth's pair (p - m, p):
+  // the height change from p - m, and the part of it that the slopes along the way do not explain (a step of the
+  // surface between the two points; 0 where the surface is smooth there).
+  double rise = 0.0;
+  double unexplained_rise = 0.0;
 };
 
 // The intermediate quantities of one step, for traces and tests. Fields a method does not use stay NaN

@@ -113,8 +113,13 @@ class HybridMethod final : public Method {
     }
     return without_height(curvature_.sample_at(fields, local, at, m));
   }
-  // The analytic surfaces of the ground truth are continuous: the curvature method's exact sample.
+  // The exact sample: where the surface steps between the point 1 px behind and this one by more than
+  // `discontinuity_px` beyond what its slopes explain, depth's reading of the step (the height change over the pair),
+  // as on a discontinuity texel; elsewhere the curvature method's exact sample.
   TexelSample sample_exact(const SurfacePoint& point, Vec2 m) const override {
+    if (std::abs(point.unexplained_rise) > params_.discontinuity_px) {
+      return {0.0, 0.0, kDepthStep, 0.0, point.height, point.rise};
+    }
     return without_height(curvature_.sample_exact(point, m));
   }
   // Whether cd(from, to, ...) reads `from`: as the curvature method, never on a discontinuity texel.

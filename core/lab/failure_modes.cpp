@@ -132,6 +132,7 @@ class LayeredSurface final : public AnalyticSurface {
     const Layer* l = top(p);
     return l != nullptr ? l->surface->gradient(p) : ExactGradient{};
   }
+  bool outside_regions(Vec2 p) const override { return top(p) == nullptr; }
   void breakpoints(Vec2 p0, Vec2 m, double u0, double u1, std::vector<double>& out) const override {
     for (const Layer& l : layers_) {
       auto add = [&](double start, double dir, double edge) {

@@ -95,6 +95,7 @@ class InterrogationSurface final : public AnalyticSurface {
     const HeightDerivatives d = surface_derivatives(spec_, p);
     return {d.hx, d.hy};
   }
+  bool outside_regions(Vec2 p) const override { return !inside(p); }
   void breakpoints(Vec2 p0, Vec2 m, double u0, double u1, std::vector<double>& out) const override {
     const double size = spec_.size;
     auto add = [&](double coord0, double dir, double edge) {
@@ -185,15 +186,43 @@ std::vector<double> integrand_breakpoints(const TruthModel& model, Vec2 p0, Vec2
   return cuts;
 }
 
-// What a method with `needs` reads of the surface at p.
-SurfacePoint point_of(const AnalyticSurface& surface, Vec2 p, FieldNeeds needs) {
+// Whether the truth gives the model's method the surface's heights.
+bool reads_heights(const TruthModel& model) {
+  const FieldNeeds needs = model.method->needs();
+  return needs.depth || (needs.depth_if_given && model.depth_given);
+}
+
+// What a method with `needs` reads of the surface at p (the heights where `heights`).
+SurfacePoint point_of(const AnalyticSurface& surface, Vec2 p, FieldNeeds needs, bool heights) {
   SurfacePoint point;
-  if (needs.depth) point.height = surface.height(p);
+  if (heights) point.height = surface.height(p);
   if (needs.gradient) {
     const ExactGradient g = surface.gradient(p);
     point.gradient = {g.x, g.y};
   }
   return point;
+}
+
+// The part of `rise`, the height change from a to a + m (m unit), that the slopes along the way do not explain: a step
+// of the surface between the two points. Between the surface's breakpoints it is smooth, and its height change there is
+// the integral of its slope along m (one Gauss-Kronrod rule per piece); with no breakpoint between the points there is
+// no step.
+double unexplained_rise(const AnalyticSurface& surface, Vec2 a, Vec2 m, double rise) {
+  std::vector<double> cuts;
+  surface.breakpoints(a, m, 0.0, 1.0, cuts);
+  if (cuts.empty()) return 0.0;
+  cuts.push_back(0.0);
+  cuts.push_back(1.0);
+  std::sort(cuts.begin(), cuts.end());
+  const auto slope = [&](double s) {
+    const ExactGradient g = surface.gradient(a + m * s);
+    return g.x * m.x + g.y * m.y;
+  };
+  double explained = 0.0, error = 0.0;
+  for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
+    if (cuts[i + 1] > cuts[i]) explained += gauss_kronrod(slope, cuts[i], cuts[i + 1], error);
+  }
+  return rise - explained;
 }
 
 }  // namespace
@@ -213,9 +242,16 @@ double truth_cd_upper_bound(const TruthModel& model) { return model.method->cd_u
 double truth_cd(const TruthModel& model, Vec2 p, Vec2 m, StepDetail* detail) {
   const Method& method = *model.method;
   const FieldNeeds needs = method.needs();
-  const TexelSample behind = method.sample_exact(point_of(*model.surface, p - m, needs), m);
-  const TexelSample here = method.sample_exact(point_of(*model.surface, p, needs), m);
-  return method.cd(behind, here, 1.0, detail);
+  const bool heights = reads_heights(model);
+  const SurfacePoint point_behind = point_of(*model.surface, p - m, needs, heights);
+  SurfacePoint point = point_of(*model.surface, p, needs, heights);
+  if (needs.gradient && heights) {
+    point.rise = point.height - point_behind.height;
+    if (!model.surface->outside_regions(p - m) && !model.surface->outside_regions(p)) {
+      point.unexplained_rise = unexplained_rise(*model.surface, p - m, m, point.rise);
+    }
+  }
+  return method.cd(method.sample_exact(point_behind, m), method.sample_exact(point, m), 1.0, detail);
 }
 
 double truth_motor_travel(const TruthModel& model, Vec2 p0, Vec2 m, double d, const TruthTolerance& tol) {

@@ -49,6 +49,12 @@ class AnalyticSurface {
   // Appends the distances u in (u0, u1) along the line p0 + u m (m unit) where the height or the gradient is not
   // smooth (a rim, an apex, a region's border); may append extra points, never needs to be sorted.
   virtual void breakpoints(Vec2 p0, Vec2 m, double u0, double u1, std::vector<double>& out) const = 0;
+  // Whether p lies outside every region, on the desktop: it has no depth map, so the hybrid method looks for no step
+  // against it (docs/METHODS.md, "Hybrid"), and neither does its truth. None by default.
+  virtual bool outside_regions(Vec2 p) const {
+    static_cast<void>(p);
+    return false;
+  }
 };
 
 // A target at its own pixels (region at (0, 0), as the tools build it), in double precision. Its heights equal
@@ -64,6 +70,9 @@ std::unique_ptr<AnalyticSurface> make_interrogation_surface(const SurfaceSpec& s
 struct TruthModel {
   const AnalyticSurface* surface = nullptr;
   const Method* method = nullptr;
+  // For a method that reads heights only where a depth map is given (FieldNeeds::depth_if_given): whether it is
+  // given one, that is the surface's heights.
+  bool depth_given = true;
 };
 
 // Smallest and largest C/D the model can give (the method's bounds).
