@@ -11,6 +11,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "config/scene_file.hpp"
@@ -460,6 +461,34 @@ TEST(HybridMethod, ASmoothReliefNearTheTexelPeriodIsNoDiscontinuity) {
   prepare_hybrid_fields(HybridParams{.discontinuity_px = 0.5, .noise_slope = 0.0, .far_noise_gain = 0.0}, step);
   EXPECT_EQ(step.discontinuity->at(15, 2), 1);
   EXPECT_EQ(step.discontinuity->at(16, 2), 1);
+}
+
+// Gratings of amplitude 4 px at about the texel period met at an angle (period 2 px at 45 degrees, 3 px at 30), with
+// exact heights and normals at the texel centres: along a row or column both maps alias to changes that neither
+// explains and that do not simply alternate (without the test of resolved relief 42 % and 37 % of the texels were
+// marked). The slopes beside such an edge change by far more than the heights do unexplained: relief the texels do
+// not resolve, where no step is to be found. (The step between level treads of the test above is still marked, and
+// so are those beside a generator's smeared normals, two tests up.)
+TEST(HybridMethod, AGratingTheTexelsDoNotResolveIsNoDiscontinuity) {
+  for (const auto& [period, degrees] : {std::pair{2.0, 45.0}, std::pair{3.0, 30.0}}) {
+    const double amplitude = 4.0, k = 2.0 * std::numbers::pi / period, a = degrees * std::numbers::pi / 180.0;
+    const double c = std::cos(a), s = std::sin(a);
+    RegionFields fields;
+    fields.gradient = GradientField(48, 48);
+    fields.depth = DepthField(48, 48);
+    for (int y = 0; y < 48; ++y) {
+      for (int x = 0; x < 48; ++x) {
+        const double phase = k * ((x + 0.5) * c + (y + 0.5) * s) + 0.3;
+        fields.depth->at(x, y) = static_cast<float>(amplitude * std::sin(phase));
+        const double slope = amplitude * k * std::cos(phase);
+        fields.gradient->at(x, y) = {static_cast<float>(slope * c), static_cast<float>(slope * s)};
+      }
+    }
+    prepare_hybrid_fields(HybridParams{.discontinuity_px = 0.5, .noise_slope = 0.0, .far_noise_gain = 0.0}, fields);
+    int marked = 0;
+    for (std::uint8_t mark : fields.discontinuity->values) marked += mark;
+    EXPECT_EQ(marked, 0) << "period " << period << " px at " << degrees << " degrees";
+  }
 }
 
 TEST(HybridMethod, NeverGivesNanOrLeavesItsBounds) {

@@ -1,6 +1,7 @@
 #include "core/engine/method_hybrid.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
@@ -73,6 +74,10 @@ double gradient_noise(const GradientField& g) { return robust_sigma(differences(
 // sqrt(2 ln n); a difference beyond it times the noise's sigma is a feature, not noise.
 double universal_threshold(std::size_t n) { return std::sqrt(2.0 * std::log(std::max<double>(2.0, n))); }
 
+// The slopes along one axis across an edge between two texels: a_out, a (the texel before the edge and the one before
+// it), b, b_out (the texel after it and the one after that).
+using EdgeSlopes = std::array<double, 4>;
+
 // How far a height change `dh` over 1 px lies outside what the slopes of the two texels explain, signed. A
 // continuous surface whose slope goes from a to b changes by anything between them (a kink or a rim between the
 // centres included). A smooth surface's slope may also peak between the centres, as on a relief near the texel
@@ -80,10 +85,23 @@ double universal_threshold(std::size_t n) { return std::sqrt(2.0 * std::log(std:
 // correction estimates from the slopes one texel further out on each side (a_out before a, b_out after b):
 // (a + b) / 2 - (c_b - c_a) / 12, the curvatures c by central differences of the slopes. That is explained too;
 // only the excess beyond all of these is not.
-double unexplained(double dh, double a_out, double a, double b, double b_out) {
+double unexplained(double dh, const EdgeSlopes& s) {
+  const auto [a_out, a, b, b_out] = s;
   const double smooth = 0.5 * (a + b) - ((b_out - b) - (a - a_out)) / 24.0;
   const double lo = std::min({a, b, smooth}), hi = std::max({a, b, smooth});
   return dh < lo ? dh - lo : (dh > hi ? dh - hi : 0.0);
+}
+
+// Whether the texels resolve the relief around an edge whose unexplained change is `e`: the slopes beside the edge
+// (from each of its texels to the one further out) change by at most kAliasedSlopeChange times e. Relief that varies
+// faster than the texels resolve (a grating at about the texel period, met at an angle) aliases in the heights as it
+// does in the normals, and a change they leave unexplained there is no step. A step's own normals change by a
+// fraction of it, even smeared by a generator (Sobel: by a quarter of its height, where about 0.6 of it is left
+// unexplained).
+constexpr double kAliasedSlopeChange = 4.0;
+bool resolved(const EdgeSlopes& s, double e) {
+  const auto [a_out, a, b, b_out] = s;
+  return std::max(std::abs(a - a_out), std::abs(b_out - b)) <= kAliasedSlopeChange * std::abs(e);
 }
 
 // Whether the unexplained change `e` of an edge, between those of the edges before and after it along the same
@@ -101,26 +119,34 @@ bool is_step(double before, double e, double after, double threshold) {
 }
 
 // Marks both texels of every edge across which the height changes by more than `threshold` beyond what the
-// normals explain, and keeps it changed (is_step).
+// normals explain, keeps it changed (is_step) and lies in relief the texels resolve (resolved).
 DiscontinuityField find_discontinuities(const GradientField& g, const DepthField& d, double threshold) {
   const std::int32_t w = g.width, h = g.height;
-  auto along_x = [&](std::int32_t x, std::int32_t y) {  // the edge between (x, y) and (x + 1, y); 0 outside
-    return x < 0 || x + 1 >= w ? 0.0
-                               : unexplained(d.at(x + 1, y) - d.at(x, y), g.at(std::max(x - 1, 0), y).x, g.at(x, y).x,
-                                             g.at(x + 1, y).x, g.at(std::min(x + 2, w - 1), y).x);
+  auto slopes_x = [&](std::int32_t x, std::int32_t y) {  // across the edge between (x, y) and (x + 1, y)
+    return EdgeSlopes{g.at(std::max(x - 1, 0), y).x, g.at(x, y).x, g.at(x + 1, y).x, g.at(std::min(x + 2, w - 1), y).x};
   };
-  auto along_y = [&](std::int32_t x, std::int32_t y) {  // between (x, y) and (x, y + 1)
-    return y < 0 || y + 1 >= h ? 0.0
-                               : unexplained(d.at(x, y + 1) - d.at(x, y), g.at(x, std::max(y - 1, 0)).y, g.at(x, y).y,
-                                             g.at(x, y + 1).y, g.at(x, std::min(y + 2, h - 1)).y);
+  auto slopes_y = [&](std::int32_t x, std::int32_t y) {  // between (x, y) and (x, y + 1)
+    return EdgeSlopes{g.at(x, std::max(y - 1, 0)).y, g.at(x, y).y, g.at(x, y + 1).y, g.at(x, std::min(y + 2, h - 1)).y};
+  };
+  auto along_x = [&](std::int32_t x, std::int32_t y) {  // 0 outside
+    return x < 0 || x + 1 >= w ? 0.0 : unexplained(d.at(x + 1, y) - d.at(x, y), slopes_x(x, y));
+  };
+  auto along_y = [&](std::int32_t x, std::int32_t y) {
+    return y < 0 || y + 1 >= h ? 0.0 : unexplained(d.at(x, y + 1) - d.at(x, y), slopes_y(x, y));
   };
   DiscontinuityField marks(w, h, 0);
   for (std::int32_t y = 0; y < h; ++y) {
     for (std::int32_t x = 0; x < w; ++x) {
-      if (x + 1 < w && is_step(along_x(x - 1, y), along_x(x, y), along_x(x + 1, y), threshold))
-        marks.at(x, y) = marks.at(x + 1, y) = 1;
-      if (y + 1 < h && is_step(along_y(x, y - 1), along_y(x, y), along_y(x, y + 1), threshold))
-        marks.at(x, y) = marks.at(x, y + 1) = 1;
+      if (x + 1 < w) {
+        const double e = along_x(x, y);
+        if (is_step(along_x(x - 1, y), e, along_x(x + 1, y), threshold) && resolved(slopes_x(x, y), e))
+          marks.at(x, y) = marks.at(x + 1, y) = 1;
+      }
+      if (y + 1 < h) {
+        const double e = along_y(x, y);
+        if (is_step(along_y(x, y - 1), e, along_y(x, y + 1), threshold) && resolved(slopes_y(x, y), e))
+          marks.at(x, y) = marks.at(x, y + 1) = 1;
+      }
     }
   }
   return marks;
