@@ -210,19 +210,24 @@ TEST(HybridMethod, LeavesARegionBorderTheNormalsExplainToTheCurvatureMethod) {
 }
 
 // Two overlapping regions: crossing into the upper one where it lies 3 px above the one below is a step; where the
-// two are level it is not.
+// two are level it is not. The same with bilinear sampling, whose samples carry their heights for it.
 TEST(HybridMethod, TakesTheDepthCdWhereARegionOverlapsAnotherBelowIt) {
   const DepthParams depth;
   const auto hybrid = std::make_shared<HybridMethod>(HybridParams{});
-  for (const float upper : {3.0f, 1.0f}) {
-    std::vector<Region> regions;
-    regions.push_back(region_of("below", plateau_fields(40, 16, 1.0f), {0, 0, 40, 16}, hybrid));
-    regions.push_back(region_of("above", plateau_fields(40, 16, upper), {20, 0, 40, 16}, hybrid));
-    const Scene scene(std::move(regions));
-    for (const auto& [x, cd] : texel_cds(scene, 5.0, 50.0)) {
-      const bool step = x == 20 && upper == 3.0f;
-      EXPECT_EQ(cd, step ? depth.kmax : 1.0)  // a 2 px rise: 1 + 3 x 2, capped at kmax
-          << "x " << x << ", upper region at " << upper << " px";
+  for (const Sampling sampling : {Sampling::nearest, Sampling::bilinear}) {
+    for (const float upper : {3.0f, 1.0f}) {
+      std::vector<Region> regions;
+      regions.push_back(region_of("below", plateau_fields(40, 16, 1.0f), {0, 0, 40, 16}, hybrid));
+      regions.push_back(region_of("above", plateau_fields(40, 16, upper), {20, 0, 40, 16}, hybrid));
+      Scene scene(std::move(regions));
+      EngineOptions options;
+      options.sampling = sampling;
+      scene.set_options(options);
+      for (const auto& [x, cd] : texel_cds(scene, 5.0, 50.0)) {
+        const bool step = x == 20 && upper == 3.0f;
+        EXPECT_EQ(cd, step ? depth.kmax : 1.0)  // a 2 px rise: 1 + 3 x 2, capped at kmax
+            << "x " << x << ", upper region at " << upper << " px, " << name_of(sampling);
+      }
     }
   }
 }

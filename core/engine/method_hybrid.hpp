@@ -106,12 +106,22 @@ class HybridMethod final : public Method {
   }
   // Bilinear sampling: curvature's interpolated sample, and on a discontinuity texel depth's reading as above (its
   // v0 and v1 flat, so that the next texel, which pairs with this sample, does not pair with a step's smeared normals).
+  // The walk pairs every sample with the one before it, so each carries its texel's height, and one whose neighbour
+  // behind lies inside the region says so (v3 = kInsideRegion): cd() looks for a step between regions only where the
+  // walk enters one, as with the nearest reading.
   TexelSample sample_at(const RegionFields* fields, Texel local, Vec2 at, Vec2 m) const override {
     if (fields != nullptr && fields->discontinuity && fields->depth && marked(*fields->discontinuity, local)) {
       const TexelSample d = depth_.sample(fields, local, m);
       if (!std::isnan(d.v1)) return {0.0, 0.0, kDepthStep, 0.0, d.v0, d.v1};
     }
-    return without_height(curvature_.sample_at(fields, local, at, m));
+    TexelSample s = curvature_.sample_at(fields, local, at, m);
+    if (fields == nullptr || !fields->depth || !fields->gradient) return without_height(s);
+    const GradientField& g = *fields->gradient;
+    with_height(s, fields, static_cast<std::size_t>(local.y) * g.width + local.x);
+    const bool enters = (m.x > 0.0 && local.x == 0) || (m.x < 0.0 && local.x == g.width - 1) ||
+                        (m.y > 0.0 && local.y == 0) || (m.y < 0.0 && local.y == g.height - 1);
+    if (!enters) s.v3 = kInsideRegion;
+    return s;
   }
   // The exact sample: where the surface steps between the point 1 px behind and this one by more than
   // `discontinuity_px` beyond what its slopes explain, depth's reading of the step (the height change over the pair),
@@ -131,7 +141,7 @@ class HybridMethod final : public Method {
   cd(const TexelSample& from, const TexelSample& to, double step_px, StepDetail* detail) const override {
     if (to.v2 == kDepthStep) [[unlikely]]
       return depth_cd(depth_.params(), depth_.cd_lower_bound(), 0.0, to.v5, 1.0, detail);
-    if (CurvatureMethod::reads_from(to) && step_between(from, to)) [[unlikely]]
+    if (CurvatureMethod::reads_from(to) && to.v3 != kInsideRegion && step_between(from, to)) [[unlikely]]
       return depth_cd(depth_.params(), depth_.cd_lower_bound(), from.v4, to.v4, 1.0, detail);
     return curvature_.cd(from, to, step_px, detail);
   }
@@ -172,6 +182,9 @@ class HybridMethod final : public Method {
 
   // v2 of a discontinuity texel's sample (curvature's v2 is finite or NaN, never infinite).
   static constexpr double kDepthStep = std::numeric_limits<double>::infinity();
+  // v3 of a bilinear sample whose texel's neighbour behind lies in the same region (the curvature method's bilinear
+  // reading leaves v3 unread unless infinite).
+  static constexpr double kInsideRegion = 0.0;
 
   HybridParams params_;
   CurvatureMethod curvature_{CurvatureParams{}};
