@@ -172,6 +172,17 @@ const std::vector<ph::Vec2>& typical_motions() {
   return motions;
 }
 
+// The same directions, each 1000 times shorter (1-10 thousandths of a px): a frame that stays inside the texel it
+// starts in, so that it costs the frame's own work and the one C/D of that texel, and no texel step.
+const std::vector<ph::Vec2>& still_motions() {
+  static const std::vector<ph::Vec2> motions = [] {
+    std::vector<ph::Vec2> out = typical_motions();
+    for (ph::Vec2& m : out) m = m * 1e-3;
+    return out;
+  }();
+  return motions;
+}
+
 struct Flick {
   ph::CursorState start;
   ph::Vec2 motor;
@@ -211,13 +222,12 @@ void report_steps(benchmark::State& state, std::uint64_t steps) {
   }
 }
 
-// Feeds the typical stream frame after frame, as the daemon would (each frame depends on the last). A
+// Feeds the typical stream (or `motions`) frame after frame, as the daemon would (each frame depends on the last). A
 // cursor that leaves `keep_in` goes back to `start`; that check is two compares per frame, under 1 ns, and
 // is left in the timing rather than pausing the timer (PauseTiming costs far more than a frame). With
 // several scenes, the next one takes over from `start` after each pass over the stream.
 void run_typical_frames(benchmark::State& state, std::span<const ph::Scene* const> scenes, ph::Vec2 start,
-                        ph::Rect keep_in) {
-  const std::vector<ph::Vec2>& motions = typical_motions();
+                        ph::Rect keep_in, const std::vector<ph::Vec2>& motions = typical_motions()) {
   const ph::CursorState start_cursor = ph::cursor_at(start);
   ph::CursorState cursor = start_cursor;
   std::size_t scene_index = 0;
@@ -328,6 +338,9 @@ void register_pair(const std::string& label, MethodKind kind, SceneListFn make_s
   };
   benchmark::RegisterBenchmark(("typical/" + suffix).c_str(), [=](benchmark::State& state) {
     run_typical_frames(state, scenes_for(), kTargetCentre, kTargetRect);
+  });
+  benchmark::RegisterBenchmark(("still/" + suffix).c_str(), [=](benchmark::State& state) {
+    run_typical_frames(state, scenes_for(), kTargetCentre, kTargetRect, still_motions());
   });
   benchmark::RegisterBenchmark(("flick/" + suffix).c_str(),
                                [=](benchmark::State& state) { run_flicks(state, scenes_for()); });
