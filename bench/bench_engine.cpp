@@ -1,6 +1,7 @@
 // Cost of ph::advance, the exact per-texel traversal (docs/METHODS.md, "The traversal"), for the curvature, the
-// depth and the hybrid method (given both maps) on the paper's targets: typical frames, fast flicks, a pointer outside
-// every region and a flat region. docs/PERFORMANCE.md explains the figures and how to reproduce them.
+// depth and the hybrid method (given both maps) on the paper's targets: typical frames, frames that stay in their texel
+// (still/: a frame's own cost), fast flicks, a pointer outside every region and a flat region. docs/PERFORMANCE.md
+// explains the figures and how to reproduce them.
 //
 // Every benchmark reports, besides the time per iteration (= per frame, one advance call):
 //   steps_per_frame  texel boundaries crossed inside regions per frame (FrameResult::steps, averaged);
