@@ -1162,6 +1162,11 @@ void default_scene_part(Report& report, const Options& options, Latency& latency
         const int fds_before = open_fd_count(pid);
         int fds_first = -1, fds_last = -1;
         long rss_first = -1, rss_last = -1;
+        // VmRSS at the end of each third of the cycles: a leak grows in every third; the allocator's high-water mark
+        // may rise once, by about 1-1.7 MB at a cycle that varies from run to run (seen in 300-cycle runs of the
+        // reader-thread daemon, also with one malloc arena and fixed mmap/trim thresholds), which is no leak.
+        const int third = std::max(1, options.cycles / 3);
+        std::vector<long> rss_thirds;
         int done = 0;
         const auto start = Clock::now();
         for (int cycle = 1; cycle <= options.cycles; ++cycle) {
@@ -1191,6 +1196,7 @@ void default_scene_part(Report& report, const Options& options, Latency& latency
             fds_first = open_fd_count(pid);
             rss_first = rss_kib(pid);
           }
+          if (cycle % third == 0 && cycle / third <= 2) rss_thirds.push_back(rss_kib(pid));
         }
         const double per_cycle = std::chrono::duration<double>(Clock::now() - start).count() / std::max(done, 1);
         if (done == options.cycles) {
@@ -1199,17 +1205,30 @@ void default_scene_part(Report& report, const Options& options, Latency& latency
           rss_last = rss_kib(pid);
           check.expect(fds_last == fds_first,
                        fmt::format("open fds: {} after cycle 1, {} after cycle {}", fds_first, fds_last, done));
-          constexpr long kRssSlackKib = 256;
-          check.expect(rss_last - rss_first <= kRssSlackKib,
+          // A leak of 2.6 KiB a cycle or more grows both later thirds by a third of the slack; a one-time rise stays
+          // within the bound on the whole run.
+          constexpr long kRssSlackKib = 256, kRssOnceKib = 4096;
+          if (rss_thirds.size() == 2) {
+            const long second = rss_thirds[1] - rss_thirds[0], last = rss_last - rss_thirds[1];
+            check.expect(
+                std::min(second, last) <= kRssSlackKib / 3,
+                fmt::format("VmRSS grew in each of the last two thirds of the cycles: by {} KiB (cycles {}-{}) "
+                            "and {} KiB (cycles {}-{}); allowed in one of them: {} KiB",
+                            second, third, 2 * third, last, 2 * third, done, kRssSlackKib / 3));
+          }
+          check.expect(rss_last - rss_first <= kRssOnceKib,
                        fmt::format("VmRSS grew from {} KiB after cycle 1 to {} KiB after cycle {} (allowed: "
                                    "{} KiB)",
-                                   rss_first, rss_last, done, kRssSlackKib));
+                                   rss_first, rss_last, done, kRssOnceKib));
         }
         check.expect(daemon->running(), "the daemon exited during the cycles");
+        const std::string thirds = rss_thirds.size() == 2 ? fmt::format(", {} and {} KiB after cycles {} and {}",
+                                                                        rss_thirds[0], rss_thirds[1], third, 2 * third)
+                                                          : std::string();
         check.note(
             fmt::format("{} cycles, {:.0f} ms each; open fds {} before, {} after cycle 1, {} after the "
-                        "last; VmRSS {} KiB after cycle 1, {} KiB after the last",
-                        done, per_cycle * 1000, fds_before, fds_first, fds_last, rss_first, rss_last));
+                        "last; VmRSS {} KiB after cycle 1{}, {} KiB after the last",
+                        done, per_cycle * 1000, fds_before, fds_first, fds_last, rss_first, thirds, rss_last));
       });
 
   session.run("[6] two mice at once: both taken, one shared cursor model", [&](Check& check) {
