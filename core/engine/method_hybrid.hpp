@@ -116,11 +116,10 @@ class HybridMethod final : public Method {
     }
     TexelSample s = curvature_.sample_at(fields, local, at, m);
     if (fields == nullptr || !fields->depth || !fields->gradient) return without_height(s);
-    const GradientField& g = *fields->gradient;
-    with_height(s, fields, static_cast<std::size_t>(local.y) * g.width + local.x);
-    const bool enters = (m.x > 0.0 && local.x == 0) || (m.x < 0.0 && local.x == g.width - 1) ||
-                        (m.y > 0.0 && local.y == 0) || (m.y < 0.0 && local.y == g.height - 1);
-    if (!enters) s.v3 = kInsideRegion;
+    const FieldTexel texel =
+        field_texel(local, fields->gradient->width, fields->gradient->height, -sign_of(m.x), -sign_of(m.y));
+    with_height(s, fields, texel.index);
+    if (texel.behind_inside) s.v3 = kInsideRegion;
     return s;
   }
   // The exact sample: where the surface steps between the point 1 px behind and this one by more than
