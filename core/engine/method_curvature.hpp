@@ -43,17 +43,17 @@ PH_ALWAYS_INLINE inline double curvature_cd_of_change(const CurvatureParams& p, 
   const double cos_alpha = 0.5 * (a1 + a2);
   // One product on the step's chain: the sign is exactly +-1, so this is (sign * change) * 180/pi to the bit.
   const double delta_beta = theta1_minus_theta2 * (p.delta_beta_sign * (180.0 / std::numbers::pi));
-  // Eq. 3 with the limits that keep Eq. 2 meaningful (k >= 1).
-  const double kmax = std::clamp(p.kmax_prime * (1.0 + delta_beta), p.kmax_lo, p.kmax_hi);
-  const double kmin = std::clamp(p.kmin_prime * (1.0 - delta_beta), p.kmin_lo, p.kmin_hi);
+  // Eq. 3 with the limits that keep Eq. 2 meaningful (k >= 1); each worked out only where Eq. 2 reads it.
+  auto kmax = [&] { return std::clamp(p.kmax_prime * (1.0 + delta_beta), p.kmax_lo, p.kmax_hi); };
+  auto kmin = [&] { return std::clamp(p.kmin_prime * (1.0 - delta_beta), p.kmin_lo, p.kmin_hi); };
   // Eq. 2: cos(alpha) < 0 is uphill (the projected normal leans against the motion).
   double cd = 1.0;
   if (cos_alpha > 0.0) {
-    cd = 1.0 - cos_alpha * (1.0 - 1.0 / kmin);
+    cd = 1.0 - cos_alpha * (1.0 - 1.0 / kmin());
   } else if (cos_alpha < 0.0) {
-    cd = 1.0 - cos_alpha * (kmax - 1.0);
+    cd = 1.0 - cos_alpha * (kmax() - 1.0);
   }
-  if (detail != nullptr) *detail = {cos_alpha, delta_beta, kmax, kmin, std::numeric_limits<double>::quiet_NaN()};
+  if (detail != nullptr) *detail = {cos_alpha, delta_beta, kmax(), kmin(), std::numeric_limits<double>::quiet_NaN()};
   return cd;
 }
 
