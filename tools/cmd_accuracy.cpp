@@ -123,9 +123,6 @@ std::vector<Storage> storages_for(const Method& method) {
   return {Storage::f32, Storage::d16, Storage::d8};
 }
 
-// Whether a storage gives a method that reads heights where they are given a depth map (build_fields).
-bool gives_depth(Storage storage) { return storage != Storage::n16 && storage != Storage::n8; }
-
 // Engine variants: every traversal x sampling the engine accepts (a new enum value is picked up here).
 std::vector<EngineOptions> engine_variants() {
   std::vector<EngineOptions> out;
@@ -438,6 +435,7 @@ MethodTruth compute_truth(const Workload& w, const Method& method, bool depth_gi
 struct StorageScenes {
   std::vector<Scene> scenes;
   double build_ms = 0.0;
+  bool depth_given = true;  // whether every region was given a depth map (a normal-map storage gives none)
 };
 
 StorageScenes build_scenes(const Workload& w, const MethodPtr& method, Storage storage) {
@@ -447,6 +445,7 @@ StorageScenes build_scenes(const Workload& w, const MethodPtr& method, Storage s
     const Clock::time_point t0 = Clock::now();
     RegionFields fields = build_fields(shape, method->needs(), storage, source);
     out.build_ms += ms_since(t0);
+    out.depth_given = out.depth_given && fields.depth.has_value();
     out.scenes.push_back(make_scene(shape, method, std::move(fields)));
   }
   out.build_ms /= static_cast<double>(w.config.targets.size());
@@ -596,7 +595,8 @@ std::vector<VariantRow> measure_all(const Workload& w, const std::vector<MethodP
     // A method that reads heights only where a depth map is given has a truth with them and one without.
     std::optional<MethodTruth> truths[2];  // [0]: without a depth map
     for (Storage storage : storages_for(*method)) {
-      const bool depth_given = !method->needs().depth_if_given || gives_depth(storage);
+      StorageScenes scenes = build_scenes(w, method, storage);
+      const bool depth_given = !method->needs().depth_if_given || scenes.depth_given;
       std::optional<MethodTruth>& truth = truths[depth_given ? 1 : 0];
       if (!truth) {
         const Clock::time_point t_truth = Clock::now();
@@ -604,7 +604,6 @@ std::vector<VariantRow> measure_all(const Workload& w, const std::vector<MethodP
         fmt::print(stderr, "accuracy: {} ground truth{} in {:.1f} s\n", method->name(),
                    depth_given ? "" : " without a depth map", ms_since(t_truth) / 1000.0);
       }
-      StorageScenes scenes = build_scenes(w, method, storage);
       auto report = [&rows](VariantRow row) {
         fmt::print(stderr, "accuracy: {:<44} end rms {:.3g} px, C/D rms {:.3g}, {:.0f} ns/frame\n", row.variant,
                    row.end_rms, row.cd_rms, row.ns_median);
