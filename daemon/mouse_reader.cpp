@@ -33,6 +33,7 @@ MouseReader::MouseReader(Read read, std::timed_mutex& state, OnBatch on_batch)
     : read_(std::move(read)), state_(state), on_batch_(std::move(on_batch)) {
   install_reader_wake_handler();
   thread_ = std::thread([this] { run(); });
+  ::pthread_setname_np(thread_.native_handle(), "ph-mouse-reader");  // for ps -L, top -H and /proc
 }
 
 MouseReader::~MouseReader() {

@@ -28,6 +28,7 @@ void SceneReloader::dispose(std::shared_ptr<const Scene> scene) {
     pthread_setschedparam(pthread_self(), SCHED_IDLE, &no_priority);
     scene.reset();
   });
+  ::pthread_setname_np(disposer_.native_handle(), "ph-scene-free");
 }
 
 bool SceneReloader::request() {
@@ -63,6 +64,7 @@ void SceneReloader::start() {
     const std::uint64_t one = 1;
     [[maybe_unused]] const ssize_t n = ::write(done_.get(), &one, sizeof one);
   });
+  ::pthread_setname_np(worker_.native_handle(), "ph-scene-load");
 }
 
 std::optional<SceneReloader::Outcome> SceneReloader::collect() {
