@@ -30,6 +30,7 @@
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <sstream>
@@ -535,6 +536,54 @@ inline long rss_kib(pid_t pid) {
     if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
   }
   return -1;
+}
+
+// Each mapping of a process (/proc/PID/smaps), keyed by its start address, permissions and path ("[heap]", a file,
+// or nothing for an anonymous one): its size and resident KiB.
+struct MappingKib {
+  long size = 0, rss = 0, huge = 0;  // huge: AnonHugePages, what transparent huge pages hold
+};
+inline std::map<std::string, MappingKib> mappings_kib(pid_t pid) {
+  std::map<std::string, MappingKib> out;
+  std::istringstream smaps(read_text_file("/proc/" + std::to_string(pid) + "/smaps"));
+  MappingKib* current = nullptr;
+  for (std::string line; std::getline(smaps, line);) {
+    std::istringstream words(line);
+    std::string first, perms, offset, device, inode, path;
+    words >> first;
+    if (first.empty()) continue;
+    if (first.back() != ':') {  // a mapping's header: start-end perms offset dev inode [path]
+      words >> perms >> offset >> device >> inode >> path;
+      current = &out[first.substr(0, first.find('-')) + " " + perms + " " + path];
+    } else if (current != nullptr && (first == "Size:" || first == "Rss:" || first == "AnonHugePages:")) {
+      long kib = 0;
+      words >> kib;
+      (first == "Size:" ? current->size : first == "Rss:" ? current->rss : current->huge) = kib;
+    }
+  }
+  return out;
+}
+
+// The mappings whose resident KiB grew by at least `min_kib` from `before` to `after` (new ones included), as
+// "KEY: RSS1 -> RSS2 KiB of SIZE", largest growth first.
+inline std::vector<std::string> grown_mappings(const std::map<std::string, MappingKib>& before,
+                                               const std::map<std::string, MappingKib>& after, long min_kib) {
+  std::vector<std::pair<long, std::string>> grown;
+  for (const auto& [key, now] : after) {
+    const auto was = before.find(key);
+    const long rss_before = was == before.end() ? 0 : was->second.rss;
+    if (now.rss - rss_before >= min_kib) {
+      grown.emplace_back(
+          now.rss - rss_before,
+          fmt::format("{}: {} -> {} KiB of {} -> {}, in huge pages {} -> {} KiB{}", key, rss_before, now.rss,
+                      was == before.end() ? 0 : was->second.size, now.size, was == before.end() ? 0 : was->second.huge,
+                      now.huge, was == before.end() ? " (new)" : ""));
+    }
+  }
+  std::sort(grown.begin(), grown.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<std::string> out;
+  for (auto& g : grown) out.push_back(std::move(g.second));
+  return out;
 }
 
 // Whether a process has `path` open (a link in /proc/PID/fd).
