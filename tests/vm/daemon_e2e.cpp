@@ -1229,6 +1229,11 @@ void default_scene_part(Report& report, const Options& options, Latency& latency
                                    rss_first, rss_last, done, kRssOnceKib));
         }
         check.expect(daemon->running(), "the daemon exited during the cycles");
+        // One mouse is left, so one reader thread, named for ps -L and top -H.
+        const std::vector<std::string> threads = thread_names(pid);
+        check.expect(std::count(threads.begin(), threads.end(), "ph-mouse-reader") == 1,
+                     fmt::format("expected one thread named ph-mouse-reader after the cycles, got threads: {}",
+                                 fmt::join(threads, ", ")));
         const std::string thirds = rss_thirds.size() == 2 ? fmt::format(", {} and {} KiB after cycles {} and {}",
                                                                         rss_thirds[0], rss_thirds[1], third, 2 * third)
                                                           : std::string();

@@ -586,6 +586,20 @@ inline std::vector<std::string> grown_mappings(const std::map<std::string, Mappi
   return out;
 }
 
+// The names of a process's threads (/proc/PID/task/TID/comm), in no particular order.
+inline std::vector<std::string> thread_names(pid_t pid) {
+  std::vector<std::string> out;
+  std::error_code error;
+  const std::string tasks = "/proc/" + std::to_string(pid) + "/task";
+  for (auto it = std::filesystem::directory_iterator(tasks, error);
+       !error && it != std::filesystem::directory_iterator(); it.increment(error)) {
+    std::string name = read_text_file(it->path().string() + "/comm");
+    while (!name.empty() && name.back() == '\n') name.pop_back();
+    out.push_back(std::move(name));
+  }
+  return out;
+}
+
 // Whether a process has `path` open (a link in /proc/PID/fd).
 inline bool process_has_open(pid_t pid, const std::string& path) {
   std::error_code error;
