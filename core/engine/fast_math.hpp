@@ -30,26 +30,20 @@ namespace ph {
 PH_ALWAYS_INLINE inline double fast_atan(double x) {
   constexpr double kTan3PiOver8 = 2.414213562373095;
   constexpr double kTanPiOver8 = 0.4142135623730950;
+  // The polynomial, for |r| <= tan(pi/8).
+  const auto odd = [](double r) PH_ALWAYS_INLINE {
+    const double z = r * r;
+    const double poly = (((8.05374449538e-2 * z - 1.38776856032e-1) * z + 1.99777106478e-1) * z - 3.33329491539e-1);
+    return poly * z * r + r;
+  };
   const double ax = std::abs(x);
   // The common case (neighbouring slopes): no reduction. The polynomial is odd, so reading x itself gives the
   // bits of the reduced form's result with its sign restored, one addition and a select shorter.
-  if (ax <= kTanPiOver8) [[likely]] {
-    const double z = x * x;
-    const double poly = (((8.05374449538e-2 * z - 1.38776856032e-1) * z + 1.99777106478e-1) * z - 3.33329491539e-1);
-    return poly * z * x + x;
-  }
-  double base = 0.0;
-  double r = ax;
-  if (ax > kTan3PiOver8) {
-    base = std::numbers::pi / 2;
-    r = -1.0 / ax;
-  } else if (ax > kTanPiOver8) {
-    base = std::numbers::pi / 4;
-    r = (ax - 1.0) / (ax + 1.0);
-  }
-  const double z = r * r;
-  const double poly = (((8.05374449538e-2 * z - 1.38776856032e-1) * z + 1.99777106478e-1) * z - 3.33329491539e-1);
-  const double result = base + (poly * z * r + r);
+  if (ax <= kTanPiOver8) [[likely]]
+    return odd(x);
+  // Reduced about pi/2 or pi/4 (and a NaN, which stays NaN).
+  const double result =
+      ax > kTan3PiOver8 ? std::numbers::pi / 2 + odd(-1.0 / ax) : std::numbers::pi / 4 + odd((ax - 1.0) / (ax + 1.0));
   return x < 0.0 ? -result : result;
 }
 

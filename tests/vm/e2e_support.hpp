@@ -565,19 +565,18 @@ inline std::map<std::string, MappingKib> mappings_kib(pid_t pid) {
 }
 
 // The mappings whose resident KiB grew by at least `min_kib` from `before` to `after` (new ones included), as
-// "KEY: RSS1 -> RSS2 KiB of SIZE", largest growth first.
+// "KEY: RSS1 -> RSS2 KiB of SIZE1 -> SIZE2, in huge pages ...", largest growth first.
 inline std::vector<std::string> grown_mappings(const std::map<std::string, MappingKib>& before,
                                                const std::map<std::string, MappingKib>& after, long min_kib) {
   std::vector<std::pair<long, std::string>> grown;
   for (const auto& [key, now] : after) {
-    const auto was = before.find(key);
-    const long rss_before = was == before.end() ? 0 : was->second.rss;
-    if (now.rss - rss_before >= min_kib) {
-      grown.emplace_back(
-          now.rss - rss_before,
-          fmt::format("{}: {} -> {} KiB of {} -> {}, in huge pages {} -> {} KiB{}", key, rss_before, now.rss,
-                      was == before.end() ? 0 : was->second.size, now.size, was == before.end() ? 0 : was->second.huge,
-                      now.huge, was == before.end() ? " (new)" : ""));
+    const auto found = before.find(key);
+    const bool is_new = found == before.end();
+    const MappingKib was = is_new ? MappingKib{} : found->second;
+    if (now.rss - was.rss >= min_kib) {
+      grown.emplace_back(now.rss - was.rss,
+                         fmt::format("{}: {} -> {} KiB of {} -> {}, in huge pages {} -> {} KiB{}", key, was.rss,
+                                     now.rss, was.size, now.size, was.huge, now.huge, is_new ? " (new)" : ""));
     }
   }
   std::sort(grown.begin(), grown.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
