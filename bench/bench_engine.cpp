@@ -1,7 +1,8 @@
 // Cost of ph::advance, the exact per-texel traversal (docs/METHODS.md, "The traversal"), for the curvature, the
 // depth and the hybrid method (given both maps) on the paper's targets: typical frames, frames that stay in their texel
-// (still/: a frame's own cost), fast flicks, a pointer outside every region and a flat region. docs/PERFORMANCE.md
-// explains the figures and how to reproduce them.
+// (still/: a frame's own cost), fast flicks, a pointer outside every region and a flat region, and a texel's reading
+// and C/D without the walk (texel/: time_per_texel). docs/PERFORMANCE.md explains the figures and how to reproduce
+// them.
 //
 // Every benchmark reports, besides the time per iteration (= per frame, one advance call):
 //   steps_per_frame  texel boundaries crossed inside regions per frame (FrameResult::steps, averaged);
@@ -456,6 +457,46 @@ void register_lut_builds() {
   }
 }
 
+// A texel's reading and C/D alone, without the walk: the method's leg for one direction (30 degrees) reads 4096
+// texels of a 64 x 64 window on the target's slope (in cache), in a random order, each C/D independent of the last.
+// What a step costs beyond this is the walk's (docs/PERFORMANCE.md, "The chain shorter with other last bits").
+template <typename M>
+void run_texels(benchmark::State& state, const ph::Region& region, const M& method) {
+  const ph::Vec2 m{std::cos(std::numbers::pi / 6.0), std::sin(std::numbers::pi / 6.0)};
+  const auto leg = method.leg(&region.fields, m);
+  std::mt19937_64 rng(20241126);
+  std::uniform_int_distribution<std::int32_t> cell(0, 63);
+  std::vector<ph::FieldTexel> texels(4096);
+  // From 80 px right of the centre: the Gaussian bump's flank, where the C/D changes from texel to texel.
+  for (ph::FieldTexel& texel : texels) texel = leg.at({kTargetSize / 2 + 80 + cell(rng), kTargetSize / 2 + cell(rng)});
+  const ph::TexelSample from{};
+  double sum = 0.0;
+  for (auto _ : state) {
+    for (const ph::FieldTexel& texel : texels) sum += method.cd(from, leg.sample(texel), 1.0, nullptr);
+  }
+  benchmark::DoNotOptimize(sum);
+  state.counters["time_per_texel"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * static_cast<double>(texels.size()),
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void register_texels() {
+  for (MethodKind kind : {MethodKind::curvature, MethodKind::depth, MethodKind::hybrid}) {
+    const std::string name = std::string("texel/") + method_name(kind) + "/bump-gaussian-h1-r200";
+    benchmark::RegisterBenchmark(name.c_str(), [kind](benchmark::State& state) {
+      const ph::Region& region = target_scene(target_named("bump-gaussian-h1-r200"), kind).regions()[0];
+      const ph::Method& method = *region.method;
+      if (kind == MethodKind::curvature) {
+        run_texels(state, region, static_cast<const ph::CurvatureMethod&>(method));
+      } else if (kind == MethodKind::depth) {
+        run_texels(state, region, static_cast<const ph::DepthMethod&>(method));
+      } else {
+        run_texels(state, region, static_cast<const ph::HybridMethod&>(method));
+      }
+    });
+  }
+}
+
 void register_all() {
   for (MethodKind kind : {MethodKind::curvature, MethodKind::depth, MethodKind::hybrid}) {
     for (const char* name : kRepresentativeTargets) register_pair(name, kind, one_target);
@@ -463,6 +504,7 @@ void register_all() {
     register_pair("flat", kind, flat_only);
   }
   register_outside();
+  register_texels();
   register_variants();
   register_lut_builds();
 }
