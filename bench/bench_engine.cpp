@@ -36,6 +36,7 @@
 #include "core/engine/method_curvature.hpp"
 #include "core/engine/method_depth.hpp"
 #include "core/engine/method_hybrid.hpp"
+#include "core/engine/methods.hpp"
 #include "core/engine/scene.hpp"
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
@@ -485,14 +486,14 @@ void register_texels() {
     const std::string name = std::string("texel/") + method_name(kind) + "/bump-gaussian-h1-r200";
     benchmark::RegisterBenchmark(name.c_str(), [kind](benchmark::State& state) {
       const ph::Region& region = target_scene(target_named("bump-gaussian-h1-r200"), kind).regions()[0];
-      const ph::Method& method = *region.method;
-      if (kind == MethodKind::curvature) {
-        run_texels(state, region, static_cast<const ph::CurvatureMethod&>(method));
-      } else if (kind == MethodKind::depth) {
-        run_texels(state, region, static_cast<const ph::DepthMethod&>(method));
-      } else {
-        run_texels(state, region, static_cast<const ph::HybridMethod&>(method));
-      }
+      // As the traversal does: the method as its concrete class, so that its reading and C/D inline.
+      ph::visit_method(*region.method, [&](const auto& method) {
+        if constexpr (requires { method.leg(&region.fields, ph::Vec2{}); }) {
+          run_texels(state, region, method);
+        } else {
+          state.SkipWithError("the method has no per-leg reading");
+        }
+      });
     });
   }
 }
