@@ -69,6 +69,10 @@ RegionFields load_region_fields(const FieldSources& sources, std::int32_t width,
                                               : load_gradient(*sources.normal_map, sources.normal_options, width,
                                                               height, report.normals, limits);
   }
+  if (needs.gradient) {
+    fields.gradient_rounding = gradient_from_depth_map ? gradient_rounding_of_depth(report.depth.value_step)
+                                                       : gradient_rounding_of_normals(report.normals.value_step);
+  }
   if (wants_depth) fields.depth = std::move(depth);
   return fields;
 }

@@ -190,6 +190,7 @@ TEST(ImageIo, ExrNormalMapWithNaNTexelsIsRepaired) {
     EXPECT_NEAR(std::hypot(v.x, v.y, v.z), 1.0, 1e-6);
   }
   EXPECT_NEAR(n.at(0, 0).x, 0.6f, 1e-6);  // signed values, not unorm
+  EXPECT_EQ(report.value_step, 0.0);      // float: no rounding to a code
 }
 
 // A real OpenEXR file whose compression attribute is made to claim 2 GB: refused from its header, by name,
@@ -269,6 +270,9 @@ void expect_maps_load(const ScratchDir& dir, ImageEncoding encoding, const std::
   EXPECT_EQ(report.normals.texels, 19u * 13u);
   EXPECT_EQ(report.normals.invalid_texels, 0u);
   ASSERT_TRUE(fields.gradient);
+  // The rounding the codes leave in the gradient, for the hybrid method's smoothing: a code is 2 / cmax in n.
+  EXPECT_DOUBLE_EQ(report.normals.value_step, 2.0 / cmax);
+  EXPECT_DOUBLE_EQ(fields.gradient_rounding, 2.0 / cmax / std::sqrt(12.0));
   DecodeReport decode_report;
   const NormalImage decoded = decode_normals(raw, {}, decode_report);
   std::size_t tilted = 0;
@@ -298,6 +302,7 @@ void expect_maps_load(const ScratchDir& dir, ImageEncoding encoding, const std::
   const RegionFields depth = load_region_fields(sources, 11, 6, depth_only, report);
   EXPECT_EQ(report.depth.texels, 66u);
   EXPECT_EQ(report.depth.invalid_texels, 0u);
+  EXPECT_DOUBLE_EQ(report.depth.value_step, 40.0 / cmax);  // px of height per code
   ASSERT_TRUE(depth.depth);
   for (std::int32_t y = 0; y < 6; ++y) {
     for (std::int32_t x = 0; x < 11; ++x) {
@@ -463,6 +468,8 @@ TEST(FieldLoader, GradientFromADepthMapWhenThereIsNoNormalMap) {
     EXPECT_NEAR(g.x, 1.0f, 1e-3);  // 0.1 per px times 10 px of relief
     EXPECT_NEAR(g.y, 0.0f, 1e-3);
   }
+  // Central differences of heights rounded to 10 / 65535 px: each slope errs by that over sqrt(24).
+  EXPECT_DOUBLE_EQ(fields.gradient_rounding, 10.0 / 65535.0 / std::sqrt(24.0));
 }
 
 TEST(FieldLoader, ReadsOnlyTheFilesTheMethodNeeds) {

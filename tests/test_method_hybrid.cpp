@@ -16,6 +16,7 @@
 
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
+#include "core/engine/decode.hpp"
 #include "core/engine/engine_options.hpp"
 #include "core/engine/methods.hpp"
 #include "core/engine/targets.hpp"
@@ -288,11 +289,12 @@ TEST(HybridMethod, IsTheCurvatureMethodOnContinuousMapsWithoutSmoothing) {
   }
 }
 
-// Smoothing within the noise band: an 8-bit-like rounding of a gentle slope (steps of 1/128 in the gradient)
-// becomes the slope again, and a rim (a jump of 0.5 in the gradient) stays sharp.
+// Smoothing within the noise band: an 8-bit-like rounding of a gentle slope (steps of 1/128 in the gradient, as
+// the fields say) becomes the slope again, and a rim (a jump of 0.5 in the gradient) stays sharp.
 TEST(HybridMethod, SmoothsNoiseAndKeepsFeatures) {
   RegionFields fields;
   fields.gradient = GradientField(64, 8);
+  fields.gradient_rounding = gradient_rounding_of_normals(1.0 / 128.0);
   for (int y = 0; y < 8; ++y) {
     for (int x = 0; x < 64; ++x) {
       const double exact = 0.002 * x;  // the slope of a gentle curve
@@ -395,12 +397,12 @@ TEST(HybridMethod, LeavesACleanNormalMapAsTheNormalMapAloneWouldBe) {
   }
 }
 
-// A float map's residual from its smoothed self is its relief's own curvature, mostly far below a map's rounding:
-// the band shrinks to the noise that residual shows, and the relief moves by a third of what the fixed band
-// (noise_slope) alone allowed (measured 0.0033 here; 0.0099 with the fixed band, near the apex).
-TEST(HybridMethod, NarrowsTheBandToTheNoiseAFloatMapShows) {
-  RegionFields fields;  // a cone of slope 0.3 and radius 28 px: a float map of the suite's `cone`
+// A cone of slope 0.3 and radius 28 px on a 64 x 64 region (a map of the suite's `cone`), and the largest change
+// the hybrid's preparation makes to its gradient.
+double largest_change_to_a_cone(double gradient_rounding) {
+  RegionFields fields;
   fields.gradient = GradientField(64, 64);
+  fields.gradient_rounding = gradient_rounding;
   for (int y = 0; y < 64; ++y) {
     for (int x = 0; x < 64; ++x) {
       const double dx = x + 0.5 - 32.0, dy = y + 0.5 - 32.0, r = std::hypot(dx, dy);
@@ -414,8 +416,19 @@ TEST(HybridMethod, NarrowsTheBandToTheNoiseAFloatMapShows) {
     largest = std::max({largest, std::abs(static_cast<double>(fields.gradient->values[i].x) - exact.values[i].x),
                         std::abs(static_cast<double>(fields.gradient->values[i].y) - exact.values[i].y)});
   }
-  EXPECT_GT(largest, 0.0);
-  EXPECT_LT(largest, 0.5 * HybridParams{}.noise_slope);
+  return largest;
+}
+
+// The band is the rounding the map's storage leaves, no more: a float map's residual from its smoothed self is its
+// relief's own curvature, and its relief stays exactly as given (the apex and rim included); the same relief as an
+// 8-bit map would give it is smoothed within the band, which noise_slope bounds.
+TEST(HybridMethod, SmoothsOnlyWhatTheMapsStorageRounds) {
+  EXPECT_EQ(largest_change_to_a_cone(0.0), 0.0);
+  const double eight_bit = largest_change_to_a_cone(gradient_rounding_of_normals(2.0 / 255.0));
+  EXPECT_GT(eight_bit, 0.0);
+  EXPECT_LE(eight_bit, HybridParams{}.noise_slope + 1e-7);
+  // A 16-bit map rounds 256 times finer: its band, and what it moves, is far below the 8-bit one's.
+  EXPECT_LT(largest_change_to_a_cone(gradient_rounding_of_normals(2.0 / 65535.0)), 0.05 * eight_bit);
 }
 
 // A grating at the texel period, aliased to heights alternating by 1 px under flat normals, and a single texel
@@ -549,6 +562,8 @@ TEST(HybridMethod, LoadsFromASceneFileWithBothMapsOrTheNormalMapAlone) {
   const RegionFields& fields = both.regions()[0].fields;
   EXPECT_EQ(both.regions()[0].method->name(), "hybrid");
   ASSERT_TRUE(fields.gradient && fields.depth && fields.discontinuity);
+  // The targets' 16-bit normal map: the rounding its codes leave reaches the method (its smoothing band).
+  EXPECT_DOUBLE_EQ(fields.gradient_rounding, gradient_rounding_of_normals(2.0 / 65535.0));
   int marked = 0;
   for (std::uint8_t mark : fields.discontinuity->values) marked += mark;
   EXPECT_GT(marked, 0);

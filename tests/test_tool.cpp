@@ -654,6 +654,8 @@ TEST(Tool, CheckConfig) {
     ASSERT_EQ(r.rc, 0) << r.err;
     EXPECT_TRUE(contains(r.out, "hybrid")) << r.out;
     EXPECT_TRUE(contains(r.out, "steps: 1132 texels (0.45 %) take the depth C/D")) << r.out;
+    // The target's 16-bit normal map: a code is 2 / 65535 in n, a slope sigma of that over sqrt(12).
+    EXPECT_TRUE(contains(r.out, "rounding: slope sigma 8.8e-06 from the map's storage")) << r.out;
     EXPECT_FALSE(contains(run_tool("check-config " + quote(scene), dir).out, "steps:"));  // curvature: no such line
   }
   {

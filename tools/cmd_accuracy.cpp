@@ -217,11 +217,15 @@ RegionFields build_fields(const Shape& shape, FieldNeeds needs, Storage storage,
     case Storage::n16:
     case Storage::n8:
       fields.gradient = gradient_from_normals(decode_normals(source.image, {}, report));
+      fields.gradient_rounding = gradient_rounding_of_normals(report.value_step);
       break;
     case Storage::d16:
     case Storage::d8: {
       DepthField depth = decode_depth(source.image, {0.5, 2.0 * shape.relief_px()}, report);
-      if (needs.gradient) fields.gradient = gradient_from_depth(depth);
+      if (needs.gradient) {
+        fields.gradient = gradient_from_depth(depth);
+        fields.gradient_rounding = gradient_rounding_of_depth(report.value_step);
+      }
       if (needs.depth || needs.depth_if_given) fields.depth = std::move(depth);
       break;
     }

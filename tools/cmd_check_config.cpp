@@ -36,6 +36,13 @@ std::string steps_line(const RegionFields& fields) {
                      share);
 }
 
+// How the hybrid method smooths the normals: within the rounding the map's storage leaves, none for a float map.
+std::string rounding_line(const RegionFields& fields) {
+  if (fields.gradient_rounding <= 0.0) return "none (a float map): the normals are used as given";
+  return fmt::format("slope sigma {:.2g} from the map's storage: the normals are smoothed within it",
+                     fields.gradient_rounding);
+}
+
 std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadReport& report) {
   fmt::memory_buffer out;
   const auto to = std::back_inserter(out);
@@ -71,7 +78,10 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
                    r.rect.y, r.rect.w, r.rect.h, r.method, effects, bytes,
                    fr.normals.invalid_texels + fr.depth.invalid_texels);
     if (i < report.variants.size()) fmt::format_to(to, "      traversal: {}\n", report.variants[i]);
-    if (region.fields.discontinuity) fmt::format_to(to, "      steps: {}\n", steps_line(region.fields));
+    if (region.fields.discontinuity) {
+      fmt::format_to(to, "      steps: {}\n", steps_line(region.fields));
+      fmt::format_to(to, "      rounding: {}\n", rounding_line(region.fields));
+    }
   }
   return fmt::to_string(out);
 }

@@ -223,7 +223,16 @@ Normal renormalised(double x, double y, double z) {
   return {static_cast<float>(x / length), static_cast<float>(y / length), static_cast<float>(z / length)};
 }
 
+// A normal component's step between codes: a unorm code c is 2c / cmax - 1, a signed one c / cmax.
+double normal_value_step(const RawImage& image, bool unorm) {
+  if (image.code_max == 0) return 0.0;
+  return (unorm ? 2.0 : 1.0) / image.code_max;
+}
+
 }  // namespace
+
+double gradient_rounding_of_normals(double value_step) { return value_step / std::sqrt(12.0); }
+double gradient_rounding_of_depth(double value_step) { return value_step / std::sqrt(24.0); }
 
 NormalImage decode_normals(const RawImage& image, const NormalDecodeOptions& options, DecodeReport& report) {
   require_normal_channels(image);
@@ -245,7 +254,7 @@ NormalImage decode_normals(const RawImage& image, const NormalDecodeOptions& opt
     }
   }
   if (invalid > 0) repair_from_nearest_valid(normals, std::move(valid), Normal{});
-  report = {normals.values.size(), invalid};
+  report = {normals.values.size(), invalid, normal_value_step(image, unorm)};
   return normals;
 }
 
@@ -326,7 +335,7 @@ GradientField decode_normals_to_gradient(const RawImage& image, const NormalDeco
   // A texel's gradient depends on its normal alone, so repairing gradients equals repairing normals first;
   // the fallback is a flat normal's gradient.
   if (invalid > 0) repair_from_nearest_valid(gradient, std::move(valid), clamped_gradient(Normal{}));
-  report = {gradient.values.size(), invalid};
+  report = {gradient.values.size(), invalid, normal_value_step(image, unorm)};
   return gradient;
 }
 
@@ -347,7 +356,7 @@ DepthField decode_depth(const RawImage& image, const DepthDecodeOptions& options
     }
   }
   if (invalid > 0) repair_from_nearest_valid(depth, std::move(valid), 0.0f);
-  report = {depth.values.size(), invalid};
+  report = {depth.values.size(), invalid, image.code_max > 0 ? std::abs(options.relief_px) / image.code_max : 0.0};
   return depth;
 }
 

@@ -45,7 +45,16 @@ struct DepthDecodeOptions {
 struct DecodeReport {
   std::size_t texels = 0;
   std::size_t invalid_texels = 0;
+  // The step between neighbouring stored values in what was decoded: 2 / code_max of a normal component from a
+  // unorm map (1 / code_max from a signed one), relief_px / code_max px of height from a depth map; 0 for float.
+  double value_step = 0.0;
 };
+
+// The standard deviation of a gradient's rounding error from the storage of its map, given the map's value_step:
+// a normal component rounded to steps q errs uniformly within +-q/2 (q / sqrt(12); in slope, near flat), and a
+// central difference (h(x+1) - h(x-1)) / 2 of heights rounded to steps q errs by q / sqrt(24). 0 for a float map.
+double gradient_rounding_of_normals(double value_step);
+double gradient_rounding_of_depth(double value_step);
 
 // Unit normals in the screen frame. A unorm image cannot store 0 (2c/cmax - 1 is +-1/cmax around it), so
 // tangent components within one code of 0 are taken as 0: a flat area of an 8- or 16-bit map is exactly

@@ -201,24 +201,27 @@ void fuse_with_depth_gradient(const DepthField& depth, const DiscontinuityField&
   }
 }
 
-// The noise band at the region's highest height: `noise_slope`, a map's rounding, at most; less where the map
-// shows less noise than that (a float map, whose residual from the smoothed field is its relief's own curvature),
-// so that a clean map's relief is not smoothed. The noise is estimated as by the universal threshold over the
-// texels whose residual is not zero: those of an area decoded exactly flat carry no information on it.
-double noise_band(double noise_slope, const GradientField& g, const GradientField& s) {
+// The noise band at the region's highest height: what rounding to the map's storage can make of the gradient
+// (`rounding`, its sigma, to the universal threshold), and no more than `noise_slope` nor than the noise the map
+// shows. The residual from the smoothed field of a map with fine steps (16 bits, float) is its relief's own
+// curvature, not noise, and its relief is kept (on a float ridge, with the band from the map's residual alone, the
+// apex and the feet were smoothed). The noise shown is estimated by the universal threshold over the texels whose
+// residual is not zero: those of an area decoded exactly flat carry no information on it.
+double noise_band(double noise_slope, double rounding, const GradientField& g, const GradientField& s) {
   std::vector<double> residual = differences(g, s);
   std::erase(residual, 0.0);
   const std::size_t tested = residual.size() * sample_stride(g.values.size());  // nonzero, all texels
   const double shown = universal_threshold(tested) * robust_sigma(residual) / kResidualGain;
-  return std::min(noise_slope, shown);
+  return std::min({noise_slope, shown, universal_threshold(tested) * rounding});
 }
 
 // Replaces each gradient by the smoothed one where they differ by at most the noise band, wider further from the
 // viewer: within the band the difference is the map's noise (rounding, a generator's jitter); beyond it, a
 // feature (a rim, a kink), which stays sharp.
-void smooth_within_band(const HybridParams& params, const DepthField* depth, GradientField& g) {
+void smooth_within_band(const HybridParams& params, double rounding, const DepthField* depth, GradientField& g) {
+  if (rounding <= 0.0) return;  // a float map: no rounding to smooth
   const GradientField s = smoothed(g);
-  const double base = noise_band(params.noise_slope, g, s);
+  const double base = noise_band(params.noise_slope, rounding, g, s);
   float lowest = 0.0f, highest = 0.0f;
   if (depth != nullptr) {
     const auto [lo, hi] = std::minmax_element(depth->values.begin(), depth->values.end());
@@ -254,7 +257,7 @@ void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields) {
                              : DiscontinuityField(g.width, g.height, 0);
   if (params.noise_slope <= 0.0) return;
   if (has_depth) fuse_with_depth_gradient(*fields.depth, *fields.discontinuity, params.noise_slope, g);
-  smooth_within_band(params, has_depth ? &*fields.depth : nullptr, g);
+  smooth_within_band(params, fields.gradient_rounding, has_depth ? &*fields.depth : nullptr, g);
 }
 
 void HybridMethod::prepare(RegionFields& fields) const { prepare_hybrid_fields(params_, fields); }

@@ -340,7 +340,9 @@ CaseMap make_map(const Layer& layer, const Storage& storage, std::mt19937_64& rn
       n = {static_cast<float>(nx / len), static_cast<float>(ny / len), static_cast<float>(nz / len)};
     }
   }
-  map.normals = stored_normals(map.normals, storage.normal_code_max);
+  DecodeReport decoded;
+  map.normals = stored_normals(map.normals, storage.normal_code_max, &decoded);
+  map.gradient_rounding = gradient_rounding_of_normals(decoded.value_step);
   map.depth = stored_depth_field;
   return map;
 }
@@ -477,7 +479,10 @@ StabilityCase make_case(const std::string& mode, double severity, double angle_d
 
 RegionFields case_fields(const CaseMap& map, FieldNeeds needs) {
   RegionFields fields;
-  if (needs.gradient) fields.gradient = gradient_from_normals(map.normals);
+  if (needs.gradient) {
+    fields.gradient = gradient_from_normals(map.normals);
+    fields.gradient_rounding = map.gradient_rounding;
+  }
   if (needs.depth || needs.depth_if_given) fields.depth = map.depth;  // every case has a depth map
   return fields;
 }

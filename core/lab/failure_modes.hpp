@@ -40,6 +40,7 @@ struct CaseMap {
   Rect rect;
   NormalImage normals;
   DepthField depth;
+  double gradient_rounding = 0.0;  // of the normals as stored (RegionFields::gradient_rounding)
 };
 
 // Where a case's strokes run: `length` px along `direction`, centred on centre + lateral x (-direction.y,

@@ -43,10 +43,11 @@ RawImage encode_depth_map(const DepthField& depth, double lo, double hi, std::ui
   return quantised_image(depth.width, depth.height, 1, v, code_max);
 }
 
-NormalImage stored_normals(const NormalImage& normals, std::uint32_t code_max) {
-  if (code_max == 0) return normals;
-  DecodeReport report;
-  return decode_normals(encode_normal_map(normals, code_max), {}, report);
+NormalImage stored_normals(const NormalImage& normals, std::uint32_t code_max, DecodeReport* report) {
+  DecodeReport decoded{normals.values.size(), 0, 0.0};
+  NormalImage out = code_max == 0 ? normals : decode_normals(encode_normal_map(normals, code_max), {}, decoded);
+  if (report != nullptr) *report = decoded;
+  return out;
 }
 
 DepthField stored_depth(const DepthField& depth, std::uint32_t code_max) {

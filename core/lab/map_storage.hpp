@@ -25,8 +25,9 @@ RawImage encode_normal_map(const NormalImage& normals, std::uint32_t code_max);
 RawImage encode_depth_map(const DepthField& depth, double lo, double hi, std::uint32_t code_max);
 DepthDecodeOptions depth_options_for(double lo, double hi);
 
-// The normals decoded from a normal map stored with code_max (0: float, returned as given).
-NormalImage stored_normals(const NormalImage& normals, std::uint32_t code_max);
+// The normals decoded from a normal map stored with code_max (0: float, returned as given); what decoding found goes
+// to `report` where one is given (its value_step: 0 for float).
+NormalImage stored_normals(const NormalImage& normals, std::uint32_t code_max, DecodeReport* report = nullptr);
 // The heights decoded from a depth map stored with code_max over the field's own range (0: float, as given).
 DepthField stored_depth(const DepthField& depth, std::uint32_t code_max);
 
