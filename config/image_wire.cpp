@@ -109,6 +109,9 @@ static_assert(std::is_trivially_copyable_v<NormalDecodeOptions> && std::is_trivi
               std::is_trivially_copyable_v<ImageSize> && std::is_trivially_copyable_v<Gradient>);
 
 void check_finite_grids(const RegionFields& fields) {
+  // The sigma of the slopes' rounding: a hostile child's NaN, infinity or negative sigma stops here.
+  if (!(fields.gradient_rounding >= 0.0 && std::isfinite(fields.gradient_rounding)))
+    throw WireError("a rounding that is not a finite sigma");
   if (fields.gradient) {
     for (const Gradient& g : fields.gradient->values) {
       if (!(std::abs(g.x) <= kMaxSlope && std::abs(g.y) <= kMaxSlope)) throw WireError("a slope out of range");
@@ -173,6 +176,7 @@ std::vector<std::byte> encode(const Answer& answer) {
     w.put(f->report);
     w.put_grid(f->fields.gradient);
     w.put_grid(f->fields.depth);
+    w.put(f->fields.gradient_rounding);
   } else if (const auto* s = std::get_if<ImageSize>(&answer)) {
     w.put(Tag::size_answer);
     w.put(*s);
@@ -197,6 +201,7 @@ Answer decode_answer(const std::vector<std::byte>& bytes, const Request& request
     a.report = r.get<FieldLoadReport>();
     a.fields.gradient = r.get_grid<Gradient>();
     a.fields.depth = r.get_grid<float>();
+    a.fields.gradient_rounding = r.get<double>();
     r.finish();
     auto fits = [&](const auto& grid, bool needed) {
       return grid.has_value() == needed && (!grid || (grid->width == f->width && grid->height == f->height));

@@ -123,6 +123,8 @@ TEST(ImageChild, ReadsEveryFormatInItsSandboxAsInProcess) {
       ASSERT_EQ(a.gradient->values[i].x, b.gradient->values[i].x) << path << " texel " << i;
       ASSERT_EQ(a.gradient->values[i].y, b.gradient->values[i].y) << path << " texel " << i;
     }
+    EXPECT_EQ(a.gradient_rounding, b.gradient_rounding) << path;  // the hybrid method's smoothing band reads it
+    EXPECT_EQ(from_child_report.normals.value_step, here_report.normals.value_step) << path;
     EXPECT_EQ(child.image_size(path).code_max, read_image_size(path).code_max) << path;
     ++files;
   }
@@ -223,6 +225,16 @@ TEST(ImageWire, AnswersWithNonFiniteOrMisshapenFieldsAreRefused) {
   answer.fields.depth = DepthField(2, 1);  // a field not asked for
   EXPECT_THROW(image_wire::decode_answer(image_wire::encode(image_wire::Answer{answer}), request),
                image_wire::WireError);
+  answer.fields.depth.reset();
+  answer.fields.gradient_rounding = 0.0023;  // an 8-bit map's: crosses as it is
+  const auto rounded = image_wire::decode_answer(image_wire::encode(image_wire::Answer{answer}), request);
+  EXPECT_EQ(std::get<image_wire::FieldsAnswer>(rounded).fields.gradient_rounding, 0.0023);
+  for (double bad : {std::nan(""), -1e-3, std::numeric_limits<double>::infinity()}) {
+    answer.fields.gradient_rounding = bad;
+    EXPECT_THROW(image_wire::decode_answer(image_wire::encode(image_wire::Answer{answer}), request),
+                 image_wire::WireError)
+        << bad;
+  }
 }
 
 TEST(ReaderSandbox, ForbidsWritingSocketsAndNewProcessesButNotThreadsOrReading) {
