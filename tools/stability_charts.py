@@ -4,7 +4,9 @@
     stability_charts.py CSVDIR OUTDIR [--variants V,...]   read CSVDIR, write one PNG per metric into OUTDIR
                                                            (one panel per failure mode, the metric against
                                                            the severity, one line per method and variant),
-                                                           print the summary table (Markdown) to stdout
+                                                           print the summary table, where each method is worse
+                                                           than every other, and the tests' bounds (Markdown)
+                                                           to stdout
 
 Reads stability.csv (mode, severity, method, variant and the metric columns) and modes.csv (mode, family,
 severity, has_features, description). Writes stability_<metric>.png for each metric. The exact input's own
@@ -163,6 +165,46 @@ def summary_table(rows, modes, methods, variant):
 
 
 BOUNDED = ["cd_err_rms", "jitter_rms", "travel_err_pct", "travel_sens_pct", "iso_pct"]
+# A method is worse than another on a metric where its value exceeds the other's by more than a tenth and by more
+# than this (values below it are rounding).
+WORSE_MARGIN = 1e-3
+
+
+def worse_than_every_other(rows, modes, methods, variant):
+    """Where a method is worse than every other method of the run (lower is better on each BOUNDED metric), per
+    method, mode and metric: the severities, and the values at the one where the gap to the worst of the others is
+    largest. Each method is measured against its own exact input, so this compares what the maps and the walk do
+    to each; a method built from others (the hybrid from curvature and depth) should never be here."""
+    if len(methods) < 2:
+        return "Where a method is worse than every other: one method only."
+    lines = [f"Where a method is worse than every other (variant `{variant}`; by more than a tenth and more than "
+             f"{WORSE_MARGIN:g}): the severities, and at the one with the largest gap the method's value (the others', "
+             "in the order of the other columns).", "",
+             "| method | mode | metric | severities | value (the others') |", "|---|---|---|---|---|"]
+    at = {(r["mode"], r["severity"], r["method"]): r for r in rows if r["variant"] == variant}
+    for method in methods:
+        others = [m for m in methods if m != method]
+        for mode in modes:
+            for metric in BOUNDED:
+                found = []
+                for sev in severities_of(rows, mode["mode"]):
+                    mine = at.get((mode["mode"], sev, method))
+                    theirs = [at.get((mode["mode"], sev, m)) for m in others]
+                    if mine is None or None in theirs or not finite(mine[metric]):
+                        continue
+                    values = [r[metric] for r in theirs if finite(r[metric])]
+                    if not values:
+                        continue
+                    worst = max(values)
+                    if mine[metric] > 1.1 * worst + WORSE_MARGIN:
+                        found.append((mine[metric] / max(worst, WORSE_MARGIN), sev, mine[metric], values))
+                if found:
+                    _, sev, value, values = max(found)
+                    sevs = ", ".join(fmt(f[1], 3) for f in sorted(found, key=lambda f: f[1]))
+                    theirs = ", ".join(fmt(v) for v in values)
+                    lines.append(f"| {method} | {mode['mode']} | {metric} | {sevs} | {fmt(value)} at {fmt(sev, 3)} "
+                                 f"({theirs}) |")
+    return "\n".join(lines)
 FLOOR = 1e-3  # no bound below this: values under it are rounding, and may differ between builds
 
 
@@ -226,6 +268,8 @@ def main(argv):
         print(f"stability_charts.py: {e}", file=sys.stderr)
         return 1
     print(summary_table(rows, modes, methods, variants[0]))
+    print()
+    print(worse_than_every_other(rows, modes, methods, variants[0]))
     bounds = bounds_of(rows, modes, methods, variants[0])
     print()
     print(bounds_table(bounds, variants[0]))
