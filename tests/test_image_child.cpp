@@ -99,6 +99,35 @@ TEST(ImageChild, FieldsEqualThoseReadInProcessAndTheModuleIsNeverMappedHere) {
   EXPECT_EQ(from_child.regions()[0].effects.size(), here.regions()[0].effects.size());
 }
 
+// A hybrid region loaded through the reader is prepared as in process: the rounding its map's storage leaves (the
+// smoothing band) crosses with the fields, so the smoothed normals and the marks are the same, bit for bit.
+TEST(ImageChild, AHybridRegionIsPreparedAsInProcess) {
+  const ScratchDir dir("image-child-hybrid");
+  const std::filesystem::path scene_file = write_scene(dir.path(), small_target());
+  std::string text = read_text(scene_file);
+  const std::string curvature = "method = \"curvature\"";
+  ASSERT_NE(text.find(curvature), std::string::npos) << text;
+  text.replace(text.find(curvature), curvature.size(), "method = \"hybrid\"");
+  write_text(scene_file, text);
+  const SceneSpec spec = parse_scene_file(scene_file);
+  Scene from_child;
+  {
+    ImageChild child;
+    from_child = load_scene(spec, nullptr, &child);
+  }
+  const Scene here = load_scene(spec);
+  const RegionFields& a = from_child.regions().at(0).fields;
+  const RegionFields& b = here.regions().at(0).fields;
+  EXPECT_GT(b.gradient_rounding, 0.0);  // the targets' 16-bit normal map
+  EXPECT_EQ(a.gradient_rounding, b.gradient_rounding);
+  ASSERT_TRUE(a.gradient && b.gradient && a.discontinuity && b.discontinuity);
+  for (std::size_t i = 0; i < a.gradient->values.size(); ++i) {
+    ASSERT_EQ(a.gradient->values[i].x, b.gradient->values[i].x) << i;
+    ASSERT_EQ(a.gradient->values[i].y, b.gradient->values[i].y) << i;
+    ASSERT_EQ(a.discontinuity->values[i], b.discontinuity->values[i]) << i;
+  }
+}
+
 // PNG, TIFF and OpenEXR, 8-bit, 16-bit and float, as normal and depth maps: the sandboxed reader reads
 // each as this process would (the sandbox leaves every decoder what it needs).
 TEST(ImageChild, ReadsEveryFormatInItsSandboxAsInProcess) {
