@@ -211,8 +211,8 @@ double noise_band(double noise_slope, double rounding, const GradientField& g, c
   std::vector<double> residual = differences(g, s);
   std::erase(residual, 0.0);
   const std::size_t tested = residual.size() * sample_stride(g.values.size());  // nonzero, all texels
-  const double shown = universal_threshold(tested) * robust_sigma(residual) / kResidualGain;
-  return std::min({noise_slope, shown, universal_threshold(tested) * rounding});
+  const double threshold = universal_threshold(tested);
+  return std::min({noise_slope, threshold * robust_sigma(residual) / kResidualGain, threshold * rounding});
 }
 
 // Replaces each gradient by the smoothed one where they differ by at most the noise band, wider further from the
