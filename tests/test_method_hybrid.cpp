@@ -21,6 +21,7 @@
 #include "core/engine/methods.hpp"
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
+#include "core/lab/map_storage.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {
@@ -395,6 +396,69 @@ TEST(HybridMethod, LeavesACleanNormalMapAsTheNormalMapAloneWouldBe) {
     ASSERT_EQ(with_depth.gradient->values[i].x, alone.gradient->values[i].x) << i;
     ASSERT_EQ(with_depth.gradient->values[i].y, alone.gradient->values[i].y) << i;
   }
+}
+
+// Two maps of one relief that each explain the other, with the noise band the same everywhere: the hybrid fuses
+// nothing, so its gradient is bit for bit the one it prepares from the normal map alone.
+void expect_not_fused(const RegionFields& fields) {
+  HybridParams same_band;
+  same_band.far_noise_gain = 0.0;
+  RegionFields with_depth = fields, alone = fields;
+  alone.depth.reset();
+  prepare_hybrid_fields(same_band, with_depth);
+  prepare_hybrid_fields(same_band, alone);
+  for (std::size_t i = 0; i < alone.gradient->values.size(); ++i) {
+    ASSERT_EQ(with_depth.gradient->values[i].x, alone.gradient->values[i].x) << i;
+    ASSERT_EQ(with_depth.gradient->values[i].y, alone.gradient->values[i].y) << i;
+  }
+}
+
+// A rough relief of three octaves (periods 24, 11 and 5 px, 2 px high in all) stored as an 8-bit height image, and
+// the normal map a generator makes from that image by Sobel, stored as 8 bits (the failure-mode suite's `fbm`):
+// the normals are the heights read across as well as along, and rounded. Before the hybrid asked whether the depth
+// map explains its normals, it pulled them toward the central differences (their disagreement, the finest octave
+// read two ways, is far above `noise_slope`).
+TEST(HybridMethod, DoesNotFuseNormalsAGeneratorMadeFromItsDepthMap) {
+  DepthField exact(64, 64);
+  for (int y = 0; y < 64; ++y) {
+    for (int x = 0; x < 64; ++x) {
+      const double u = x + 0.5, v = y + 0.5, tau = 2.0 * std::numbers::pi;
+      exact.at(x, y) =
+          static_cast<float>(1.2 * std::sin(tau * (u + 0.4 * v) / 24.0) + 0.5 * std::sin(tau * (0.3 * u - v) / 11.0) +
+                             0.3 * std::sin(tau * (u + v) / 5.0));
+    }
+  }
+  RegionFields fields;
+  fields.depth = stored_depth(exact, 255);
+  DecodeReport report;
+  fields.gradient = gradient_from_normals(stored_normals(sobel_normals(*fields.depth), 255, &report));
+  fields.gradient_rounding = gradient_rounding_of_normals(report.value_step);
+  ASSERT_GT(rms_difference(*fields.gradient, gradient_from_depth(*fields.depth)), HybridParams{}.noise_slope);
+  expect_not_fused(fields);
+}
+
+// A grating of period 8 px as exact float maps: the normals at the texel centres and the heights. Central
+// differences of the heights read its slopes a tenth flatter than the normals; Simpson's mean of the normals over
+// the same 2 px agrees with them, so nothing is fused and the float normals are used as given (before: fused).
+TEST(HybridMethod, DoesNotFuseTheExactNormalsOfAFineGrating) {
+  RegionFields fields;
+  fields.gradient = GradientField(64, 64);
+  fields.depth = DepthField(64, 64);
+  const double k = 2.0 * std::numbers::pi / 8.0, a = 0.5;
+  for (int y = 0; y < 64; ++y) {
+    for (int x = 0; x < 64; ++x) {
+      const double u = (x + 0.5) * 0.8 + (y + 0.5) * 0.6;  // across the grating, at 37 degrees
+      fields.depth->at(x, y) = static_cast<float>(a * std::sin(k * u));
+      const double slope = a * k * std::cos(k * u);
+      fields.gradient->at(x, y) = {static_cast<float>(0.8 * slope), static_cast<float>(0.6 * slope)};
+    }
+  }
+  ASSERT_GT(rms_difference(*fields.gradient, gradient_from_depth(*fields.depth)), HybridParams{}.noise_slope);
+  const GradientField given = *fields.gradient;
+  expect_not_fused(fields);
+  RegionFields prepared = fields;
+  prepare_hybrid_fields(HybridParams{}, prepared);
+  EXPECT_EQ(rms_difference(*prepared.gradient, given), 0.0);
 }
 
 // A cone of slope 0.3 and radius 28 px on a 64 x 64 region (a map of the suite's `cone`), and the largest change

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace ph {
@@ -180,16 +181,82 @@ DiscontinuityField with_smeared_neighbours(const DiscontinuityField& marks, cons
   return out;
 }
 
+// The unit normal's x and y of a slope: what a normal map stores, so that its rounding is the same everywhere.
+std::array<double, 2> normal_xy(Gradient g) {
+  const double gx = g.x, gy = g.y, length = std::sqrt(1.0 + gx * gx + gy * gy);
+  return {gx / length, gy / length};
+}
+
+// The robust sigma of the difference between the unit normals' x and y of two slopes, `pair(x, y)`, at every
+// sample_stride-th texel of a w x h field.
+template <typename Pair>
+double robust_sigma_of_normals(std::int32_t w, std::int32_t h, const Pair& pair) {
+  const std::size_t texels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  const std::size_t stride = sample_stride(texels);
+  std::vector<double> out;
+  out.reserve(2 * (texels / stride + 1));
+  for (std::size_t i = 0; i < texels; i += stride) {
+    const auto [a, b] = pair(static_cast<std::int32_t>(i % static_cast<std::size_t>(w)),
+                             static_cast<std::int32_t>(i / static_cast<std::size_t>(w)));
+    const auto [ax, ay] = normal_xy(a);
+    const auto [bx, by] = normal_xy(b);
+    out.push_back(std::abs(ax - bx));
+    out.push_back(std::abs(ay - by));
+  }
+  return robust_sigma(std::move(out));
+}
+
+// How far the normals `g` lie from what the depth map says they are, `d` its central differences: the robust sigma
+// of their difference (as unit normals) for the closest of three readings of the heights. Its central differences;
+// those smoothed [1 2 1] / 4 across their axis, which is the Sobel filter that normal-map generators apply to a
+// height image; and the normals' own mean over the 2 px a central difference spans, by Simpson's rule ([1 4 1] / 6
+// along the axis), against the central differences: a relief's exact normals at the texel centres and its exact
+// heights agree so to the fourth order, where a central difference alone flattens a grating of period 8 px by a
+// tenth. Generators and exact samples differ in their finest detail, which neither reads as the other does.
+double disagreement_with_depth(const GradientField& g, const GradientField& d) {
+  const std::int32_t w = g.width, h = g.height;
+  const double central = robust_sigma_of_normals(w, h, [&](std::int32_t x, std::int32_t y) {
+    return std::pair{g.at(x, y), d.at(x, y)};
+  });
+  const double sobel = robust_sigma_of_normals(w, h, [&](std::int32_t x, std::int32_t y) {
+    const Gradient c = d.at(x, y);
+    const Gradient up = d.at(x, std::max(y - 1, 0)), down = d.at(x, std::min(y + 1, h - 1));
+    const Gradient left = d.at(std::max(x - 1, 0), y), right = d.at(std::min(x + 1, w - 1), y);
+    return std::pair{g.at(x, y), Gradient{c.x + 0.25f * ((up.x - c.x) + (down.x - c.x)),
+                                          c.y + 0.25f * ((left.y - c.y) + (right.y - c.y))}};
+  });
+  const double simpson = robust_sigma_of_normals(w, h, [&](std::int32_t x, std::int32_t y) {
+    const Gradient n = g.at(x, y);
+    const Gradient up = g.at(x, std::max(y - 1, 0)), down = g.at(x, std::min(y + 1, h - 1));
+    const Gradient left = g.at(std::max(x - 1, 0), y), right = g.at(std::min(x + 1, w - 1), y);
+    return std::pair{
+        Gradient{n.x + ((left.x - n.x) + (right.x - n.x)) / 6.0f, n.y + ((up.y - n.y) + (down.y - n.y)) / 6.0f},
+        d.at(x, y)};
+  });
+  return std::min({central, sobel, simpson});
+}
+
+// The robust sigma of a uniform rounding is 1.28 times its sigma (the median of |u| is a quarter of the step);
+// normals that a generator made from the heights and then rounded disagree with them by that and a little of the
+// heights' own rounding. Twice the rounding's sigma covers both; the suite's noisy and quantised maps lie at 2.6
+// times and beyond (docs/METHODS.md, "Hybrid").
+constexpr double kExplainedRounding = 2.0;
+
 // The normals and the depth map's central differences are two estimates of the same slopes. Where the normals
-// disagree with the heights by more than the map's rounding (`noise_slope`), each texel whose disagreement is
+// are not what the depth map says they are (disagreement_with_depth) beyond the map's rounding (`noise_slope` at the
+// universal threshold, or twice the rounding of the normals' storage, `rounding`), each texel whose disagreement is
 // noise-like (within the universal threshold of its robust sigma) and that is no discontinuity takes their
 // inverse-variance mean, each field's variance estimated from its own residual: noisy normals over a clean depth
-// map become the depth map's slopes, clean normals over a coarse depth map stay as they are.
+// map become the depth map's slopes, clean normals over a coarse depth map stay as they are. Normals the depth map
+// explains carry no noise of their own for it to take out: fusing them would trade the detail one reading resolves
+// for the other's.
 void fuse_with_depth_gradient(const DepthField& depth, const DiscontinuityField& marks, double noise_slope,
-                              GradientField& g) {
+                              double rounding, GradientField& g) {
   const GradientField from_depth = gradient_from_depth(depth);
-  const double band = universal_threshold(2 * g.values.size()) * robust_sigma(differences(g, from_depth));
-  if (band <= noise_slope) return;  // they agree within the rounding: nothing to fix
+  const double threshold = universal_threshold(2 * g.values.size());
+  const double unexplained = disagreement_with_depth(g, from_depth);
+  if (threshold * unexplained <= noise_slope || unexplained <= kExplainedRounding * rounding) return;
+  const double band = threshold * robust_sigma(differences(g, from_depth));
   const double vn = std::pow(gradient_noise(g), 2), vd = std::pow(gradient_noise(from_depth), 2);
   if (vn + vd <= 0.0) return;
   const double normals_weight = vd / (vn + vd);
@@ -256,7 +323,8 @@ void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields) {
                                                        g, *fields.depth, params.discontinuity_px)
                              : DiscontinuityField(g.width, g.height, 0);
   if (params.noise_slope <= 0.0) return;
-  if (has_depth) fuse_with_depth_gradient(*fields.depth, *fields.discontinuity, params.noise_slope, g);
+  if (has_depth)
+    fuse_with_depth_gradient(*fields.depth, *fields.discontinuity, params.noise_slope, fields.gradient_rounding, g);
   smooth_within_band(params, fields.gradient_rounding, has_depth ? &*fields.depth : nullptr, g);
 }
 
