@@ -187,12 +187,14 @@ std::array<double, 2> normal_xy(Gradient g) {
   return {gx / length, gy / length};
 }
 
-// The robust sigma of the difference between the unit normals' x and y of two slopes, `pair(x, y)`, at every
-// sample_stride-th texel of a w x h field.
+// The robust sigma of the difference between the unit normals' x and y of two slopes, `pair(x, y)`, at every texel
+// of a w x h field up to 2^17 texels, every k-th beyond: it decides one thing for the whole region, which the
+// median of a quarter of a million values does to a few parts in a thousand (a full-HD region's load would
+// otherwise take a fifth longer).
 template <typename Pair>
 double robust_sigma_of_normals(std::int32_t w, std::int32_t h, const Pair& pair) {
   const std::size_t texels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-  const std::size_t stride = sample_stride(texels);
+  const std::size_t stride = texels / (std::size_t{1} << 17) + 1;
   std::vector<double> out;
   out.reserve(2 * (texels / stride + 1));
   for (std::size_t i = 0; i < texels; i += stride) {
