@@ -383,6 +383,32 @@ TEST(HybridMethod, EstimatesTheNoiseOfALargeRegionFromASample) {
   EXPECT_LT(std::sqrt(after), 0.01 * std::sqrt(before));
 }
 
+// A region too large to read every texel (1200 x 300 px: every third is read where every texel would be, up to
+// 2^17) whose normals are noisy on two columns in three, clean on the third: the texels read must fall on every
+// column, or the noise is not seen (with every third texel read, a width divisible by three reads one column in
+// three on every row) and the depth map's clean slopes are not taken.
+TEST(HybridMethod, ReadsEveryColumnOfALargeRegion) {
+  RegionFields fields;
+  fields.gradient = GradientField(1200, 300);
+  fields.depth = DepthField(1200, 300);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  double before = 0.0;
+  for (int y = 0; y < 300; ++y) {
+    for (int x = 0; x < 1200; ++x) {
+      fields.depth->at(x, y) = 0.1f * static_cast<float>(x);
+      const double nx = x % 3 == 0 ? 0.0 : noise(rng), ny = x % 3 == 0 ? 0.0 : noise(rng);
+      fields.gradient->at(x, y) = {static_cast<float>(0.1 + nx), static_cast<float>(ny)};
+      before += nx * nx + ny * ny;
+    }
+  }
+  prepare_hybrid_fields(HybridParams{}, fields);
+  double after = 0.0;
+  for (const Gradient& g : fields.gradient->values) after += std::pow(g.x - 0.1, 2) + std::pow(g.y, 2);
+  // Measured 0.35: a third of the texels are clean, which narrows the band of what is noise (fuse_with_depth_gradient).
+  EXPECT_LT(std::sqrt(after), 0.5 * std::sqrt(before));
+}
+
 // Two maps of one relief that each explain the other, with the noise band the same everywhere: the hybrid fuses
 // nothing, so its gradient is bit for bit the one it prepares from the normal map alone.
 void expect_not_fused(const RegionFields& fields) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -49,11 +50,19 @@ double robust_sigma(std::vector<double> magnitudes) {
 // Texels whose differences the noise estimates read: every one up to 2^20, every k-th beyond (the median of a
 // million values is as good as that of all, and a 4K region's would take 130 MB).
 constexpr std::size_t kSampledTexels = std::size_t{1} << 20;
-std::size_t sample_stride(std::size_t texels) { return texels / kSampledTexels + 1; }
+
+// Every k-th texel of a field `width` wide holding `texels`, so that at most `samples` are read: k sharing no factor
+// with the width, so that the texels read fall on every column in turn (a k that divides the width reads the same
+// columns on every row: one phase of a relief periodic along x).
+std::size_t sample_stride(std::size_t texels, std::int32_t width, std::size_t samples = kSampledTexels) {
+  std::size_t k = texels / samples + 1;
+  while (k > 1 && std::gcd(k, static_cast<std::size_t>(width)) != 1) ++k;
+  return k;
+}
 
 // Both components of a - b, as magnitudes, at every sample_stride-th texel.
 std::vector<double> differences(const GradientField& a, const GradientField& b) {
-  const std::size_t stride = sample_stride(a.values.size());
+  const std::size_t stride = sample_stride(a.values.size(), a.width);
   std::vector<double> out;
   out.reserve(2 * (a.values.size() / stride + 1));
   for (std::size_t i = 0; i < a.values.size(); i += stride) {
@@ -194,7 +203,7 @@ std::array<double, 2> normal_xy(Gradient g) {
 template <typename Pair>
 double robust_sigma_of_normals(std::int32_t w, std::int32_t h, const Pair& pair) {
   const std::size_t texels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-  const std::size_t stride = texels / (std::size_t{1} << 17) + 1;
+  const std::size_t stride = sample_stride(texels, w, std::size_t{1} << 17);
   std::vector<double> out;
   out.reserve(2 * (texels / stride + 1));
   for (std::size_t i = 0; i < texels; i += stride) {
@@ -279,7 +288,7 @@ void fuse_with_depth_gradient(const DepthField& depth, const DiscontinuityField&
 double noise_band(double noise_slope, double rounding, const GradientField& g, const GradientField& s) {
   std::vector<double> residual = differences(g, s);
   std::erase(residual, 0.0);
-  const std::size_t tested = residual.size() * sample_stride(g.values.size());  // nonzero, all texels
+  const std::size_t tested = residual.size() * sample_stride(g.values.size(), g.width);  // nonzero, all texels
   const double threshold = universal_threshold(tested);
   return std::min({noise_slope, threshold * robust_sigma(residual) / kResidualGain, threshold * rounding});
 }
