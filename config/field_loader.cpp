@@ -73,7 +73,10 @@ RegionFields load_region_fields(const FieldSources& sources, std::int32_t width,
     fields.gradient_rounding = gradient_from_depth_map ? gradient_rounding_of_depth(report.depth.value_step)
                                                        : gradient_rounding_of_normals(report.normals.value_step);
   }
-  if (wants_depth) fields.depth = std::move(depth);
+  if (wants_depth) {
+    fields.depth = std::move(depth);
+    fields.depth_rounding = height_rounding_of_depth(report.depth.value_step);
+  }
   return fields;
 }
 

@@ -109,9 +109,10 @@ static_assert(std::is_trivially_copyable_v<NormalDecodeOptions> && std::is_trivi
               std::is_trivially_copyable_v<ImageSize> && std::is_trivially_copyable_v<Gradient>);
 
 void check_finite_grids(const RegionFields& fields) {
-  // The sigma of the slopes' rounding: a hostile child's NaN, infinity or negative sigma stops here.
-  if (!(fields.gradient_rounding >= 0.0 && std::isfinite(fields.gradient_rounding)))
-    throw WireError("a rounding that is not a finite sigma");
+  // The sigmas of the slopes' and the heights' rounding: a hostile child's NaN, infinity or negative sigma stops here.
+  for (double sigma : {fields.gradient_rounding, fields.depth_rounding}) {
+    if (!(sigma >= 0.0 && std::isfinite(sigma))) throw WireError("a rounding that is not a finite sigma");
+  }
   if (fields.gradient) {
     for (const Gradient& g : fields.gradient->values) {
       if (!(std::abs(g.x) <= kMaxSlope && std::abs(g.y) <= kMaxSlope)) throw WireError("a slope out of range");
@@ -177,6 +178,7 @@ std::vector<std::byte> encode(const Answer& answer) {
     w.put_grid(f->fields.gradient);
     w.put_grid(f->fields.depth);
     w.put(f->fields.gradient_rounding);
+    w.put(f->fields.depth_rounding);
   } else if (const auto* s = std::get_if<ImageSize>(&answer)) {
     w.put(Tag::size_answer);
     w.put(*s);
@@ -202,6 +204,7 @@ Answer decode_answer(const std::vector<std::byte>& bytes, const Request& request
     a.fields.gradient = r.get_grid<Gradient>();
     a.fields.depth = r.get_grid<float>();
     a.fields.gradient_rounding = r.get<double>();
+    a.fields.depth_rounding = r.get<double>();
     r.finish();
     auto fits = [&](const auto& grid, bool needed) {
       return grid.has_value() == needed && (!grid || (grid->width == f->width && grid->height == f->height));

@@ -120,6 +120,8 @@ TEST(ImageChild, AHybridRegionIsPreparedAsInProcess) {
   const RegionFields& b = here.regions().at(0).fields;
   EXPECT_GT(b.gradient_rounding, 0.0);  // the targets' 16-bit normal map
   EXPECT_EQ(a.gradient_rounding, b.gradient_rounding);
+  EXPECT_GT(b.depth_rounding, 0.0);  // and its 16-bit depth map
+  EXPECT_EQ(a.depth_rounding, b.depth_rounding);
   ASSERT_TRUE(a.gradient && b.gradient && a.discontinuity && b.discontinuity);
   for (std::size_t i = 0; i < a.gradient->values.size(); ++i) {
     ASSERT_EQ(a.gradient->values[i].x, b.gradient->values[i].x) << i;
@@ -153,6 +155,7 @@ TEST(ImageChild, ReadsEveryFormatInItsSandboxAsInProcess) {
       ASSERT_EQ(a.gradient->values[i].y, b.gradient->values[i].y) << path << " texel " << i;
     }
     EXPECT_EQ(a.gradient_rounding, b.gradient_rounding) << path;  // the hybrid method's smoothing band reads it
+    EXPECT_EQ(a.depth_rounding, b.depth_rounding) << path;        // and its reading of normals from the heights
     EXPECT_EQ(from_child_report.normals.value_step, here_report.normals.value_step) << path;
     EXPECT_EQ(child.image_size(path).code_max, read_image_size(path).code_max) << path;
     ++files;
@@ -256,13 +259,19 @@ TEST(ImageWire, AnswersWithNonFiniteOrMisshapenFieldsAreRefused) {
                image_wire::WireError);
   answer.fields.depth.reset();
   answer.fields.gradient_rounding = 0.0023;  // an 8-bit map's: crosses as it is
+  answer.fields.depth_rounding = 0.11;       // a 16-bit depth map's of 100 px relief, the same
   const auto rounded = image_wire::decode_answer(image_wire::encode(image_wire::Answer{answer}), request);
   EXPECT_EQ(std::get<image_wire::FieldsAnswer>(rounded).fields.gradient_rounding, 0.0023);
-  for (double bad : {std::nan(""), -1e-3, std::numeric_limits<double>::infinity()}) {
-    answer.fields.gradient_rounding = bad;
-    EXPECT_THROW(image_wire::decode_answer(image_wire::encode(image_wire::Answer{answer}), request),
-                 image_wire::WireError)
-        << bad;
+  EXPECT_EQ(std::get<image_wire::FieldsAnswer>(rounded).fields.depth_rounding, 0.11);
+  for (double* sigma : {&answer.fields.gradient_rounding, &answer.fields.depth_rounding}) {
+    const double good = *sigma;
+    for (double bad : {std::nan(""), -1e-3, std::numeric_limits<double>::infinity()}) {
+      *sigma = bad;
+      EXPECT_THROW(image_wire::decode_answer(image_wire::encode(image_wire::Answer{answer}), request),
+                   image_wire::WireError)
+          << bad;
+    }
+    *sigma = good;
   }
 }
 

@@ -505,6 +505,8 @@ TEST(FieldLoader, BothFieldsWhenBothAreNeeded) {
   EXPECT_EQ(fields.bytes(), 12u * 256u);
   EXPECT_EQ(report.normals.texels, 64u);
   EXPECT_EQ(report.depth.texels, 64u);
+  // Heights rounded to relief_px / 65535 (the default relief of 100 px) err by that over sqrt(12).
+  EXPECT_DOUBLE_EQ(fields.depth_rounding, 100.0 / 65535.0 / std::sqrt(12.0));
 }
 
 TEST(FieldLoader, MissingMapsAreConfigurationErrors) {

@@ -427,28 +427,63 @@ void expect_not_fused(const RegionFields& fields) {
 // Normals that agree with their heights within the rounding: the depth map changes nothing but what it marks.
 TEST(HybridMethod, LeavesACleanNormalMapAsTheNormalMapAloneWouldBe) { expect_not_fused(hill_fields()); }
 
-// A rough relief of three octaves (periods 24, 11 and 5 px, 2 px high in all) stored as an 8-bit height image, and
-// the normal map a generator makes from that image by Sobel, stored as 8 bits (the failure-mode suite's `fbm`):
-// the normals are the heights read across as well as along, and rounded. Before the hybrid asked whether the depth
-// map explains its normals, it pulled them toward the central differences (their disagreement, the finest octave
-// read two ways, is far above `noise_slope`).
-TEST(HybridMethod, DoesNotFuseNormalsAGeneratorMadeFromItsDepthMap) {
+// A rough relief of three octaves (periods 24, 11 and 5 px, 4 x `scale` px high in all) stored as a height image
+// with `depth_codes`, and the normal map a generator makes from that image by Sobel, stored as 8 bits (the failure-
+// mode suite's `fbm`): the normals are the heights read across as well as along, and rounded.
+RegionFields generated_rough_maps(double scale, std::uint32_t depth_codes) {
   DepthField exact(64, 64);
   for (int y = 0; y < 64; ++y) {
     for (int x = 0; x < 64; ++x) {
       const double u = x + 0.5, v = y + 0.5, tau = 2.0 * std::numbers::pi;
-      exact.at(x, y) =
-          static_cast<float>(1.2 * std::sin(tau * (u + 0.4 * v) / 24.0) + 0.5 * std::sin(tau * (0.3 * u - v) / 11.0) +
-                             0.3 * std::sin(tau * (u + v) / 5.0));
+      exact.at(x, y) = static_cast<float>(scale * (1.2 * std::sin(tau * (u + 0.4 * v) / 24.0) +
+                                                   0.5 * std::sin(tau * (0.3 * u - v) / 11.0) +
+                                                   0.3 * std::sin(tau * (u + v) / 5.0)));
     }
   }
   RegionFields fields;
-  fields.depth = stored_depth(exact, 255);
-  DecodeReport report;
-  fields.gradient = gradient_from_normals(stored_normals(sobel_normals(*fields.depth), 255, &report));
-  fields.gradient_rounding = gradient_rounding_of_normals(report.value_step);
+  DecodeReport depth_report, normals_report;
+  fields.depth = stored_depth(exact, depth_codes, &depth_report);
+  fields.depth_rounding = height_rounding_of_depth(depth_report.value_step);
+  fields.gradient = gradient_from_normals(stored_normals(sobel_normals(*fields.depth), 255, &normals_report));
+  fields.gradient_rounding = gradient_rounding_of_normals(normals_report.value_step);
+  return fields;
+}
+
+// The generator's normals of an 8-bit height image 16 px high: the heights are stored coarser than the normals
+// (their rounding through the Sobel filter, 0.008 in slope, is over three times the normals' 0.0023), so the
+// normals stay as given, and unfused. Before the hybrid asked whether the depth map explains its normals, it pulled
+// them toward the central differences (their disagreement, the finest octave read two ways, is far above
+// `noise_slope`).
+TEST(HybridMethod, DoesNotFuseNormalsAGeneratorMadeFromItsDepthMap) {
+  const RegionFields fields = generated_rough_maps(4.0, 255);
   ASSERT_GT(rms_difference(*fields.gradient, gradient_from_depth(*fields.depth)), HybridParams{}.noise_slope);
   expect_not_fused(fields);
+}
+
+// The same relief 4 px high as a 16-bit height image and the generator's 8-bit normal map of it: the heights are
+// stored 200 times finer than the normals, so the hybrid takes the generator's reading again from them, without the
+// normals' rounding, and smooths only within what is left of it.
+TEST(HybridMethod, ReadsAGeneratorsNormalsAgainFromFinerHeights) {
+  RegionFields fields = generated_rough_maps(1.0, 65535);
+  const GradientField reading = gradient_from_normals(sobel_normals(*fields.depth));  // as a generator, unrounded
+  auto largest_inner_difference = [&](const GradientField& g) {
+    double largest = 0.0;
+    for (int y = 1; y < 63; ++y) {
+      for (int x = 1; x < 63; ++x) {
+        largest = std::max({largest, std::abs(static_cast<double>(g.at(x, y).x) - reading.at(x, y).x),
+                            std::abs(static_cast<double>(g.at(x, y).y) - reading.at(x, y).y)});
+      }
+    }
+    return largest;
+  };
+  ASSERT_GT(largest_inner_difference(*fields.gradient), 2e-3);  // the normals' 8-bit rounding
+  const double normals_rounding = fields.gradient_rounding;
+  HybridParams unsmoothed_by_depth;
+  unsmoothed_by_depth.far_noise_gain = 0.0;
+  prepare_hybrid_fields(unsmoothed_by_depth, fields);
+  EXPECT_LT(largest_inner_difference(*fields.gradient), 1e-5);  // measured 6e-8: float against double
+  EXPECT_LT(fields.gradient_rounding, 0.01 * normals_rounding);
+  EXPECT_GT(fields.gradient_rounding, 0.0);
 }
 
 // A grating of period 8 px as exact float maps: the normals at the texel centres and the heights. Central

@@ -19,6 +19,7 @@
 #include "config/image_io.hpp"
 #include "config/target_files.hpp"
 #include "core/engine/targets.hpp"
+#include "core/lab/map_storage.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/tool_runner.hpp"
 
@@ -657,6 +658,30 @@ TEST(Tool, CheckConfig) {
     // The target's 16-bit normal map: a code is 2 / 65535 in n, a slope sigma of that over sqrt(12).
     EXPECT_TRUE(contains(r.out, "rounding: slope sigma 8.8e-06 from the map's storage")) << r.out;
     EXPECT_FALSE(contains(run_tool("check-config " + quote(scene), dir).out, "steps:"));  // curvature: no such line
+  }
+  {
+    SCOPED_TRACE("hybrid: a generator's 8-bit normals read again from 16-bit heights");
+    Grid<float> image(32, 32);  // a dome 0.2 of the default 100 px relief high, as a 16-bit grey image
+    for (int y = 0; y < 32; ++y) {
+      for (int x = 0; x < 32; ++x) {
+        image.at(x, y) = static_cast<float>(0.2 * std::exp(-(std::pow(x - 15.5, 2) + std::pow(y - 15.5, 2)) / 60.0));
+      }
+    }
+    write_gray_png16(dir / "dome_depth.png", image);
+    DepthField heights(32, 32);  // what the loader reads back, from which the generator made its normals
+    for (std::size_t i = 0; i < heights.values.size(); ++i) {
+      heights.values[i] = static_cast<float>(std::round(image.values[i] * 65535.0) / 65535.0 * 100.0);
+    }
+    write_normal_image(dir / "dome_normals.png", sobel_normals(heights), {ImageFormat::png, 8});
+    std::ofstream(dir / "generated.toml", std::ios::binary)
+        << "[[region]]\nname = \"dome\"\nx = 0\ny = 0\nwidth = 32\nheight = 32\nmethod = \"hybrid\"\n"
+           "normal_map = \"dome_normals.png\"\ndepth_map = \"dome_depth.png\"\n";
+    const ToolResult r = run_tool("check-config " + quote(dir / "generated.toml"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    // 100 / 65535 px per code through the Sobel filter: 1.5e-3 / sqrt(12) x sqrt(12) / 8 = 1.9e-4; the 8-bit normal
+    // map's own, 2 / 255 / sqrt(12) = 2.3e-3.
+    EXPECT_TRUE(contains(r.out, "rounding: slope sigma 0.00019: the normals are a generator's reading")) << r.out;
+    EXPECT_TRUE(contains(r.out, "(normal map's own: 0.0023)")) << r.out;
   }
   {
     SCOPED_TRACE("bad setting");

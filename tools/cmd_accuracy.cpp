@@ -226,7 +226,10 @@ RegionFields build_fields(const Shape& shape, FieldNeeds needs, Storage storage,
         fields.gradient = gradient_from_depth(depth);
         fields.gradient_rounding = gradient_rounding_of_depth(report.value_step);
       }
-      if (needs.depth || needs.depth_if_given) fields.depth = std::move(depth);
+      if (needs.depth || needs.depth_if_given) {
+        fields.depth = std::move(depth);
+        fields.depth_rounding = height_rounding_of_depth(report.value_step);
+      }
       break;
     }
   }

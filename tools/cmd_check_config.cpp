@@ -13,6 +13,7 @@
 
 #include "config/daemon_config.hpp"
 #include "config/scene_file.hpp"
+#include "core/engine/decode.hpp"
 #include "tools/commands.hpp"
 
 namespace ph::tools {
@@ -36,9 +37,16 @@ std::string steps_line(const RegionFields& fields) {
                      share);
 }
 
-// How the hybrid method smooths the normals: within the rounding the map's storage leaves, none for a float map.
-std::string rounding_line(const RegionFields& fields) {
+// How the hybrid method smooths the normals: within the rounding the map's storage leaves, none for a float map; a
+// rounding below the normal map's own says that it read a generator's normals again from finer heights.
+std::string rounding_line(const RegionFields& fields, const FieldLoadReport& report) {
   if (fields.gradient_rounding <= 0.0) return "none (a float map): the normals are used as given";
+  if (report.normals.texels > 0 && fields.gradient_rounding < gradient_rounding_of_normals(report.normals.value_step)) {
+    return fmt::format(
+        "slope sigma {:.2g}: the normals are a generator's reading of the depth map's heights, which are stored "
+        "finer, so they are read again from them (normal map's own: {:.2g}) and smoothed within it",
+        fields.gradient_rounding, gradient_rounding_of_normals(report.normals.value_step));
+  }
   return fmt::format("slope sigma {:.2g} from the map's storage: the normals are smoothed within it",
                      fields.gradient_rounding);
 }
@@ -80,7 +88,7 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
     if (i < report.variants.size()) fmt::format_to(to, "      traversal: {}\n", report.variants[i]);
     if (region.fields.discontinuity) {
       fmt::format_to(to, "      steps: {}\n", steps_line(region.fields));
-      fmt::format_to(to, "      rounding: {}\n", rounding_line(region.fields));
+      fmt::format_to(to, "      rounding: {}\n", rounding_line(region.fields, fr));
     }
   }
   return fmt::to_string(out);

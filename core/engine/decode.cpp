@@ -233,6 +233,7 @@ double normal_value_step(const RawImage& image, bool unorm) {
 
 double gradient_rounding_of_normals(double value_step) { return value_step / std::sqrt(12.0); }
 double gradient_rounding_of_depth(double value_step) { return value_step / std::sqrt(24.0); }
+double height_rounding_of_depth(double value_step) { return value_step / std::sqrt(12.0); }
 
 NormalImage decode_normals(const RawImage& image, const NormalDecodeOptions& options, DecodeReport& report) {
   require_normal_channels(image);

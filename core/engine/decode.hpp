@@ -55,6 +55,8 @@ struct DecodeReport {
 // central difference (h(x+1) - h(x-1)) / 2 of heights rounded to steps q errs by q / sqrt(24). 0 for a float map.
 double gradient_rounding_of_normals(double value_step);
 double gradient_rounding_of_depth(double value_step);
+// The standard deviation of a height's rounding error from a depth map's storage: value_step / sqrt(12). 0 for float.
+double height_rounding_of_depth(double value_step);
 
 // Unit normals in the screen frame. A unorm image cannot store 0 (2c/cmax - 1 is +-1/cmax around it), so
 // tangent components within one code of 0 are taken as 0: a flat area of an 8- or 16-bit map is exactly

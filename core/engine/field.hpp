@@ -84,6 +84,9 @@ struct RegionFields {
   // The standard deviation of the gradient's error from the storage of the map it was decoded from (core/engine/
   // decode.hpp: an 8-bit normal map's 0.0023); 0 for a float map and for fields made in code: exact.
   double gradient_rounding = 0.0;
+  // The same for the heights, from the depth map's storage (px; height_rounding_of_depth): 0 for a float map, for
+  // fields made in code and where there is no depth field.
+  double depth_rounding = 0.0;
 
   std::size_t bytes() const {
     return (gradient ? gradient->bytes() : 0) + (depth ? depth->bytes() : 0) +

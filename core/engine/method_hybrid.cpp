@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -217,26 +218,37 @@ double robust_sigma_of_normals(std::int32_t w, std::int32_t h, const Pair& pair)
   return robust_sigma(std::move(out));
 }
 
+// A normal-map generator's reading of a height image at (x, y), from its central differences `d`: those smoothed
+// [1 2 1] / 4 across their axis, which is the Sobel filter (divided by 8, so that a plane's slope comes out as it is).
+Gradient sobel_reading(const GradientField& d, std::int32_t x, std::int32_t y) {
+  const std::int32_t w = d.width, h = d.height;
+  const Gradient c = d.at(x, y);
+  const Gradient up = d.at(x, std::max(y - 1, 0)), down = d.at(x, std::min(y + 1, h - 1));
+  const Gradient left = d.at(std::max(x - 1, 0), y), right = d.at(std::min(x + 1, w - 1), y);
+  return {c.x + 0.25f * ((up.x - c.x) + (down.x - c.x)), c.y + 0.25f * ((left.y - c.y) + (right.y - c.y))};
+}
+
 // How far the normals `g` lie from what the depth map says they are, `d` its central differences: the robust sigma
-// of their difference (as unit normals) for the closest of three readings of the heights. Its central differences;
-// those smoothed [1 2 1] / 4 across their axis, which is the Sobel filter that normal-map generators apply to a
-// height image; and the normals' own mean over the 2 px a central difference spans, by Simpson's rule ([1 4 1] / 6
-// along the axis), against the central differences: a relief's exact normals at the texel centres and its exact
-// heights agree so to the fourth order, where a central difference alone flattens a grating of period 8 px by a
-// tenth. Generators and exact samples differ in their finest detail, which neither reads as the other does.
-double disagreement_with_depth(const GradientField& g, const GradientField& d) {
+// of their difference (as unit normals) for each of three readings of the heights. Its central differences; a
+// generator's (sobel_reading); and the normals' own mean over the 2 px a central difference spans, by Simpson's rule
+// ([1 4 1] / 6 along the axis), against the central differences: a relief's exact normals at the texel centres and
+// its exact heights agree so to the fourth order, where a central difference alone flattens a grating of period 8 px
+// by a tenth. Generators and exact samples differ in their finest detail, which neither reads as the other does, so
+// the closest reading is the one that explains the normals.
+struct Disagreement {
+  double central, sobel, simpson;
+  double closest() const { return std::min({central, sobel, simpson}); }
+};
+Disagreement disagreement_with_depth(const GradientField& g, const GradientField& d) {
   const std::int32_t w = g.width, h = g.height;
-  const double central = robust_sigma_of_normals(w, h, [&](std::int32_t x, std::int32_t y) {
+  Disagreement out{};
+  out.central = robust_sigma_of_normals(w, h, [&](std::int32_t x, std::int32_t y) {
     return std::pair{g.at(x, y), d.at(x, y)};
   });
-  const double sobel = robust_sigma_of_normals(w, h, [&](std::int32_t x, std::int32_t y) {
-    const Gradient c = d.at(x, y);
-    const Gradient up = d.at(x, std::max(y - 1, 0)), down = d.at(x, std::min(y + 1, h - 1));
-    const Gradient left = d.at(std::max(x - 1, 0), y), right = d.at(std::min(x + 1, w - 1), y);
-    return std::pair{g.at(x, y), Gradient{c.x + 0.25f * ((up.x - c.x) + (down.x - c.x)),
-                                          c.y + 0.25f * ((left.y - c.y) + (right.y - c.y))}};
+  out.sobel = robust_sigma_of_normals(w, h, [&](std::int32_t x, std::int32_t y) {
+    return std::pair{g.at(x, y), sobel_reading(d, x, y)};
   });
-  const double simpson = robust_sigma_of_normals(w, h, [&](std::int32_t x, std::int32_t y) {
+  out.simpson = robust_sigma_of_normals(w, h, [&](std::int32_t x, std::int32_t y) {
     const Gradient n = g.at(x, y);
     const Gradient up = g.at(x, std::max(y - 1, 0)), down = g.at(x, std::min(y + 1, h - 1));
     const Gradient left = g.at(std::max(x - 1, 0), y), right = g.at(std::min(x + 1, w - 1), y);
@@ -244,7 +256,7 @@ double disagreement_with_depth(const GradientField& g, const GradientField& d) {
         Gradient{n.x + ((left.x - n.x) + (right.x - n.x)) / 6.0f, n.y + ((up.y - n.y) + (down.y - n.y)) / 6.0f},
         d.at(x, y)};
   });
-  return std::min({central, sobel, simpson});
+  return out;
 }
 
 // The robust sigma of a uniform rounding is 1.28 times its sigma (the median of |u| is a quarter of the step);
@@ -252,6 +264,25 @@ double disagreement_with_depth(const GradientField& g, const GradientField& d) {
 // heights' own rounding. Twice the rounding's sigma covers both; the suite's noisy and quantised maps lie at 2.6
 // times and beyond (docs/METHODS.md, "Hybrid").
 constexpr double kExplainedRounding = 2.0;
+
+// The Sobel filter's weights on the six heights it reads, (+-1, +-2, +-1) / 8, make a slope whose rounding is
+// sqrt(12) / 8 times the heights'.
+constexpr double kSobelRoundingGain = 0.4330127018922193;
+
+// Normals a generator made from this depth map (its reading explains them within their storage's rounding, as
+// fuse_with_depth_gradient asks) carry nothing the heights do not, and their own rounding besides: where the
+// heights are stored finer than that (a 16-bit height image and its 8-bit normal map), the generator's reading is
+// taken again from the heights, and the rounding left is the heights' through the filter. Returns whether it was.
+bool reread_from_depth(const GradientField& from_depth, const Disagreement& disagreement, double depth_rounding,
+                       GradientField& g, double& rounding) {
+  const double reread_rounding = kSobelRoundingGain * depth_rounding;
+  if (!(disagreement.sobel <= kExplainedRounding * rounding && reread_rounding < rounding)) return false;
+  for (std::int32_t y = 0; y < g.height; ++y) {
+    for (std::int32_t x = 0; x < g.width; ++x) g.at(x, y) = sobel_reading(from_depth, x, y);
+  }
+  rounding = reread_rounding;
+  return true;
+}
 
 // The normals and the depth map's central differences are two estimates of the same slopes. Where the normals
 // are not what the depth map says they are (disagreement_with_depth) beyond the map's rounding (`noise_slope` at the
@@ -261,11 +292,10 @@ constexpr double kExplainedRounding = 2.0;
 // map become the depth map's slopes, clean normals over a coarse depth map stay as they are. Normals the depth map
 // explains carry no noise of their own for it to take out: fusing them would trade the detail one reading resolves
 // for the other's.
-void fuse_with_depth_gradient(const DepthField& depth, const DiscontinuityField& marks, double noise_slope,
-                              double rounding, GradientField& g) {
-  const GradientField from_depth = gradient_from_depth(depth);
+void fuse_with_depth_gradient(const GradientField& from_depth, const Disagreement& disagreement,
+                              const DiscontinuityField& marks, double noise_slope, double rounding, GradientField& g) {
   const double threshold = universal_threshold(2 * g.values.size());
-  const double unexplained = disagreement_with_depth(g, from_depth);
+  const double unexplained = disagreement.closest();
   if (threshold * unexplained <= noise_slope || unexplained <= kExplainedRounding * rounding) return;
   const double band = threshold * robust_sigma(differences(g, from_depth));
   const double vn = std::pow(gradient_noise(g), 2), vd = std::pow(gradient_noise(from_depth), 2);
@@ -329,13 +359,25 @@ void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields) {
   if (!fields.gradient || fields.discontinuity) return;  // prepared once: a scene built again keeps its fields
   GradientField& g = *fields.gradient;
   const bool has_depth = fields.depth && fields.depth->width == g.width && fields.depth->height == g.height;
+  // noise_slope 0 asks for the normals as given: neither read again, nor fused, nor smoothed.
+  std::optional<GradientField> from_depth;
+  std::optional<Disagreement> disagreement;
+  bool reread = false;
+  if (has_depth && params.noise_slope > 0.0) {
+    from_depth = gradient_from_depth(*fields.depth);
+    disagreement = disagreement_with_depth(g, *from_depth);
+    reread = reread_from_depth(*from_depth, *disagreement, fields.depth_rounding, g, fields.gradient_rounding);
+  }
   fields.discontinuity = has_depth
                              ? with_smeared_neighbours(find_discontinuities(g, *fields.depth, params.discontinuity_px),
                                                        g, *fields.depth, params.discontinuity_px)
                              : DiscontinuityField(g.width, g.height, 0);
   if (params.noise_slope <= 0.0) return;
-  if (has_depth)
-    fuse_with_depth_gradient(*fields.depth, *fields.discontinuity, params.noise_slope, fields.gradient_rounding, g);
+  // Normals read again from the heights are the depth map's own reading: nothing to fuse.
+  if (has_depth && !reread) {
+    fuse_with_depth_gradient(*from_depth, *disagreement, *fields.discontinuity, params.noise_slope,
+                             fields.gradient_rounding, g);
+  }
   smooth_within_band(params, fields.gradient_rounding, has_depth ? &*fields.depth : nullptr, g);
 }
 

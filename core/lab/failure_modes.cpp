@@ -330,7 +330,8 @@ CaseMap make_map(const Layer& layer, const Storage& storage, std::mt19937_64& rn
       map.normals.at(x, y) = normal_from_gradient({static_cast<float>(gr.x), static_cast<float>(gr.y)});
     }
   }
-  const DepthField stored_depth_field = stored_depth(map.depth, storage.depth_code_max);
+  DecodeReport depth_decoded;
+  const DepthField stored_depth_field = stored_depth(map.depth, storage.depth_code_max, &depth_decoded);
   if (storage.sobel_normals) map.normals = sobel_normals(storage.sobel_from_stored ? stored_depth_field : map.depth);
   if (storage.normal_noise > 0.0) {
     std::normal_distribution<double> gauss(0.0, storage.normal_noise);
@@ -344,6 +345,7 @@ CaseMap make_map(const Layer& layer, const Storage& storage, std::mt19937_64& rn
   map.normals = stored_normals(map.normals, storage.normal_code_max, &decoded);
   map.gradient_rounding = gradient_rounding_of_normals(decoded.value_step);
   map.depth = stored_depth_field;
+  map.depth_rounding = height_rounding_of_depth(depth_decoded.value_step);
   return map;
 }
 
@@ -483,7 +485,10 @@ RegionFields case_fields(const CaseMap& map, FieldNeeds needs) {
     fields.gradient = gradient_from_normals(map.normals);
     fields.gradient_rounding = map.gradient_rounding;
   }
-  if (needs.depth || needs.depth_if_given) fields.depth = map.depth;  // every case has a depth map
+  if (needs.depth || needs.depth_if_given) {  // every case has a depth map
+    fields.depth = map.depth;
+    fields.depth_rounding = map.depth_rounding;
+  }
   return fields;
 }
 

@@ -41,6 +41,7 @@ struct CaseMap {
   NormalImage normals;
   DepthField depth;
   double gradient_rounding = 0.0;  // of the normals as stored (RegionFields::gradient_rounding)
+  double depth_rounding = 0.0;     // of the heights as stored (RegionFields::depth_rounding)
 };
 
 // Where a case's strokes run: `length` px along `direction`, centred on centre + lateral x (-direction.y,

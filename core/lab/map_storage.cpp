@@ -50,11 +50,15 @@ NormalImage stored_normals(const NormalImage& normals, std::uint32_t code_max, D
   return out;
 }
 
-DepthField stored_depth(const DepthField& depth, std::uint32_t code_max) {
-  if (code_max == 0 || depth.empty()) return depth;
-  const auto [lo, hi] = std::minmax_element(depth.values.begin(), depth.values.end());
-  DecodeReport report;
-  return decode_depth(encode_depth_map(depth, *lo, *hi, code_max), depth_options_for(*lo, *hi), report);
+DepthField stored_depth(const DepthField& depth, std::uint32_t code_max, DecodeReport* report) {
+  DecodeReport decoded{depth.values.size(), 0, 0.0};
+  DepthField out = depth;
+  if (code_max != 0 && !depth.empty()) {
+    const auto [lo, hi] = std::minmax_element(depth.values.begin(), depth.values.end());
+    out = decode_depth(encode_depth_map(depth, *lo, *hi, code_max), depth_options_for(*lo, *hi), decoded);
+  }
+  if (report != nullptr) *report = decoded;
+  return out;
 }
 
 NormalImage sobel_normals(const DepthField& depth, double strength) {

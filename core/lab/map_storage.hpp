@@ -28,8 +28,9 @@ DepthDecodeOptions depth_options_for(double lo, double hi);
 // The normals decoded from a normal map stored with code_max (0: float, returned as given); what decoding found goes
 // to `report` where one is given (its value_step: 0 for float).
 NormalImage stored_normals(const NormalImage& normals, std::uint32_t code_max, DecodeReport* report = nullptr);
-// The heights decoded from a depth map stored with code_max over the field's own range (0: float, as given).
-DepthField stored_depth(const DepthField& depth, std::uint32_t code_max);
+// The heights decoded from a depth map stored with code_max over the field's own range (0: float, as given); what
+// decoding found goes to `report` where one is given (its value_step: 0 for float).
+DepthField stored_depth(const DepthField& depth, std::uint32_t code_max, DecodeReport* report = nullptr);
 
 // The normal map a generator makes from a height image: the Sobel derivatives (divided by 8, so a plane's slope
 // comes out exact), edges clamped, n = (-g_x, -g_y, 1) / |.| times `strength` on the slope.
