@@ -486,6 +486,25 @@ TEST(HybridMethod, ReadsAGeneratorsNormalsAgainFromFinerHeights) {
   EXPECT_GT(fields.gradient_rounding, 0.0);
 }
 
+// A region given a depth map and no normal map: its gradient is the heights' central differences, which no
+// generator's reading explains better (on a tilted plane every reading agrees exactly), and stays as it is, with the
+// rounding of its own storage.
+TEST(HybridMethod, KeepsTheGradientOfARegionGivenNoNormalMap) {
+  DepthField plane(48, 32);
+  for (int y = 0; y < 32; ++y) {
+    for (int x = 0; x < 48; ++x) plane.at(x, y) = static_cast<float>(0.3 * x + 0.1 * y);
+  }
+  RegionFields fields;
+  DecodeReport report;
+  fields.depth = stored_depth(plane, 255, &report);
+  fields.depth_rounding = height_rounding_of_depth(report.value_step);
+  fields.gradient = gradient_from_depth(*fields.depth);
+  fields.gradient_rounding = gradient_rounding_of_depth(report.value_step);
+  const double rounding = fields.gradient_rounding;
+  prepare_hybrid_fields(HybridParams{}, fields);
+  EXPECT_EQ(fields.gradient_rounding, rounding);
+}
+
 // A grating of period 8 px as exact float maps: the normals at the texel centres and the heights. Central
 // differences of the heights read its slopes a tenth flatter than the normals; Simpson's mean of the normals over
 // the same 2 px agrees with them, so nothing is fused and the float normals are used as given (before: fused).

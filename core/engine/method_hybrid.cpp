@@ -269,14 +269,18 @@ constexpr double kExplainedRounding = 2.0;
 // sqrt(12) / 8 times the heights'.
 constexpr double kSobelRoundingGain = 0.4330127018922193;
 
-// Normals a generator made from this depth map (its reading explains them within their storage's rounding, as
-// fuse_with_depth_gradient asks) carry nothing the heights do not, and their own rounding besides: where the
+// Normals a generator made from this depth map (its reading explains them best, and within their storage's rounding,
+// as fuse_with_depth_gradient asks) carry nothing the heights do not, and their own rounding besides: where the
 // heights are stored finer than that (a 16-bit height image and its 8-bit normal map), the generator's reading is
 // taken again from the heights, and the rounding left is the heights' through the filter. Returns whether it was.
 bool reread_from_depth(const GradientField& from_depth, const Disagreement& disagreement, double depth_rounding,
                        GradientField& g, double& rounding) {
   const double reread_rounding = kSobelRoundingGain * depth_rounding;
-  if (!(disagreement.sobel <= kExplainedRounding * rounding && reread_rounding < rounding)) return false;
+  // The generator's reading must explain the normals better than the others do: a gradient made from this depth
+  // map's central differences (a region given no normal map) is that reading exactly, and stays.
+  const bool generated = disagreement.sobel < std::min(disagreement.central, disagreement.simpson) &&
+                         disagreement.sobel <= kExplainedRounding * rounding;
+  if (!generated || !(reread_rounding < rounding)) return false;
   for (std::int32_t y = 0; y < g.height; ++y) {
     for (std::int32_t x = 0; x < g.width; ++x) g.at(x, y) = sobel_reading(from_depth, x, y);
   }
