@@ -1,8 +1,9 @@
 // The hybrid of the curvature and depth methods that the curvature paper proposes for its method's two failure
 // modes (docs/METHODS.md, "Hybrid"): where the height changes across a texel edge by more than the normals
 // explain (a discontinuity, which a normal map cannot show), the depth method's C/D; elsewhere the curvature
-// method's, on normals fused with the depth map's slopes where they are noisier than it, and smoothed where their
-// differences are within the map's noise, more so further from the viewer. Everything is derived once at load
+// method's, on normals read again from the heights where a generator made them from heights stored finer, fused
+// with the depth map's slopes where they are noisier than it, and smoothed where their differences are within the
+// map's noise, more so further from the viewer. Everything is derived once at load
 // (prepare); a step costs the curvature method's plus one byte read.
 #pragma once
 
@@ -26,7 +27,8 @@ struct HybridParams {
   // A texel's gradient is replaced by the smoothed one where they differ by at most this (per component, px
   // per px; less where the map shows less noise, as a float map does): about one code of an 8-bit normal map at
   // a flat texel (2/255 = 0.0078). Normals that disagree with the depth map's slopes by more noise than this
-  // are first pulled toward them (method_hybrid.cpp, fuse_with_depth_gradient). 0: no smoothing and no fusion.
+  // are first pulled toward them (method_hybrid.cpp, fuse_with_depth_gradient). 0: the normals as given (no
+  // smoothing, no fusion, no reading again from the heights).
   double noise_slope = 0.01;
   // How much wider that band is at the region's lowest height than at its highest (the paper: smooth more
   // further from the viewer); 0: the same everywhere.
@@ -35,10 +37,11 @@ struct HybridParams {
 
 std::string validate(const HybridParams& params);
 
-// Marks the discontinuities (and the flat texels beside a step whose normals a generator smeared), pulls noisy normals
-// toward the depth map's slopes where the two disagree by noise-like amounts (not at a step), then smooths
-// `fields.gradient` within the noise band, as HybridMethod::prepare does (exposed for tests). Without a depth field no
-// texel is a discontinuity, nothing is fused and the band is the same everywhere.
+// Reads a generator's normals again from heights stored finer than they are (and lowers `fields.gradient_rounding` to
+// what is left), marks the discontinuities (and the flat texels beside a step whose normals a generator smeared),
+// pulls noisy normals toward the depth map's slopes where the two disagree by noise-like amounts (not at a step), then
+// smooths `fields.gradient` within the noise band, as HybridMethod::prepare does (exposed for tests). Without a depth
+// field no texel is a discontinuity, nothing is read again or fused and the band is the same everywhere.
 void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields);
 
 class HybridMethod final : public Method {
