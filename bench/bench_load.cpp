@@ -1,7 +1,7 @@
 // What a load or reload costs, from the file to a region ready to walk: a 3840 x 2160 curvature region from a
 // 16-bit normal PNG (load_scene, and its steps one by one), and a full-HD class map of the curvature materials
-// (make_materials_effect from a normal map's gradient). docs/PERFORMANCE.md ("Load time") gives the figures
-// and the command.
+// (make_materials_effect from a normal map's gradient), and what the hybrid method derives at load for a full-HD
+// region (prepare_hybrid_fields). docs/PERFORMANCE.md ("Load time") gives the figures and the command.
 //
 // The PNG is written once per run into a scratch folder (PH_BENCH_DIR, else the system's temporary folder).
 #include <benchmark/benchmark.h>
@@ -18,6 +18,8 @@
 #include "core/effects/effect_materials.hpp"
 #include "core/engine/decode.hpp"
 #include "core/engine/field.hpp"
+#include "core/engine/method_hybrid.hpp"
+#include "core/lab/map_storage.hpp"
 
 namespace {
 
@@ -129,6 +131,40 @@ void BM_ClassMapFullHd(benchmark::State& state) {
   report_texels(state, std::int64_t{ph::bench::kReliefWidth} * ph::bench::kReliefHeight);
 }
 
+// A full-HD hybrid region's preparation (discontinuities, the normals' comparison with the heights, fusion,
+// smoothing) from the shared relief's float heights and its normals as an 8-bit map (0), or as float normals with
+// noise of sigma 0.02 (1: fused with the heights' slopes).
+void BM_PrepareHybridFullHd(benchmark::State& state) {
+  ph::RegionFields given;
+  given.depth = ph::bench::relief_depth();
+  ph::NormalImage normals(ph::bench::kReliefWidth, ph::bench::kReliefHeight);
+  std::uint64_t seed = 12345;
+  auto noise = [&seed] {  // a sum of uniforms: about Gaussian, sigma 0.02
+    double sum = 0.0;
+    for (int i = 0; i < 12; ++i) {
+      seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+      sum += static_cast<double>(seed >> 11) * 0x1.0p-53;
+    }
+    return 0.02 * (sum - 6.0);
+  };
+  for (std::size_t i = 0; i < normals.values.size(); ++i) {
+    ph::Gradient g = ph::bench::relief_gradient().values[i];
+    if (state.range(0) == 1) g = {static_cast<float>(g.x + noise()), static_cast<float>(g.y + noise())};
+    normals.values[i] = ph::normal_from_gradient(g);
+  }
+  ph::DecodeReport report;
+  given.gradient = ph::gradient_from_normals(ph::stored_normals(normals, state.range(0) == 0 ? 255 : 0, &report));
+  given.gradient_rounding = ph::gradient_rounding_of_normals(report.value_step);
+  for (auto _ : state) {
+    state.PauseTiming();
+    ph::RegionFields fields = given;
+    state.ResumeTiming();
+    ph::prepare_hybrid_fields(ph::HybridParams{}, fields);
+    benchmark::DoNotOptimize(fields.gradient->values.data());
+  }
+  report_texels(state, std::int64_t{ph::bench::kReliefWidth} * ph::bench::kReliefHeight);
+}
+
 }  // namespace
 
 BENCHMARK(BM_LoadCurvatureRegionUhd)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -136,5 +172,6 @@ BENCHMARK(BM_ReadPngUhd)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DecodeNormalsUhd)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DecodeNormalsToGradientUhd)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ClassMapFullHd)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PrepareHybridFullHd)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 BENCHMARK_MAIN();
