@@ -109,9 +109,10 @@ static_assert(std::is_trivially_copyable_v<NormalDecodeOptions> && std::is_trivi
               std::is_trivially_copyable_v<ImageSize> && std::is_trivially_copyable_v<Gradient>);
 
 // What the child loads crosses member by member (encode, decode_answer, and check_finite_grids for the values): the
-// gradient, the heights and the two roundings; the discontinuity marks are made after, by the method. A member added
-// to RegionFields changes its size and stops the build here until it is carried too (or the comment says why not).
-static_assert(sizeof(RegionFields) == 136, "RegionFields changed: carry its new member on the image wire");
+// gradient, the heights and the two roundings; the discontinuity marks and the fusion's weight are made after, by the
+// method. A member added to RegionFields changes its size and stops the build here until it is carried too (or the
+// comment says why not).
+static_assert(sizeof(RegionFields) == 152, "RegionFields changed: carry its new member on the image wire");
 
 void check_finite_grids(const RegionFields& fields) {
   // The sigmas of the slopes' and the heights' rounding: a hostile child's NaN, infinity or negative sigma stops here.

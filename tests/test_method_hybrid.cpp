@@ -358,6 +358,9 @@ TEST(HybridMethod, PullsNoisyNormalsToTheSlopesOfACleanDepthMap) {
   prepare_hybrid_fields(HybridParams{}, noisy);
   EXPECT_GT(rms_difference(*normals_only.gradient, *clean.gradient), 0.5 * before);  // the band is far too narrow
   EXPECT_LT(rms_difference(*noisy.gradient, *clean.gradient), 0.05 * before);        // measured 0.028
+  ASSERT_TRUE(noisy.fused_normals_weight);                                           // what check-config reports
+  EXPECT_LT(*noisy.fused_normals_weight, 0.01);
+  EXPECT_FALSE(normals_only.fused_normals_weight);
   for (std::uint8_t mark : noisy.discontinuity->values) EXPECT_EQ(mark, 0);
 }
 
@@ -419,6 +422,7 @@ void expect_not_fused(const RegionFields& fields) {
   alone.depth.reset();
   prepare_hybrid_fields(same_band, with_depth);
   prepare_hybrid_fields(same_band, alone);
+  EXPECT_FALSE(with_depth.fused_normals_weight);
   for (std::size_t i = 0; i < alone.gradient->values.size(); ++i) {
     ASSERT_EQ(with_depth.gradient->values[i].x, alone.gradient->values[i].x) << i;
     ASSERT_EQ(with_depth.gradient->values[i].y, alone.gradient->values[i].y) << i;

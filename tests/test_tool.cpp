@@ -11,6 +11,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <iterator>
+#include <random>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -657,6 +658,7 @@ TEST(Tool, CheckConfig) {
     EXPECT_TRUE(contains(r.out, "steps: 1132 texels (0.45 %) take the depth C/D")) << r.out;
     // The target's 16-bit normal map: a code is 2 / 65535 in n, a slope sigma of that over sqrt(12).
     EXPECT_TRUE(contains(r.out, "rounding: slope sigma 8.8e-06 from the map's storage")) << r.out;
+    EXPECT_TRUE(contains(r.out, "fusion: none: the depth map's heights explain the normals")) << r.out;
     EXPECT_FALSE(contains(run_tool("check-config " + quote(scene), dir).out, "steps:"));  // curvature: no such line
   }
   {
@@ -682,6 +684,22 @@ TEST(Tool, CheckConfig) {
     // map's own, 2 / 255 / sqrt(12) = 2.3e-3.
     EXPECT_TRUE(contains(r.out, "rounding: slope sigma 0.00019: the normals are a generator's reading")) << r.out;
     EXPECT_TRUE(contains(r.out, "(normal map's own: 0.0023)")) << r.out;
+    EXPECT_TRUE(contains(r.out, "fusion: none")) << r.out;
+    // The same heights under normals of their exact slopes with noise of sigma 0.05 on each: pulled to the heights.
+    NormalImage noisy(32, 32);
+    std::mt19937_64 rng(3);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    for (int y = 0; y < 32; ++y) {
+      for (int x = 0; x < 32; ++x) {
+        const double e = 20.0 * std::exp(-(std::pow(x - 15.5, 2) + std::pow(y - 15.5, 2)) / 60.0);
+        noisy.at(x, y) = normal_from_gradient({static_cast<float>(-2.0 * (x - 15.5) / 60.0 * e + noise(rng)),
+                                               static_cast<float>(-2.0 * (y - 15.5) / 60.0 * e + noise(rng))});
+      }
+    }
+    write_normal_png16(dir / "dome_normals.png", noisy);
+    const ToolResult fused = run_tool("check-config " + quote(dir / "generated.toml"), dir);
+    ASSERT_EQ(fused.rc, 0) << fused.err;
+    EXPECT_TRUE(contains(fused.out, "fusion: the normals are pulled toward the depth map's slopes")) << fused.out;
   }
   {
     SCOPED_TRACE("bad setting");

@@ -51,6 +51,16 @@ std::string rounding_line(const RegionFields& fields, const FieldLoadReport& rep
                      fields.gradient_rounding);
 }
 
+// Whether the hybrid method pulled the normals toward the depth map's slopes (docs/METHODS.md, "Hybrid"), which
+// `noise_slope` bounds.
+std::string fusion_line(const RegionFields& fields) {
+  if (!fields.depth) return "none without a depth map";
+  if (!fields.fused_normals_weight) return "none: the depth map's heights explain the normals within their rounding";
+  return fmt::format(
+      "the normals are pulled toward the depth map's slopes where they disagree by noise (their weight {:.2g})",
+      *fields.fused_normals_weight);
+}
+
 std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadReport& report) {
   fmt::memory_buffer out;
   const auto to = std::back_inserter(out);
@@ -89,6 +99,7 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
     if (region.fields.discontinuity) {
       fmt::format_to(to, "      steps: {}\n", steps_line(region.fields));
       fmt::format_to(to, "      rounding: {}\n", rounding_line(region.fields, fr));
+      fmt::format_to(to, "      fusion: {}\n", fusion_line(region.fields));
     }
   }
   return fmt::to_string(out);

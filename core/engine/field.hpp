@@ -87,6 +87,9 @@ struct RegionFields {
   // The same for the heights, from the depth map's storage (px; height_rounding_of_depth): 0 for a float map, for
   // fields made in code and where there is no depth field.
   double depth_rounding = 0.0;
+  // Where the hybrid method's preparation pulled the normals toward the depth map's slopes, the normals' weight in
+  // that mean (core/engine/method_hybrid.cpp); empty where it did not (and for every other method).
+  std::optional<double> fused_normals_weight;
 
   std::size_t bytes() const {
     return (gradient ? gradient->bytes() : 0) + (depth ? depth->bytes() : 0) +

@@ -295,15 +295,16 @@ bool reread_from_depth(const GradientField& from_depth, const Disagreement& disa
 // inverse-variance mean, each field's variance estimated from its own residual: noisy normals over a clean depth
 // map become the depth map's slopes, clean normals over a coarse depth map stay as they are. Normals the depth map
 // explains carry no noise of their own for it to take out: fusing them would trade the detail one reading resolves
-// for the other's.
-void fuse_with_depth_gradient(const GradientField& from_depth, const Disagreement& disagreement,
-                              const DiscontinuityField& marks, double noise_slope, double rounding, GradientField& g) {
+// for the other's. Returns the normals' weight where it fused.
+std::optional<double> fuse_with_depth_gradient(const GradientField& from_depth, const Disagreement& disagreement,
+                                               const DiscontinuityField& marks, double noise_slope, double rounding,
+                                               GradientField& g) {
   const double threshold = universal_threshold(2 * g.values.size());
   const double unexplained = disagreement.closest();
-  if (threshold * unexplained <= noise_slope || unexplained <= kExplainedRounding * rounding) return;
+  if (threshold * unexplained <= noise_slope || unexplained <= kExplainedRounding * rounding) return std::nullopt;
   const double band = threshold * robust_sigma(differences(g, from_depth));
   const double vn = std::pow(gradient_noise(g), 2), vd = std::pow(gradient_noise(from_depth), 2);
-  if (vn + vd <= 0.0) return;
+  if (vn + vd <= 0.0) return std::nullopt;
   const double normals_weight = vd / (vn + vd);
   for (std::size_t i = 0; i < g.values.size(); ++i) {
     const Gradient n = g.values[i], d = from_depth.values[i];
@@ -311,6 +312,7 @@ void fuse_with_depth_gradient(const GradientField& from_depth, const Disagreemen
     g.values[i] = {static_cast<float>(d.x + normals_weight * (n.x - d.x)),
                    static_cast<float>(d.y + normals_weight * (n.y - d.y))};
   }
+  return normals_weight;
 }
 
 // The noise band at the region's highest height: what rounding to the map's storage can make of the gradient
@@ -379,8 +381,8 @@ void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields) {
   if (params.noise_slope <= 0.0) return;
   // Normals read again from the heights are the depth map's own reading: nothing to fuse.
   if (has_depth && !reread) {
-    fuse_with_depth_gradient(*from_depth, *disagreement, *fields.discontinuity, params.noise_slope,
-                             fields.gradient_rounding, g);
+    fields.fused_normals_weight = fuse_with_depth_gradient(*from_depth, *disagreement, *fields.discontinuity,
+                                                           params.noise_slope, fields.gradient_rounding, g);
   }
   smooth_within_band(params, fields.gradient_rounding, has_depth ? &*fields.depth : nullptr, g);
 }
