@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <random>
 #include <string>
 
 #include "bench/relief.hpp"
@@ -138,18 +139,11 @@ void BM_PrepareHybridFullHd(benchmark::State& state) {
   ph::RegionFields given;
   given.depth = ph::bench::relief_depth();
   ph::NormalImage normals(ph::bench::kReliefWidth, ph::bench::kReliefHeight);
-  std::uint64_t seed = 12345;
-  auto noise = [&seed] {  // a sum of uniforms: about Gaussian, sigma 0.02
-    double sum = 0.0;
-    for (int i = 0; i < 12; ++i) {
-      seed = seed * 6364136223846793005ull + 1442695040888963407ull;
-      sum += static_cast<double>(seed >> 11) * 0x1.0p-53;
-    }
-    return 0.02 * (sum - 6.0);
-  };
+  std::mt19937_64 rng(12345);
+  std::normal_distribution<double> noise(0.0, 0.02);
   for (std::size_t i = 0; i < normals.values.size(); ++i) {
     ph::Gradient g = ph::bench::relief_gradient().values[i];
-    if (state.range(0) == 1) g = {static_cast<float>(g.x + noise()), static_cast<float>(g.y + noise())};
+    if (state.range(0) == 1) g = {static_cast<float>(g.x + noise(rng)), static_cast<float>(g.y + noise(rng))};
     normals.values[i] = ph::normal_from_gradient(g);
   }
   ph::DecodeReport report;

@@ -218,20 +218,33 @@ double robust_sigma_of_normals(std::int32_t w, std::int32_t h, const Pair& pair)
   return robust_sigma(std::move(out));
 }
 
+// A texel's gradient and its four neighbours', the border texels repeated.
+struct Cross {
+  Gradient c, left, right, up, down;
+};
+Cross cross_at(const GradientField& f, std::int32_t x, std::int32_t y) {
+  return {f.at(x, y), f.at(std::max(x - 1, 0), y), f.at(std::min(x + 1, f.width - 1), y), f.at(x, std::max(y - 1, 0)),
+          f.at(x, std::min(y + 1, f.height - 1))};
+}
+
 // A normal-map generator's reading of a height image at (x, y), from its central differences `d`: those smoothed
 // [1 2 1] / 4 across their axis, which is the Sobel filter (divided by 8, so that a plane's slope comes out as it is).
 Gradient sobel_reading(const GradientField& d, std::int32_t x, std::int32_t y) {
-  const std::int32_t w = d.width, h = d.height;
-  const Gradient c = d.at(x, y);
-  const Gradient up = d.at(x, std::max(y - 1, 0)), down = d.at(x, std::min(y + 1, h - 1));
-  const Gradient left = d.at(std::max(x - 1, 0), y), right = d.at(std::min(x + 1, w - 1), y);
+  const auto [c, left, right, up, down] = cross_at(d, x, y);
   return {c.x + 0.25f * ((up.x - c.x) + (down.x - c.x)), c.y + 0.25f * ((left.y - c.y) + (right.y - c.y))};
+}
+
+// The normals' own mean at (x, y) over the 2 px a central difference spans, by Simpson's rule: [1 4 1] / 6 along
+// each component's axis.
+Gradient simpson_mean(const GradientField& g, std::int32_t x, std::int32_t y) {
+  const auto [n, left, right, up, down] = cross_at(g, x, y);
+  return {n.x + ((left.x - n.x) + (right.x - n.x)) / 6.0f, n.y + ((up.y - n.y) + (down.y - n.y)) / 6.0f};
 }
 
 // How far the normals `g` lie from what the depth map says they are, `d` its central differences: the robust sigma
 // of their difference (as unit normals) for each of three readings of the heights. Its central differences; a
-// generator's (sobel_reading); and the normals' own mean over the 2 px a central difference spans, by Simpson's rule
-// ([1 4 1] / 6 along the axis), against the central differences: a relief's exact normals at the texel centres and
+// generator's (sobel_reading); and the normals' own mean over the 2 px a central difference spans (simpson_mean),
+// against the central differences: a relief's exact normals at the texel centres and
 // its exact heights agree so to the fourth order, where a central difference alone flattens a grating of period 8 px
 // by a tenth. Generators and exact samples differ in their finest detail, which neither reads as the other does, so
 // the closest reading is the one that explains the normals.
@@ -249,12 +262,7 @@ Disagreement disagreement_with_depth(const GradientField& g, const GradientField
     return std::pair{g.at(x, y), sobel_reading(d, x, y)};
   });
   out.simpson = robust_sigma_of_normals(w, h, [&](std::int32_t x, std::int32_t y) {
-    const Gradient n = g.at(x, y);
-    const Gradient up = g.at(x, std::max(y - 1, 0)), down = g.at(x, std::min(y + 1, h - 1));
-    const Gradient left = g.at(std::max(x - 1, 0), y), right = g.at(std::min(x + 1, w - 1), y);
-    return std::pair{
-        Gradient{n.x + ((left.x - n.x) + (right.x - n.x)) / 6.0f, n.y + ((up.y - n.y) + (down.y - n.y)) / 6.0f},
-        d.at(x, y)};
+    return std::pair{simpson_mean(g, x, y), d.at(x, y)};
   });
   return out;
 }
