@@ -163,28 +163,36 @@ DiscontinuityField find_discontinuities(const GradientField& g, const DepthField
   return marks;
 }
 
-// The marks and those of their 8 neighbours that are level with a mark (heights within `threshold` px) but flatter
-// than it (the length of the gradient less by more than `threshold`): a generator smears a step's normals over the
-// texels of its edge, and curvature's reading of the texel beside them, which pairs its normal with those of the
-// texels behind it (any of its 8 neighbours, by the direction of the motion), would feel the smeared normals as a
-// wall where the heights are level. Depth's C/D there is the height change along the motion: the step's where the
-// motion crosses it, none beside it.
+// The marks and the band a generator smeared around them: every 8-neighbour of a texel of the band that is level with
+// it (heights within `threshold` px) but flatter than it (the length of the gradient less by more than `threshold`)
+// joins the band, and passes it on in turn. A generator smears a step's normals over the texels of its edge and the
+// ones beside them (Sobel across a diagonal step: three texels either side of the line carry its slope), and
+// curvature's reading of a texel, which pairs its normal with those of the texels behind it (any of its 8
+// neighbours, by the direction of the motion), would feel the smeared normals as a wall where the heights are level.
+// Depth's C/D there is the height change along the motion: the step's where the motion crosses it, none beside it.
+// Each texel that joins is flatter than the one that passed the band on by more than `threshold`, so the band reaches
+// at most a mark's steepness / `threshold` texels from it.
 DiscontinuityField with_smeared_neighbours(const DiscontinuityField& marks, const GradientField& g, const DepthField& d,
                                            double threshold) {
   const std::int32_t w = marks.width, h = marks.height;
   DiscontinuityField out = marks;
+  auto steepness = [&](std::int32_t x, std::int32_t y) { return std::hypot(g.at(x, y).x, g.at(x, y).y); };
+  std::vector<std::pair<std::int32_t, std::int32_t>> to_pass_on;
   for (std::int32_t y = 0; y < h; ++y) {
     for (std::int32_t x = 0; x < w; ++x) {
-      if (marks.at(x, y) == 0) continue;
-      const Gradient gm = g.at(x, y);
-      const double hm = d.at(x, y), steepness = std::hypot(gm.x, gm.y);
-      for (std::int32_t v = std::max(0, y - 1); v <= std::min(h - 1, y + 1); ++v) {
-        for (std::int32_t u = std::max(0, x - 1); u <= std::min(w - 1, x + 1); ++u) {
-          const Gradient gn = g.at(u, v);
-          const bool level = std::abs(d.at(u, v) - hm) <= threshold;
-          const bool flatter = steepness - std::hypot(gn.x, gn.y) > threshold;
-          if (level && flatter) out.at(u, v) = 1;
-        }
+      if (marks.at(x, y) != 0) to_pass_on.emplace_back(x, y);
+    }
+  }
+  while (!to_pass_on.empty()) {
+    const auto [x, y] = to_pass_on.back();
+    to_pass_on.pop_back();
+    const double level = d.at(x, y), steep = steepness(x, y);
+    for (std::int32_t v = std::max(0, y - 1); v <= std::min(h - 1, y + 1); ++v) {
+      for (std::int32_t u = std::max(0, x - 1); u <= std::min(w - 1, x + 1); ++u) {
+        if (out.at(u, v) != 0 || std::abs(d.at(u, v) - level) > threshold) continue;
+        if (steep - steepness(u, v) <= threshold) continue;
+        out.at(u, v) = 1;
+        to_pass_on.emplace_back(u, v);
       }
     }
   }
