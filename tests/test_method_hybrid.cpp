@@ -151,7 +151,8 @@ TEST(HybridMethod, TakesTheDepthCdWhereverAGeneratorSmearedADiagonalStep) {
     const double a = degrees * std::numbers::pi / 180.0;
     const Vec2 m{std::cos(a), std::sin(a)};
     const Vec2 from = Vec2{24.0, 24.0} - m * 16.0 + Vec2{0.3, 0.1};
-    const std::vector<double> by_hybrid = stroke_cds(hybrid, from, m, 32.0), by_depth = stroke_cds(depth, from, m, 32.0);
+    const std::vector<double> by_hybrid = stroke_cds(hybrid, from, m, 32.0),
+                              by_depth = stroke_cds(depth, from, m, 32.0);
     ASSERT_EQ(by_hybrid.size(), by_depth.size()) << degrees;
     for (std::size_t i = 0; i < by_hybrid.size(); ++i) EXPECT_EQ(by_hybrid[i], by_depth[i]) << degrees << " " << i;
     EXPECT_GT(*std::max_element(by_hybrid.begin(), by_hybrid.end()), 1.5) << degrees;  // the step is felt
