@@ -113,6 +113,9 @@ static_assert(std::is_trivially_copyable_v<NormalDecodeOptions> && std::is_trivi
 // method. A member added to RegionFields changes its size and stops the build here until it is carried too (or the
 // comment says why not).
 static_assert(sizeof(RegionFields) == 152, "RegionFields changed: carry its new member on the image wire");
+// What a region asks for crosses flag by flag: a member added to FieldNeeds stops the build here until it crosses too
+// (depth_if_given once did not, and the daemon's hybrid regions got no depth map).
+static_assert(sizeof(FieldNeeds) == 3, "FieldNeeds changed: carry its new member on the image wire");
 
 void check_finite_grids(const RegionFields& fields) {
   // The sigmas of the slopes' and the heights' rounding: a hostile child's NaN, infinity or negative sigma stops here.
@@ -145,6 +148,7 @@ std::vector<std::byte> encode(const Request& request) {
     w.put(f->height);
     w.put<std::uint8_t>(f->needs.gradient ? 1 : 0);
     w.put<std::uint8_t>(f->needs.depth ? 1 : 0);
+    w.put<std::uint8_t>(f->needs.depth_if_given ? 1 : 0);
   } else {
     w.put(Tag::size_request);
     w.put_string(std::get<SizeRequest>(request).path.string());
@@ -165,6 +169,7 @@ Request decode_request(const std::vector<std::byte>& bytes) {
     f.height = r.get<std::int32_t>();
     f.needs.gradient = r.get_flag();
     f.needs.depth = r.get_flag();
+    f.needs.depth_if_given = r.get_flag();
     r.finish();
     return f;
   }
@@ -215,7 +220,10 @@ Answer decode_answer(const std::vector<std::byte>& bytes, const Request& request
     auto fits = [&](const auto& grid, bool needed) {
       return grid.has_value() == needed && (!grid || (grid->width == f->width && grid->height == f->height));
     };
-    if (!fits(a.fields.gradient, f->needs.gradient) || !fits(a.fields.depth, f->needs.depth))
+    // The heights are asked for where a method needs them, or reads them where the region has a depth map (the
+    // hybrid method), as load_region_fields reads them.
+    const bool depth_asked = f->needs.depth || (f->needs.depth_if_given && f->sources.depth_map);
+    if (!fits(a.fields.gradient, f->needs.gradient) || !fits(a.fields.depth, depth_asked))
       throw WireError("fields other than those asked for");
     check_finite_grids(a.fields);
     return a;

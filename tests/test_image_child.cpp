@@ -99,8 +99,10 @@ TEST(ImageChild, FieldsEqualThoseReadInProcessAndTheModuleIsNeverMappedHere) {
   EXPECT_EQ(from_child.regions()[0].effects.size(), here.regions()[0].effects.size());
 }
 
-// A hybrid region loaded through the reader is prepared as in process: the rounding its map's storage leaves (the
-// smoothing band) crosses with the fields, so the smoothed normals and the marks are the same, bit for bit.
+// A hybrid region loaded through the reader is prepared as in process: its depth map, which the method reads where
+// one is given (FieldNeeds::depth_if_given; until 2026-11-26 it did not cross, and the daemon's hybrid regions had
+// none), and the rounding its maps' storage leaves (the smoothing band) cross with the fields, so the heights, the
+// smoothed normals and the marks are the same, bit for bit.
 TEST(ImageChild, AHybridRegionIsPreparedAsInProcess) {
   const ScratchDir dir("image-child-hybrid");
   const std::filesystem::path scene_file = write_scene(dir.path(), small_target());
@@ -123,9 +125,12 @@ TEST(ImageChild, AHybridRegionIsPreparedAsInProcess) {
   EXPECT_GT(b.depth_rounding, 0.0);  // and its 16-bit depth map
   EXPECT_EQ(a.depth_rounding, b.depth_rounding);
   ASSERT_TRUE(a.gradient && b.gradient && a.discontinuity && b.discontinuity);
+  ASSERT_TRUE(b.depth);
+  ASSERT_TRUE(a.depth);
   for (std::size_t i = 0; i < a.gradient->values.size(); ++i) {
     ASSERT_EQ(a.gradient->values[i].x, b.gradient->values[i].x) << i;
     ASSERT_EQ(a.gradient->values[i].y, b.gradient->values[i].y) << i;
+    ASSERT_EQ(a.depth->values[i], b.depth->values[i]) << i;
     ASSERT_EQ(a.discontinuity->values[i], b.discontinuity->values[i]) << i;
   }
 }
@@ -234,6 +239,33 @@ TEST(ImageChild, AReaderThatStopsInTheMiddleOfAnAnswerIsKilledAfterTheTimeout) {
   const std::string message = thrown_message<FieldError>([&] { child.image_size("/x/half.png"); });
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
   EXPECT_NE(message.find("not complete in time"), std::string::npos) << message;
+}
+
+// What a region asks for crosses as it is, each flag of FieldNeeds.
+TEST(ImageWire, RequestsCarryEveryNeed) {
+  for (const FieldNeeds needs : {FieldNeeds{true, false, false}, FieldNeeds{false, true, false},
+                                 FieldNeeds{true, false, true}, FieldNeeds{true, true, true}}) {
+    image_wire::FieldsRequest request;
+    request.sources.depth_map = "/x/depth.png";
+    request.width = 3;
+    request.height = 2;
+    request.needs = needs;
+    const auto back = std::get<image_wire::FieldsRequest>(image_wire::decode_request(image_wire::encode(request)));
+    EXPECT_EQ(back.needs.gradient, needs.gradient);
+    EXPECT_EQ(back.needs.depth, needs.depth);
+    EXPECT_EQ(back.needs.depth_if_given, needs.depth_if_given);
+    // A method that reads the heights where they are given gets them from a region with a depth map: an answer
+    // without them is refused, as one with them where none were asked for.
+    image_wire::FieldsAnswer with_depth, without;
+    if (needs.gradient) with_depth.fields.gradient = without.fields.gradient = GradientField(3, 2);
+    with_depth.fields.depth = DepthField(3, 2);
+    const bool depth_asked = needs.depth || needs.depth_if_given;
+    const image_wire::FieldsAnswer& right = depth_asked ? with_depth : without;
+    const image_wire::FieldsAnswer& wrong = depth_asked ? without : with_depth;
+    EXPECT_TRUE(std::holds_alternative<image_wire::FieldsAnswer>(
+        image_wire::decode_answer(image_wire::encode(image_wire::Answer{right}), back)));
+    EXPECT_THROW(image_wire::decode_answer(image_wire::encode(image_wire::Answer{wrong}), back), image_wire::WireError);
+  }
 }
 
 TEST(ImageWire, AnswersWithNonFiniteOrMisshapenFieldsAreRefused) {
