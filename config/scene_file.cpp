@@ -626,4 +626,30 @@ std::vector<std::string> invalid_texel_warnings(const SceneSpec& spec, const Sce
   return out;
 }
 
+std::optional<ReliefScale> relief_scale(const RegionSpec& region, const RegionFields& fields) {
+  if (!fields.normals_to_depth_slope_ratio || !region.sources.normal_map || !region.sources.depth_map)
+    return std::nullopt;
+  ReliefScale out;
+  out.ratio = *fields.normals_to_depth_slope_ratio;
+  out.relief_px = region.sources.depth_options.relief_px;
+  out.matching_relief_px = out.relief_px * out.ratio;
+  out.mismatched = !(out.ratio >= 0.8 && out.ratio <= 1.25);
+  return out;
+}
+
+std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scene& scene) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < spec.regions.size() && i < scene.regions().size(); ++i) {
+    const RegionSpec& r = spec.regions[i];
+    const std::optional<ReliefScale> scale = relief_scale(r, scene.regions()[i].fields);
+    if (!scale || !scale->mismatched) continue;
+    out.push_back(fmt::format(
+        "{}:{}: region '{}': the normal map's slopes are {:.2g} times the depth map's where both show the relief "
+        "sloping; if both hold the same relief, relief_px = {:.3g} (now {:.3g}) makes them agree (the hybrid method "
+        "compares them to find steps and noise)",
+        spec.file.string(), r.line, r.name, scale->ratio, scale->matching_relief_px, scale->relief_px));
+  }
+  return out;
+}
+
 }  // namespace ph

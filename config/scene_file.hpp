@@ -92,4 +92,19 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report = nullptr, Field
 // "Screen, regions and fields"), "FILE:LINE: region 'NAME': " and invalid_texel_notes' text; none for a clean scene.
 std::vector<std::string> invalid_texel_warnings(const SceneSpec& spec, const SceneLoadReport& report);
 
+// What the hybrid method found of a region's two maps' scales (RegionFields::normals_to_depth_slope_ratio): the
+// ratio of the normal map's slopes to the depth map's, and the depth map's relief_px that would make them agree.
+// Empty where the region has no such ratio (another method, a single map, too little resolved slope).
+struct ReliefScale {
+  double ratio = 1.0;
+  double relief_px = 100.0;           // the region's
+  double matching_relief_px = 100.0;  // relief_px times the ratio
+  bool mismatched = false;            // the ratio off 1 by more than a quarter (below 0.8 or above 1.25)
+};
+std::optional<ReliefScale> relief_scale(const RegionSpec& region, const RegionFields& fields);
+
+// One line per region whose maps' scales are mismatched (relief_scale), "FILE:LINE: region 'NAME': " and what
+// relief_px would make them agree; none where they agree.
+std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scene& scene);
+
 }  // namespace ph

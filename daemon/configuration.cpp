@@ -46,6 +46,7 @@ Configuration load_configuration(const ConfigChoice& choice) {
     c.scene = std::make_shared<const Scene>(load_scene(spec, &report, &images));
     // Invalid texels are counted, repaired and reported at load (docs/METHODS.md, "Screen, regions and fields").
     for (std::string& warning : invalid_texel_warnings(spec, report)) c.warnings.push_back(std::move(warning));
+    for (std::string& warning : relief_scale_warnings(spec, *c.scene)) c.warnings.push_back(std::move(warning));
     c.settings = spec.daemon;
     c.source = file->string();
   } else {

@@ -5,6 +5,7 @@
 #include <sys/socket.h>
 #include <sys/un.h>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <limits>
@@ -189,6 +190,37 @@ TEST(DaemonConfiguration, InvalidTexelsAreWarnedPerRegionAndMap) {
     EXPECT_EQ(g.x, 0.0f);
     EXPECT_EQ(g.y, 0.0f);
   }
+}
+
+// A hybrid region whose depth map holds its relief at half the scale of its normal map (relief_px 50 where the normals
+// were made for 100) is warned of, with the relief_px that makes them agree; one whose maps agree is not.
+TEST(DaemonConfiguration, MismatchedReliefScalesOfAHybridRegionAreWarned) {
+  const ScratchDir dir("daemon-config-scale");
+  Grid<float> image(48, 48);  // a dome 0.2 of the relief high, as a 16-bit grey image
+  NormalImage normals(48, 48);
+  for (int y = 0; y < 48; ++y) {
+    for (int x = 0; x < 48; ++x) {
+      const double dx = x + 0.5 - 24.0, dy = y + 0.5 - 24.0, e = std::exp(-(dx * dx + dy * dy) / 120.0);
+      image.at(x, y) = static_cast<float>(0.5 + 0.2 * e);
+      const double h = 100.0 * 0.2 * e;  // px, at relief_px 100
+      normals.at(x, y) =
+          normal_from_gradient({static_cast<float>(-2.0 * dx / 120.0 * h), static_cast<float>(-2.0 * dy / 120.0 * h)});
+    }
+  }
+  write_gray_png16(dir / "dome_depth.png", image);
+  write_normal_png16(dir / "dome_normals.png", normals);
+  const std::string region = "method = \"hybrid\"\nnormal_map = \"dome_normals.png\"\ndepth_map = \"dome_depth.png\"\n";
+  std::ofstream(dir / "scene.toml") << "[daemon]\ndesktop = [0, 0, 800, 600]\n\n"
+                                       "[[region]]\nname = \"agreed\"\nx = 0\ny = 0\nwidth = 48\nheight = 48\n"
+                                    << region
+                                    << "\n[[region]]\nname = \"halved\"\nx = 100\ny = 0\nwidth = 48\nheight = 48\n"
+                                    << region << "relief_px = 50\n";
+  const Configuration c = load_configuration(choice_in(dir));
+  ASSERT_EQ(c.warnings.size(), 1u);
+  const std::string& w = c.warnings[0];
+  EXPECT_EQ(w.rfind((dir / "scene.toml").string() + ":14: region 'halved': ", 0), 0u) << w;
+  EXPECT_NE(w.find("the normal map's slopes are 2 times the depth map's"), std::string::npos) << w;
+  EXPECT_NE(w.find("relief_px = 100 (now 50) makes them agree"), std::string::npos) << w;
 }
 
 // A datagram socket standing in for systemd's notification socket.

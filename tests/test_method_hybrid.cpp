@@ -8,6 +8,7 @@
 #include <fstream>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -470,6 +471,37 @@ void expect_not_fused(const RegionFields& fields) {
 
 // Normals that agree with their heights within the rounding: the depth map changes nothing but what it marks.
 TEST(HybridMethod, LeavesACleanNormalMapAsTheNormalMapAloneWouldBe) { expect_not_fused(hill_fields()); }
+
+// The normals' slopes over the depth map's where both show resolved relief: 1 on the hill, whose two maps hold it at
+// one scale; 2 with its heights halved (a depth map whose relief_px is half the normal map's scale); still 1 with a
+// 10 px cliff across the hill, whose steps and the slopes beside them are not read; none on a flat region with a
+// jump, where no resolved slope is left to compare. What the preparation keeps for check-config and the daemon's
+// warning (config/scene_file.hpp, relief_scale).
+TEST(HybridMethod, ReadsTheRatioOfTheNormalsSlopesToTheDepthMaps) {
+  const auto ratio_of = [](RegionFields fields) {
+    prepare_hybrid_fields(HybridParams{}, fields);
+    return fields.normals_to_depth_slope_ratio;
+  };
+  const std::optional<double> same = ratio_of(hill_fields());
+  ASSERT_TRUE(same);
+  EXPECT_NEAR(*same, 1.0, 0.02);
+  RegionFields halved = hill_fields();
+  for (float& h : halved.depth->values) h *= 0.5f;
+  const std::optional<double> twice = ratio_of(halved);
+  ASSERT_TRUE(twice);
+  EXPECT_NEAR(*twice, 2.0, 0.04);
+  RegionFields cliff = hill_fields();
+  for (int y = 0; y < 64; ++y) {
+    for (int x = 40; x < 64; ++x) cliff.depth->at(x, y) += 10.0f;
+  }
+  const std::optional<double> with_cliff = ratio_of(cliff);
+  ASSERT_TRUE(with_cliff);
+  EXPECT_NEAR(*with_cliff, 1.0, 0.02);
+  EXPECT_FALSE(ratio_of(cliff_fields()));
+  RegionFields alone = hill_fields();
+  alone.depth.reset();
+  EXPECT_FALSE(ratio_of(alone));  // no depth map: nothing to compare
+}
 
 // A rough relief of three octaves (periods 24, 11 and 5 px, 4 x `scale` px high in all) stored as a height image
 // with `depth_codes`, and the normal map a generator makes from that image by Sobel, stored as 8 bits (the failure-

@@ -685,6 +685,17 @@ TEST(Tool, CheckConfig) {
     EXPECT_TRUE(contains(r.out, "rounding: slope sigma 0.00019: the normals are a generator's reading")) << r.out;
     EXPECT_TRUE(contains(r.out, "(normal map's own: 0.0023)")) << r.out;
     EXPECT_TRUE(contains(r.out, "fusion: none")) << r.out;
+    EXPECT_TRUE(contains(r.out, "scale: the normal map's slopes are 1 times the depth map's")) << r.out;
+    EXPECT_FALSE(contains(r.out, "makes them agree")) << r.out;
+    // The same maps with the depth map's relief_px halved: its slopes are half the normals', and it says so.
+    std::ofstream(dir / "halved.toml", std::ios::binary)
+        << "[[region]]\nname = \"dome\"\nx = 0\ny = 0\nwidth = 32\nheight = 32\nmethod = \"hybrid\"\n"
+           "normal_map = \"dome_normals.png\"\ndepth_map = \"dome_depth.png\"\nrelief_px = 50\n";
+    const ToolResult halved = run_tool("check-config " + quote(dir / "halved.toml"), dir);
+    ASSERT_EQ(halved.rc, 0) << halved.err;
+    EXPECT_TRUE(contains(halved.out, "scale: the normal map's slopes are 2 times the depth map's")) << halved.out;
+    // (101: the generator's 8-bit normals read the dome's slopes a little apart from its heights' differences.)
+    EXPECT_TRUE(contains(halved.out, "relief_px = 101 (now 50) makes them agree")) << halved.out;
     // The same heights under normals of their exact slopes with noise of sigma 0.05 on each: pulled to the heights.
     NormalImage noisy(32, 32);
     std::mt19937_64 rng(3);

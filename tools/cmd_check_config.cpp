@@ -61,6 +61,19 @@ std::string fusion_line(const RegionFields& fields) {
       *fields.fused_normals_weight);
 }
 
+// Whether the region's normal map and depth map hold the relief at one scale, as the hybrid method compares them.
+std::string scale_line(const RegionSpec& region, const RegionFields& fields) {
+  const std::optional<ReliefScale> scale = relief_scale(region, fields);
+  if (!scale) return "too little resolved slope to compare the normal map's slopes with the depth map's";
+  std::string line = fmt::format(
+      "the normal map's slopes are {:.2g} times the depth map's where both show the relief sloping", scale->ratio);
+  if (scale->mismatched) {
+    line += fmt::format("; if both hold the same relief, relief_px = {:.3g} (now {:.3g}) makes them agree",
+                        scale->matching_relief_px, scale->relief_px);
+  }
+  return line;
+}
+
 std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadReport& report) {
   fmt::memory_buffer out;
   const auto to = std::back_inserter(out);
@@ -100,6 +113,8 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
       fmt::format_to(to, "      steps: {}\n", steps_line(region.fields));
       fmt::format_to(to, "      rounding: {}\n", rounding_line(region.fields, fr));
       fmt::format_to(to, "      fusion: {}\n", fusion_line(region.fields));
+      if (r.sources.normal_map && r.sources.depth_map)
+        fmt::format_to(to, "      scale: {}\n", scale_line(r, region.fields));
     }
   }
   return fmt::to_string(out);

@@ -197,7 +197,8 @@ void note_device(const std::string& input, const Recording& recording, const Rec
   }
 }
 
-// The scene file's scene (or the embedded default), with a warning per map with invalid texels (repaired).
+// The scene file's scene (or the embedded default), with a warning per map with invalid texels (repaired) and per
+// region whose normal map and depth map hold the relief at different scales.
 Scene load_replay_scene(const std::string& scene_file) {
   if (scene_file.empty()) return default_scene();
   const SceneSpec spec = parse_scene_file(scene_file);
@@ -205,6 +206,7 @@ Scene load_replay_scene(const std::string& scene_file) {
   Scene scene = load_scene(spec, &report);
   for (const std::string& w : invalid_texel_warnings(spec, report))
     fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
+  for (const std::string& w : relief_scale_warnings(spec, scene)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
   return scene;
 }
 

@@ -90,6 +90,10 @@ struct RegionFields {
   // Where the hybrid method's preparation pulled the normals toward the depth map's slopes, the normals' weight in
   // that mean (core/engine/method_hybrid.cpp); empty where it did not (and for every other method).
   std::optional<double> fused_normals_weight;
+  // Where the hybrid method's preparation compared the normals with a depth map, the normals' slopes over the depth
+  // map's where both show the relief sloping (slope_ratio_to_depth in core/engine/method_hybrid.hpp): 1 where the two
+  // maps hold it at one scale; empty where there was too little slope to tell (and for every other method).
+  std::optional<double> normals_to_depth_slope_ratio;
 
   std::size_t bytes() const {
     return (gradient ? gradient->bytes() : 0) + (depth ? depth->bytes() : 0) +

@@ -44,6 +44,15 @@ std::string validate(const HybridParams& params);
 // field no texel is a discontinuity, nothing is read again or fused and the band is the same everywhere.
 void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields);
 
+// The normals' slopes `g` over the depth map's, `from_depth` its central differences, where both show the relief
+// sloping: the median, over the texels not in `marks` (no step, where the two disagree by design) and whose central
+// difference along an axis exceeds `floor`, of the normal's slope along that axis over that difference. 1 where the
+// normal map and the depth map hold the relief at one scale (within a few per cent on resolved relief; a generator's
+// smoothing of the finest detail makes it a little less); a depth map whose `relief_px` is not the normal map's
+// scale shows as its ratio. Empty where fewer than 100 such slopes are read.
+std::optional<double> slope_ratio_to_depth(const GradientField& g, const GradientField& from_depth,
+                                           const DiscontinuityField& marks, double floor);
+
 class HybridMethod final : public Method {
  public:
   using Params = HybridParams;
