@@ -569,15 +569,15 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
     region.method = make_method(r, spec.methods);
     const FieldNeeds method_needs = region.method->needs();
     FieldNeeds needs = method_needs;
+    // What the effects read joins what the method reads (its heights where given included: the hybrid's).
+    const auto join = [](FieldNeeds a, FieldNeeds b) {
+      return FieldNeeds{a.gradient || b.gradient, a.depth || b.depth, a.depth_if_given || b.depth_if_given};
+    };
     if (r.materials) {
-      const FieldNeeds m =
-          materials_needs(*r.materials, r.sources.normal_map.has_value(), r.sources.depth_map.has_value());
-      needs = {needs.gradient || m.gradient, needs.depth || m.depth};
+      needs =
+          join(needs, materials_needs(*r.materials, r.sources.normal_map.has_value(), r.sources.depth_map.has_value()));
     }
-    if (r.wells) {
-      const FieldNeeds w = wells_needs(*r.wells);
-      needs = {needs.gradient || w.gradient, needs.depth || w.depth};
-    }
+    if (r.wells) needs = join(needs, wells_needs(*r.wells));
     FieldLoadReport field_report;
     try {
       region.fields = fields_from.load_fields(r.sources, r.rect.w, r.rect.h, needs, field_report);

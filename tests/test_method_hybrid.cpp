@@ -750,7 +750,8 @@ TEST(HybridMethod, SceneFileNamesItWithItsTableAndANormalMapAlone) {
 
 // A target's scene file as `pseudohaptic targets` writes it (normal and depth maps), its method made the hybrid;
 // `drop` removes that line (e.g. the depth map) from the region.
-SceneSpec hybrid_target_scene(const std::filesystem::path& dir, const TargetSpec& target, const std::string& drop) {
+SceneSpec hybrid_target_scene(const std::filesystem::path& dir, const TargetSpec& target, const std::string& drop,
+                              const std::string& append = "") {
   const std::filesystem::path file = write_target_files(dir, {target}).front();
   std::ifstream in(file);
   std::ostringstream text;
@@ -760,6 +761,7 @@ SceneSpec hybrid_target_scene(const std::filesystem::path& dir, const TargetSpec
     if (line == "method = \"curvature\"") line = "method = \"hybrid\"";
     text << line << "\n";
   }
+  text << append;  // after the region's table: a table of its own (the file has one region, last)
   return parse_scene_text(text.str(), file, builtin_methods());
 }
 
@@ -780,6 +782,23 @@ TEST(HybridMethod, LoadsFromASceneFileWithBothMapsOrTheNormalMapAlone) {
   ASSERT_TRUE(alone.gradient && alone.discontinuity);
   EXPECT_FALSE(alone.depth);
   for (std::uint8_t mark : alone.discontinuity->values) EXPECT_EQ(mark, 0);
+}
+
+// With effects that read the normals only (isophote wells, materials from the normals), the hybrid still gets the
+// region's depth map and finds the same steps: what the effects read joins what the method reads (before, the join
+// dropped that the method reads the heights where given).
+TEST(HybridMethod, KeepsItsDepthMapBesideEffectsThatReadTheNormals) {
+  const TargetSpec target = all_targets()[6];
+  ScratchDir dir;
+  const Scene plain = load_scene(hybrid_target_scene(dir.path(), target, ""));
+  for (const std::string effect :
+       {"[region.wells]\npattern = \"isophotes\"\n", "[region.materials]\nsource = \"normals\"\n"}) {
+    const Scene with_effect = load_scene(hybrid_target_scene(dir.path(), target, "", effect));
+    const RegionFields& fields = with_effect.regions()[0].fields;
+    EXPECT_EQ(with_effect.regions()[0].effects.size(), 1u) << effect;
+    ASSERT_TRUE(fields.depth && fields.discontinuity) << effect;
+    EXPECT_EQ(fields.discontinuity->values, plain.regions()[0].fields.discontinuity->values) << effect;
+  }
 }
 
 }  // namespace
