@@ -257,12 +257,14 @@ std::string daemon_table() {
          "pointer_speed = 1.0\n";
 }
 
-ph::TargetSpec hole_target() {
+ph::TargetSpec target_named(const std::string& name) {
   for (const ph::TargetSpec& spec : ph::all_targets()) {
-    if (spec.name() == "hole-polynomial-h1-r200") return spec;
+    if (spec.name() == name) return spec;
   }
-  throw Fatal("no target hole-polynomial-h1-r200");
+  throw Fatal("no target " + name);
 }
+
+ph::TargetSpec hole_target() { return target_named("hole-polynomial-h1-r200"); }
 
 // The daemon table and one region: the hole target's files (in the config's folder) where the default
 // scene has it, at (710, 290).
@@ -945,6 +947,55 @@ void flat_part(Report& report, const Options& options, Latency& latency, Latency
     check.note(fmt::format("still running; said \"{}\"; {} frames back, {} changed, all as the previous scene", said,
                            result.frames.size(), result.differing));
   });
+
+  session.run(
+      "[7] SIGHUP to a hybrid region: the daemon finds its steps from the depth map, as the offline pipeline",
+      [&](Check& check) {
+        // The Gaussian bump of radius 100 px at the hole's place: its truncated rim steps down by about 1 px, which the
+        // hybrid method finds from the depth map (docs/METHODS.md, "Hybrid"). The daemon reads images in a child
+        // process, the offline pipeline in this one; until 2026-11-26 the depth map of a hybrid region did not reach
+        // the daemon.
+        const ph::TargetSpec bump = target_named("bump-gaussian-h1-r100");
+        ph::write_target_files(options.scratch, {bump});
+        std::string text = region_config(bump);
+        const std::string curvature = "method = \"curvature\"", hybrid = "method = \"hybrid\"";
+        text.replace(text.find(curvature), curvature.size(), hybrid);
+        write_file_atomically(config, text);
+        notify->clear();
+        daemon->signal(SIGHUP);
+        check.expect(notify->expect("RELOADING=1", 10s), "expected RELOADING=1 after SIGHUP, got none within 10 s");
+        check.expect(notify->expect("READY=1", 60s), "expected READY=1 after RELOADING=1, got none within 60 s");
+        if (!check.ok()) throw Fatal("no reload");
+        const auto scene = std::make_shared<const ph::Scene>(ph::load_scene(ph::parse_scene_file(config)));
+        std::size_t marked = 0;
+        for (std::uint8_t mark : scene->regions().at(0).fields.discontinuity->values) marked += mark != 0 ? 1 : 0;
+        check.expect(marked > 0, "expected the offline hybrid region to mark the bump's rim, got no mark");
+        model.set_scene(scene);
+        // Left of the bump's rim (at x = 860 on this row), then across the bump and its far rim (x = 1060).
+        const ph::Vec2 at = model.cursor().position;
+        std::vector<ph::InputEvent> move;
+        if (const auto dx = static_cast<std::int32_t>(std::lround(840 - at.x)); dx != 0)
+          move.push_back(rel(ev::kRelX, dx));
+        if (const auto dy = static_cast<std::int32_t>(std::lround(540 - at.y)); dy != 0)
+          move.push_back(rel(ev::kRelY, dy));
+        if (!move.empty()) expect_through(check, *mouse, *out, model, make_frame(move), "positioning");
+        // The same pipeline with the region as the curvature method: what the daemon did with no depth map.
+        ph::Pipeline with_steps = model, no_steps = model;
+        std::string as_curvature = text;
+        as_curvature.replace(as_curvature.find(hybrid), hybrid.size(), curvature);
+        no_steps.set_scene(std::make_shared<const ph::Scene>(
+            ph::load_scene(ph::parse_scene_text(as_curvature, config, ph::builtin_methods()))));
+        const std::vector<Frame> frames = stroke(50, 5);
+        const StrokeResult result = run_stroke(check, *mouse, *out, model, frames, "stroke");
+        int apart = 0;
+        for (const Frame& f : frames) apart += same_events(with_steps.process(f), no_steps.process(f)) ? 0 : 1;
+        check.expect(apart > 0, "expected the rim's steps to change some frame from the curvature method's, got none");
+        check.note(
+            fmt::format("{} texels marked; {} frames across the bump, {} changed by the region, all equal to the "
+                        "offline pipeline; {} of the stroke's {} frames apart from the curvature method's (what the "
+                        "daemon did with no depth map)",
+                        marked, result.frames.size(), result.differing, apart, frames.size()));
+      });
 
   session.run(
       "[3b] SIGHUP to absolute output: a tablet-like device replaces the relative one, cursor kept", [&](Check& check) {
