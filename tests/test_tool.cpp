@@ -675,10 +675,15 @@ TEST(Tool, CheckConfig) {
       heights.values[i] = static_cast<float>(std::round(image.values[i] * 65535.0) / 65535.0 * 100.0);
     }
     write_normal_image(dir / "dome_normals.png", sobel_normals(heights), {ImageFormat::png, 8});
-    std::ofstream(dir / "generated.toml", std::ios::binary)
-        << "[[region]]\nname = \"dome\"\nx = 0\ny = 0\nwidth = 32\nheight = 32\nmethod = \"hybrid\"\n"
-           "normal_map = \"dome_normals.png\"\ndepth_map = \"dome_depth.png\"\n";
-    const ToolResult r = run_tool("check-config " + quote(dir / "generated.toml"), dir);
+    // check-config on a scene of the dome's two maps as a hybrid region, with `more` in its table.
+    const auto check_dome = [&](const std::string& file, const std::string& more) {
+      std::ofstream(dir / file, std::ios::binary)
+          << "[[region]]\nname = \"dome\"\nx = 0\ny = 0\nwidth = 32\nheight = 32\nmethod = \"hybrid\"\n"
+             "normal_map = \"dome_normals.png\"\ndepth_map = \"dome_depth.png\"\n"
+          << more;
+      return run_tool("check-config " + quote(dir / file), dir);
+    };
+    const ToolResult r = check_dome("generated.toml", "");
     ASSERT_EQ(r.rc, 0) << r.err;
     // 100 / 65535 px per code through the Sobel filter: 1.5e-3 / sqrt(12) x sqrt(12) / 8 = 1.9e-4; the 8-bit normal
     // map's own, 2 / 255 / sqrt(12) = 2.3e-3.
@@ -688,10 +693,7 @@ TEST(Tool, CheckConfig) {
     EXPECT_TRUE(contains(r.out, "scale: the normal map's slopes are 1 times the depth map's")) << r.out;
     EXPECT_FALSE(contains(r.out, "makes them agree")) << r.out;
     // The same maps with the depth map's relief_px halved: its slopes are half the normals', and it says so.
-    std::ofstream(dir / "halved.toml", std::ios::binary)
-        << "[[region]]\nname = \"dome\"\nx = 0\ny = 0\nwidth = 32\nheight = 32\nmethod = \"hybrid\"\n"
-           "normal_map = \"dome_normals.png\"\ndepth_map = \"dome_depth.png\"\nrelief_px = 50\n";
-    const ToolResult halved = run_tool("check-config " + quote(dir / "halved.toml"), dir);
+    const ToolResult halved = check_dome("halved.toml", "relief_px = 50\n");
     ASSERT_EQ(halved.rc, 0) << halved.err;
     EXPECT_TRUE(contains(halved.out, "scale: the normal map's slopes are 2 times the depth map's")) << halved.out;
     // (101: the generator's 8-bit normals read the dome's slopes a little apart from its heights' differences.)
