@@ -25,9 +25,20 @@ FieldError file_error(const std::filesystem::path& path, const std::string& reas
   return FieldError(path.string() + ": " + reason);
 }
 
+// OpenImageIO 2.4 decompresses a deflate TIFF's strips on its thread pool and, where a scanline after them fails
+// to read, returns before those tasks end, which then write to its stack and freed buffers (a use after scope,
+// mended in later OpenImageIO releases). The image fuzzer found it as heap corruption that no input reproduced alone.
+// Decoded in one thread, the strips are done before it returns.
+void decode_tiff_strips_in_one_thread() {
+  static const bool set = OIIO::attribute("tiff:multithread", 0);
+  static_cast<void>(set);
+}
+
 // Keeps colour values as stored: without this hint OpenImageIO premultiplies RGB by alpha on reading PNG,
-// which would corrupt an RGBA normal map whose alpha is not 1.
+// which would corrupt an RGBA normal map whose alpha is not 1. (Every read opens its image with it, so the TIFF
+// setting above is made here too.)
 OIIO::ImageSpec as_stored_config() {
+  decode_tiff_strips_in_one_thread();
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
   return config;
