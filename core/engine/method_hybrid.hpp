@@ -44,12 +44,14 @@ std::string validate(const HybridParams& params);
 // field no texel is a discontinuity, nothing is read again or fused and the band is the same everywhere.
 void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields);
 
-// The normals' slopes `g` over the depth map's, `from_depth` its central differences, where both show the relief
-// sloping: the median, over the texels not in `marks` (no step, where the two disagree by design) and whose central
-// difference along an axis exceeds `floor`, of the normal's slope along that axis over that difference. 1 where the
-// normal map and the depth map hold the relief at one scale (within a few per cent on resolved relief; a generator's
-// smoothing of the finest detail makes it a little less); a depth map whose `relief_px` is not the normal map's
-// scale shows as its ratio. Empty where fewer than 100 such slopes are read.
+// The normals' slopes `g` over the depth map's, `from_depth` its central differences, where both show relief the
+// texels resolve: the median, over the slopes along each axis where neither the texel nor its two neighbours on that
+// axis is in `marks` (a step, where the two disagree by design), both slopes exceed `floor`, have one sign, and change
+// along the axis by a second difference within a fifth of them (no kink, no relief near the texel period), of the
+// normal's slope over the difference. 1 where the normal map and the depth map hold the relief at one scale (within a
+// few per cent; a generator's smoothing of the finest detail makes it a little less); a depth map whose `relief_px`
+// is not the normal map's scale shows as its ratio. Read on every k-th row of a region over 2^17 texels. Empty where
+// fewer than 100 such slopes are read.
 std::optional<double> slope_ratio_to_depth(const GradientField& g, const GradientField& from_depth,
                                            const DiscontinuityField& marks, double floor);
 
