@@ -10,6 +10,7 @@
 #include "core/engine/method_curvature.hpp"
 #include "core/engine/method_depth.hpp"
 #include "core/engine/method_flat.hpp"
+#include "core/engine/method_hybrid.hpp"
 #include "core/lab/study.hpp"
 #include "core/lab/study_random.hpp"
 #include "core/lab/study_stats.hpp"
@@ -118,6 +119,24 @@ TEST(StudyDesignTest, BlockOrdersArePermutationsThatDifferBetweenBlocks) {
   EXPECT_EQ(std::set<std::size_t>(a.begin(), a.end()).size(), all_targets().size());
   EXPECT_NE(a, b);
   EXPECT_EQ(a, block_order(design, 0, 1));
+}
+
+// A technique's region holds the fields its method reads: the hybrid's, its normals and the heights it reads where
+// given, and finds the rim's steps from them as the scene files' regions do.
+TEST(StudyScene, GivesEachMethodTheFieldsItReads) {
+  const StudyDesign design;
+  const TargetSpec target = all_targets()[6];  // bump-gaussian-h1-r100: its rim steps by about 1 px
+  const RegionFields fields = target_fields(target);
+  ASSERT_TRUE(fields.gradient && fields.depth);
+  const StudyTechnique hybrid{"hybrid", std::make_shared<HybridMethod>(HybridParams{}), {}};
+  const StudyTechnique curvature{"curvature", std::make_shared<CurvatureMethod>(CurvatureParams{}), {}};
+  const Scene with_heights = study_scene(design, target, fields, hybrid);
+  const RegionFields& got = with_heights.regions().at(0).fields;
+  ASSERT_TRUE(got.gradient && got.depth && got.discontinuity);
+  EXPECT_GT(std::count_if(got.discontinuity->values.begin(), got.discontinuity->values.end(),
+                          [](std::uint8_t m) { return m != 0; }),
+            0);
+  EXPECT_FALSE(study_scene(design, target, fields, curvature).regions().at(0).fields.depth);
 }
 
 TEST(StudyTrial, TheTextureDecidesTheAnswerAndTheSameSeedTheTrial) {
