@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -272,6 +273,52 @@ TEST(HybridMethod, TakesTheDepthCdWhereARegionOverlapsAnotherBelowIt) {
       }
     }
   }
+}
+
+// Two overlapping regions holding one slope of 0.2 px per px, the upper one raised by exactly discontinuity_px: where
+// the walk crosses into it the height changes by the slope plus that, which is no step, however the float heights and
+// their sums round (before, crossings at some heights were steps and others not). Raised by a hundredth more, each
+// crossing is one. The exact input decides alike at the tie.
+TEST(HybridMethod, ARiseOfExactlyTheThresholdIsNoStepHoweverItRounds) {
+  const HybridParams params;
+  const auto hybrid = std::make_shared<HybridMethod>(params);
+  const auto sloped = [](float base) {
+    RegionFields fields;
+    fields.gradient = GradientField(40, 16, Gradient{0.2f, 0.0f});
+    fields.depth = DepthField(40, 16);
+    for (int y = 0; y < 16; ++y) {
+      for (int x = 0; x < 40; ++x) fields.depth->at(x, y) = static_cast<float>(base + 0.2 * (x + 0.5));
+    }
+    return fields;
+  };
+  for (const double offset : {params.discontinuity_px, params.discontinuity_px + 0.01}) {
+    int steps = 0, crossings = 0;
+    for (int i = 0; i < 40; ++i) {
+      const double base = 0.37 * i;  // heights from 0 to about 23 px, each rounding its own way
+      std::vector<Region> regions;
+      regions.push_back(region_of("below", sloped(static_cast<float>(base)), {0, 0, 40, 16}, hybrid));
+      // The upper region's first texel holds the lower slope continued 20 px, plus the offset.
+      regions.push_back(
+          region_of("above", sloped(static_cast<float>(base + 0.2 * 20 + offset)), {20, 0, 40, 16}, hybrid));
+      const Scene scene(std::move(regions));
+      for (const auto& [x, cd] : texel_cds(scene, 5.0, 50.0)) {
+        if (x != 20) continue;
+        ++crossings;
+        if (cd == DepthParams{}.kmax || cd > 3.0) ++steps;
+      }
+    }
+    EXPECT_EQ(crossings, 40) << offset;
+    EXPECT_EQ(steps, offset == params.discontinuity_px ? 0 : 40) << offset;
+  }
+  SurfacePoint tie;
+  tie.height = 17.3;
+  tie.rise = 0.7;
+  tie.unexplained_rise = params.discontinuity_px;
+  // A step's sample carries v2 = +infinity (curvature's is finite or NaN).
+  constexpr double kStep = std::numeric_limits<double>::infinity();
+  EXPECT_NE(hybrid->sample_exact(tie, {1.0, 0.0}).v2, kStep);
+  tie.unexplained_rise = params.discontinuity_px + 1e-3;
+  EXPECT_EQ(hybrid->sample_exact(tie, {1.0, 0.0}).v2, kStep);
 }
 
 TEST(HybridMethod, ASlopeTheNormalsExplainIsNoDiscontinuity) {

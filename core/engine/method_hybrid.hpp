@@ -140,7 +140,7 @@ class HybridMethod final : public Method {
   // `discontinuity_px` beyond what its slopes explain, depth's reading of the step (the height change over the pair),
   // as on a discontinuity texel; elsewhere the curvature method's exact sample.
   TexelSample sample_exact(const SurfacePoint& point, Vec2 m) const override {
-    if (std::abs(point.unexplained_rise) > params_.discontinuity_px) {
+    if (beyond(std::abs(point.unexplained_rise), params_.discontinuity_px, std::abs(point.height))) {
       return {0.0, 0.0, kDepthStep, 0.0, point.height, point.rise};
     }
     return without_height(curvature_.sample_exact(point, m));
@@ -187,7 +187,16 @@ class HybridMethod final : public Method {
     if (!(to.v5 >= 0.0)) return false;  // (NaN: no height here)
     const double from_slope = from.v2 == kDepthStep ? std::abs(from.v5) : from.v5;
     if (!(from_slope >= 0.0)) return false;
-    return std::abs(to.v4 - from.v4) > std::max(from_slope, to.v5) + params_.discontinuity_px;
+    return beyond(std::abs(to.v4 - from.v4), std::max(from_slope, to.v5) + params_.discontinuity_px,
+                  std::max(std::abs(from.v4), std::abs(to.v4)));
+  }
+  // Whether `change` exceeds `bound` by more than the float rounding of heights of magnitude `height` (a depth field's
+  // heights are floats): a change equal to the bound is none, whichever arithmetic made it, so that the walk on stored
+  // heights and the exact input on the surface's decide alike there (two regions overlapping by exactly
+  // `discontinuity_px` are seamless to both).
+  static bool beyond(double change, double bound, double height) {
+    constexpr double kFloatRounding = 4.0 * std::numeric_limits<float>::epsilon();
+    return change > bound + kFloatRounding * std::max(1.0, height);
   }
   static bool marked(const DiscontinuityField& marks, Texel t) {
     return t.x >= 0 && t.y >= 0 && t.x < marks.width && t.y < marks.height && marks.at(t.x, t.y) != 0;
