@@ -58,7 +58,7 @@ RegionFields load_region_fields(const FieldSources& sources, std::int32_t width,
   // Depth is read once, for the depth itself or for normals when there is no normal map; nothing else is read.
   const bool gradient_from_depth_map = needs.gradient && !sources.normal_map;
   std::optional<DepthField> depth;
-  const bool wants_depth = needs.depth || (needs.depth_if_given && sources.depth_map);
+  const bool wants_depth = needs.reads_depth(sources.depth_map.has_value());
   if (wants_depth || gradient_from_depth_map) {
     depth = load_depth(*sources.depth_map, sources.depth_options, width, height, report.depth, limits);
   }

@@ -220,10 +220,9 @@ Answer decode_answer(const std::vector<std::byte>& bytes, const Request& request
     auto fits = [&](const auto& grid, bool needed) {
       return grid.has_value() == needed && (!grid || (grid->width == f->width && grid->height == f->height));
     };
-    // The heights are asked for where a method needs them, or reads them where the region has a depth map (the
-    // hybrid method), as load_region_fields reads them.
-    const bool depth_asked = f->needs.depth || (f->needs.depth_if_given && f->sources.depth_map);
-    if (!fits(a.fields.gradient, f->needs.gradient) || !fits(a.fields.depth, depth_asked))
+    // The heights where they were asked for, as load_region_fields reads them.
+    if (!fits(a.fields.gradient, f->needs.gradient) ||
+        !fits(a.fields.depth, f->needs.reads_depth(f->sources.depth_map.has_value())))
       throw WireError("fields other than those asked for");
     check_finite_grids(a.fields);
     return a;

@@ -569,15 +569,11 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
     region.method = make_method(r, spec.methods);
     const FieldNeeds method_needs = region.method->needs();
     FieldNeeds needs = method_needs;
-    // What the effects read joins what the method reads (its heights where given included: the hybrid's).
-    const auto join = [](FieldNeeds a, FieldNeeds b) {
-      return FieldNeeds{a.gradient || b.gradient, a.depth || b.depth, a.depth_if_given || b.depth_if_given};
-    };
     if (r.materials) {
-      needs =
-          join(needs, materials_needs(*r.materials, r.sources.normal_map.has_value(), r.sources.depth_map.has_value()));
+      needs = joined(needs,
+                     materials_needs(*r.materials, r.sources.normal_map.has_value(), r.sources.depth_map.has_value()));
     }
-    if (r.wells) needs = join(needs, wells_needs(*r.wells));
+    if (r.wells) needs = joined(needs, wells_needs(*r.wells));
     FieldLoadReport field_report;
     try {
       region.fields = fields_from.load_fields(r.sources, r.rect.w, r.rect.h, needs, field_report);
@@ -593,7 +589,7 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
       throw ConfigError(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, e.what()));
     }
     if (!method_needs.gradient) region.fields.gradient.reset();
-    if (!method_needs.depth && !method_needs.depth_if_given) region.fields.depth.reset();
+    if (!method_needs.reads_depth(true)) region.fields.depth.reset();
     std::string variant = label_of(spec.daemon.engine) + " (the [daemon] table's)";
     if (r.engine_auto) {
       VariantChoice choice = choose_variant(region, {r.accuracy_px});
@@ -629,12 +625,7 @@ std::vector<std::string> invalid_texel_warnings(const SceneSpec& spec, const Sce
 std::optional<ReliefScale> relief_scale(const RegionSpec& region, const RegionFields& fields) {
   if (!fields.normals_to_depth_slope_ratio || !region.sources.normal_map || !region.sources.depth_map)
     return std::nullopt;
-  ReliefScale out;
-  out.ratio = *fields.normals_to_depth_slope_ratio;
-  out.relief_px = region.sources.depth_options.relief_px;
-  out.matching_relief_px = out.relief_px * out.ratio;
-  out.mismatched = !(out.ratio >= 0.8 && out.ratio <= 1.25);
-  return out;
+  return ReliefScale{*fields.normals_to_depth_slope_ratio, region.sources.depth_options.relief_px};
 }
 
 std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scene& scene) {
@@ -642,12 +633,12 @@ std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scen
   for (std::size_t i = 0; i < spec.regions.size() && i < scene.regions().size(); ++i) {
     const RegionSpec& r = spec.regions[i];
     const std::optional<ReliefScale> scale = relief_scale(r, scene.regions()[i].fields);
-    if (!scale || !scale->mismatched) continue;
+    if (!scale || !scale->mismatched()) continue;
     out.push_back(fmt::format(
         "{}:{}: region '{}': the normal map's slopes are {:.2g} times the depth map's where both show the relief "
         "sloping; if both hold the same relief, relief_px = {:.3g} (now {:.3g}) makes them agree (the hybrid method "
         "compares them to find steps and noise)",
-        spec.file.string(), r.line, r.name, scale->ratio, scale->matching_relief_px, scale->relief_px));
+        spec.file.string(), r.line, r.name, scale->ratio, scale->matching_relief_px(), scale->relief_px));
   }
   return out;
 }

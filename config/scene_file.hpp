@@ -97,9 +97,9 @@ std::vector<std::string> invalid_texel_warnings(const SceneSpec& spec, const Sce
 // Empty where the region has no such ratio (another method, a single map, too little resolved slope).
 struct ReliefScale {
   double ratio = 1.0;
-  double relief_px = 100.0;           // the region's
-  double matching_relief_px = 100.0;  // relief_px times the ratio
-  bool mismatched = false;            // the ratio off 1 by more than a quarter (below 0.8 or above 1.25)
+  double relief_px = 100.0;  // the region's
+  double matching_relief_px() const { return relief_px * ratio; }
+  bool mismatched() const { return !(ratio >= 0.8 && ratio <= 1.25); }  // off 1 by more than a quarter
 };
 std::optional<ReliefScale> relief_scale(const RegionSpec& region, const RegionFields& fields);
 

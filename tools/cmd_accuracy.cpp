@@ -212,7 +212,7 @@ RegionFields build_fields(const Shape& shape, FieldNeeds needs, Storage storage,
   switch (storage) {
     case Storage::f32:
       if (needs.gradient) fields.gradient = shape.gradient_field();
-      if (needs.depth || needs.depth_if_given) fields.depth = shape.depth_field();
+      if (needs.reads_depth(true)) fields.depth = shape.depth_field();
       break;
     case Storage::n16:
     case Storage::n8:
@@ -226,7 +226,7 @@ RegionFields build_fields(const Shape& shape, FieldNeeds needs, Storage storage,
         fields.gradient = gradient_from_depth(depth);
         fields.gradient_rounding = gradient_rounding_of_depth(report.value_step);
       }
-      if (needs.depth || needs.depth_if_given) {
+      if (needs.reads_depth(true)) {
         fields.depth = std::move(depth);
         fields.depth_rounding = height_rounding_of_depth(report.value_step);
       }

@@ -91,8 +91,7 @@ Scene scene_from_target(const TraceOptions& o) {
     region.rect = {0, 0, t.size, t.size};
     region.method = make_method(r);
     if (region.method->needs().gradient) region.fields.gradient = target_gradient_field(t);
-    if (region.method->needs().depth || region.method->needs().depth_if_given)
-      region.fields.depth = target_depth_field(t);
+    if (region.method->needs().reads_depth(true)) region.fields.depth = target_depth_field(t);
     std::vector<Region> regions;
     regions.push_back(std::move(region));
     return Scene(std::move(regions));

@@ -70,7 +70,17 @@ struct FieldNeeds {
   bool gradient = false;
   bool depth = false;
   bool depth_if_given = false;  // reads the heights where the region has a depth map, works without them
+
+  // Whether the heights are read in a region that has a depth map (`depth_given`) or not: the one rule every loader,
+  // the image wire and the lab follow (a copy of it that forgot depth_if_given once kept the hybrid's depth map from
+  // the daemon).
+  constexpr bool reads_depth(bool depth_given) const { return depth || (depth_if_given && depth_given); }
 };
+
+// What two readers of one region's fields read together (a method and an effect).
+constexpr FieldNeeds joined(FieldNeeds a, FieldNeeds b) {
+  return {a.gradient || b.gradient, a.depth || b.depth, a.depth_if_given || b.depth_if_given};
+}
 
 // What a method derives from the fields when a scene is built (Method::prepare): the hybrid method's texels
 // where the height changes more than the normals explain (1) and the rest (0).

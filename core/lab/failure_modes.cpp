@@ -485,7 +485,7 @@ RegionFields case_fields(const CaseMap& map, FieldNeeds needs) {
     fields.gradient = gradient_from_normals(map.normals);
     fields.gradient_rounding = map.gradient_rounding;
   }
-  if (needs.depth || needs.depth_if_given) {  // every case has a depth map
+  if (needs.reads_depth(true)) {  // every case has a depth map
     fields.depth = map.depth;
     fields.depth_rounding = map.depth_rounding;
   }

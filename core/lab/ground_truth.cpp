@@ -189,7 +189,7 @@ std::vector<double> integrand_breakpoints(const TruthModel& model, Vec2 p0, Vec2
 // Whether the truth gives the model's method the surface's heights.
 bool reads_heights(const TruthModel& model) {
   const FieldNeeds needs = model.method->needs();
-  return needs.depth || (needs.depth_if_given && model.depth_given);
+  return needs.reads_depth(model.depth_given);
 }
 
 // What a method with `needs` reads of the surface at p (the heights where `heights`).

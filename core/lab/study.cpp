@@ -64,7 +64,7 @@ Scene study_scene(const StudyDesign& design, const TargetSpec& target, const Reg
   if (technique.effects) region.effects = technique.effects(fields, target.size, target.size);
   const FieldNeeds needs = technique.method->needs();
   if (needs.gradient) region.fields.gradient = fields.gradient;
-  if (needs.depth || needs.depth_if_given) region.fields.depth = fields.depth;  // the hybrid reads them where given
+  if (needs.reads_depth(fields.depth.has_value())) region.fields.depth = fields.depth;
   region.method = technique.method;
   std::vector<Region> regions;
   regions.push_back(std::move(region));
