@@ -764,6 +764,63 @@ TEST(HybridMethod, AGratingTheTexelsDoNotResolveIsNoDiscontinuity) {
   }
 }
 
+// A line raised 1 or 2 texels wide in a depth map whose normals are flat: its two edges' unexplained changes are
+// opposite and within two texels of each other, a ridge too narrow to be a change of level (the finest octave of a
+// rough relief aliases to such pairs, below). A line 3 texels wide is a plateau, and both its edges are steps.
+TEST(HybridMethod, ALineOneOrTwoTexelsWideIsNoStepAndAWiderOneIs) {
+  for (int width : {1, 2, 3}) {
+    RegionFields fields;
+    fields.gradient = GradientField(24, 4, Gradient{});
+    fields.depth = DepthField(24, 4, 0.0f);
+    for (int y = 0; y < 4; ++y) {
+      for (int x = 10; x < 10 + width; ++x) fields.depth->at(x, y) = 2.0f;
+    }
+    prepare_hybrid_fields(HybridParams{.discontinuity_px = 0.5, .noise_slope = 0.0, .far_noise_gain = 0.0}, fields);
+    int marked = 0;
+    for (int x = 0; x < 24; ++x) marked += fields.discontinuity->at(x, 2);
+    EXPECT_EQ(marked, width == 3 ? 4 : 0) << width << " px wide";  // 9, 10 and 12, 13
+  }
+}
+
+// A rough relief whose finest octave has a period of 4 px (three waves of 0.5 px at 20, 75 and 140 degrees over two
+// coarser octaves), its height image stored in 8 bits and its normals made from that by a generator (Sobel), as the
+// failure-mode suite's `fbm` at amplitude 8 px: the Sobel filter reads the finest octave at 0.64 of its slope where
+// the heights change by 0.9 of it across an edge, so the heights change by more than the normals explain, in pairs
+// of opposite sign within two texels, where the slopes beside the edge change by more than twice as much. No step
+// is there: with only an opposite change on the next edge taken as taking one back, and the slopes beside an edge
+// allowed to change by four times the unexplained change, 9 % of the texels were marked.
+TEST(HybridMethod, TheFinestOctaveOfAGeneratorsRoughMapsIsNoStep) {
+  const int n = 96;
+  DepthField exact(n, n);
+  const double tau = 2.0 * std::numbers::pi;
+  struct Wave {
+    double period, amplitude, degrees, phase;
+  };
+  const Wave waves[] = {{32.0, 2.6, 60.0, 0.3}, {16.0, 1.5, 170.0, 1.1}, {8.0, 0.85, 100.0, 2.0},
+                        {4.0, 0.5, 20.0, 0.7},  {4.0, 0.5, 75.0, 2.9},   {4.0, 0.5, 140.0, 4.4}};
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      double height = 10.0;
+      for (const Wave& w : waves) {
+        const double a = w.degrees * std::numbers::pi / 180.0;
+        height +=
+            w.amplitude * std::sin(tau * ((x + 0.5) * std::cos(a) + (y + 0.5) * std::sin(a)) / w.period + w.phase);
+      }
+      exact.at(x, y) = static_cast<float>(height);
+    }
+  }
+  RegionFields fields;
+  DecodeReport depth_report, normals_report;
+  fields.depth = stored_depth(exact, 255, &depth_report);
+  fields.depth_rounding = height_rounding_of_depth(depth_report.value_step);
+  fields.gradient = gradient_from_normals(stored_normals(sobel_normals(*fields.depth), 255, &normals_report));
+  fields.gradient_rounding = gradient_rounding_of_normals(normals_report.value_step);
+  prepare_hybrid_fields(HybridParams{}, fields);
+  int marked = 0;
+  for (std::uint8_t mark : fields.discontinuity->values) marked += mark;
+  EXPECT_LT(marked, n * n / 100) << marked << " of " << n * n << " texels marked";
+}
+
 TEST(HybridMethod, NeverGivesNanOrLeavesItsBounds) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -108,22 +108,25 @@ double unexplained(double dh, const EdgeSlopes& s) {
 // faster than the texels resolve (a grating at about the texel period, met at an angle) aliases in the heights as it
 // does in the normals, and a change they leave unexplained there is no step. A step's own normals change by a
 // fraction of it, even smeared by a generator (Sobel: by a quarter of its height, where about 0.6 of it is left
-// unexplained).
-constexpr double kAliasedSlopeChange = 4.0;
+// unexplained: 0.42 of it, a margin of five). On the finest octave (4 px) of a rough relief read by a generator (Sobel
+// reads it at 0.64 of its slope, the heights change by 0.9 of it across an edge) most edges fail this test at a factor
+// of two; at four, twice as many texels were marked (tests/test_method_hybrid.cpp).
+constexpr double kAliasedSlopeChange = 2.0;
 bool resolved(const EdgeSlopes& s, double e) {
   const auto [a_out, a, b, b_out] = s;
   return std::max(std::abs(a - a_out), std::abs(b_out - b)) <= kAliasedSlopeChange * std::abs(e);
 }
 
-// Whether the unexplained change `e` of an edge, between those of the edges before and after it along the same
-// axis, is a change of level. An opposite change on a neighbouring edge of comparable size (less than twice
-// `e`'s) takes it back within one texel: a spike or an alternation of the heights, which is what a grating near
-// the texel period aliases to, not a step. What is left of `e` after those must exceed the threshold. (A much
-// larger opposite neighbour is its own step, of which `e` is the overshoot of a generator's smeared normals.)
-bool is_step(double before, double e, double after, double threshold) {
+// Whether the unexplained change `e` of an edge is a change of level, `nearby` those of the two edges before it and
+// the two after it along the same axis. An opposite change on one of them of comparable size (less than twice `e`'s)
+// takes it back within two texels: a spike, a line two texels wide or an alternation of the heights, which is what a
+// grating near the texel period and the finest octave (4 px) of a rough relief alias to, not a step. What is left of
+// `e` after those must exceed the threshold. (A much larger opposite neighbour is its own step, of which `e` is the
+// overshoot of a generator's smeared normals.)
+bool is_step(double e, const std::array<double, 4>& nearby, double threshold) {
   if (std::abs(e) <= threshold) return false;
   double kept = e;
-  for (double n : {before, after}) {
+  for (double n : nearby) {
     if (n * e < 0.0 && std::abs(n) < 2.0 * std::abs(e)) kept += n;
   }
   return kept * e > threshold * std::abs(e);
@@ -150,13 +153,13 @@ DiscontinuityField find_discontinuities(const GradientField& g, const DepthField
     for (std::int32_t x = 0; x < w; ++x) {
       if (x + 1 < w) {
         const double e = along_x(x, y);
-        if (is_step(along_x(x - 1, y), e, along_x(x + 1, y), threshold) && resolved(slopes_x(x, y), e))
-          marks.at(x, y) = marks.at(x + 1, y) = 1;
+        const std::array<double, 4> nearby{along_x(x - 2, y), along_x(x - 1, y), along_x(x + 1, y), along_x(x + 2, y)};
+        if (is_step(e, nearby, threshold) && resolved(slopes_x(x, y), e)) marks.at(x, y) = marks.at(x + 1, y) = 1;
       }
       if (y + 1 < h) {
         const double e = along_y(x, y);
-        if (is_step(along_y(x, y - 1), e, along_y(x, y + 1), threshold) && resolved(slopes_y(x, y), e))
-          marks.at(x, y) = marks.at(x, y + 1) = 1;
+        const std::array<double, 4> nearby{along_y(x, y - 2), along_y(x, y - 1), along_y(x, y + 1), along_y(x, y + 2)};
+        if (is_step(e, nearby, threshold) && resolved(slopes_y(x, y), e)) marks.at(x, y) = marks.at(x, y + 1) = 1;
       }
     }
   }
