@@ -132,32 +132,36 @@ std::vector<double> stroke_cds(const Scene& scene, Vec2 from, Vec2 m, double len
   return out;
 }
 
-// A 4 px step along a diagonal with its normals made from the heights by Sobel, as a generator does: the two texels
-// of each edge carry 2.12 and the texels beside them 0.71 where the heights are level, so a texel two away from the
-// marked edge pairs a flat normal with a smeared one behind it. The band of depth's C/D reaches every such texel:
-// crossed at 0, 30, 45 and 60 degrees the hybrid's C/D is the depth method's, step for step (before, the flat texels
-// two away kept curvature's and met the smeared normals as a ripple).
+// A step of 2 px and one of 4 px along a diagonal with their normals made from the heights by Sobel, as a generator
+// does: the two texels of each edge carry gradients of length 0.53 h and the texels beside them 0.18 h where the
+// heights are level, so a texel two away from the marked edge pairs a flat normal with a smeared one behind it. The
+// band of depth's C/D reaches every such texel: crossed at 0, 30, 45 and 60 degrees the hybrid's C/D is the depth
+// method's, step for step (before, the flat texels two away kept curvature's and met the smeared normals as a ripple:
+// at 4 px until the band was passed on, at 2 px until its decrement became 0.4 `discontinuity_px`).
 TEST(HybridMethod, TakesTheDepthCdWhereverAGeneratorSmearedADiagonalStep) {
-  const auto diagonal_step = [] {
-    RegionFields fields;
-    fields.depth = DepthField(48, 48, 0.0f);
-    for (int y = 0; y < 48; ++y) {
-      for (int x = 0; x < 48; ++x) fields.depth->at(x, y) = x + y >= 48 ? 4.0f : 0.0f;
+  for (const float height : {2.0f, 4.0f}) {
+    const auto diagonal_step = [height] {
+      RegionFields fields;
+      fields.depth = DepthField(48, 48, 0.0f);
+      for (int y = 0; y < 48; ++y) {
+        for (int x = 0; x < 48; ++x) fields.depth->at(x, y) = x + y >= 48 ? height : 0.0f;
+      }
+      fields.gradient = gradient_from_normals(sobel_normals(*fields.depth));
+      return fields;
+    };
+    const Scene hybrid = one_region(diagonal_step(), {0, 0, 48, 48}, std::make_shared<HybridMethod>(HybridParams{}));
+    const Scene depth = one_region(diagonal_step(), {0, 0, 48, 48}, std::make_shared<DepthMethod>(DepthParams{}));
+    for (const double degrees : {0.0, 30.0, 45.0, 60.0}) {
+      const double a = degrees * std::numbers::pi / 180.0;
+      const Vec2 m{std::cos(a), std::sin(a)};
+      const Vec2 from = Vec2{24.0, 24.0} - m * 16.0 + Vec2{0.3, 0.1};
+      const std::vector<double> by_hybrid = stroke_cds(hybrid, from, m, 32.0),
+                                by_depth = stroke_cds(depth, from, m, 32.0);
+      ASSERT_EQ(by_hybrid.size(), by_depth.size()) << height << " px at " << degrees << " degrees";
+      for (std::size_t i = 0; i < by_hybrid.size(); ++i)
+        EXPECT_EQ(by_hybrid[i], by_depth[i]) << height << " px at " << degrees << " degrees, step " << i;
+      EXPECT_GT(*std::max_element(by_hybrid.begin(), by_hybrid.end()), 1.5) << degrees;  // the step is felt
     }
-    fields.gradient = gradient_from_normals(sobel_normals(*fields.depth));
-    return fields;
-  };
-  const Scene hybrid = one_region(diagonal_step(), {0, 0, 48, 48}, std::make_shared<HybridMethod>(HybridParams{}));
-  const Scene depth = one_region(diagonal_step(), {0, 0, 48, 48}, std::make_shared<DepthMethod>(DepthParams{}));
-  for (const double degrees : {0.0, 30.0, 45.0, 60.0}) {
-    const double a = degrees * std::numbers::pi / 180.0;
-    const Vec2 m{std::cos(a), std::sin(a)};
-    const Vec2 from = Vec2{24.0, 24.0} - m * 16.0 + Vec2{0.3, 0.1};
-    const std::vector<double> by_hybrid = stroke_cds(hybrid, from, m, 32.0),
-                              by_depth = stroke_cds(depth, from, m, 32.0);
-    ASSERT_EQ(by_hybrid.size(), by_depth.size()) << degrees;
-    for (std::size_t i = 0; i < by_hybrid.size(); ++i) EXPECT_EQ(by_hybrid[i], by_depth[i]) << degrees << " " << i;
-    EXPECT_GT(*std::max_element(by_hybrid.begin(), by_hybrid.end()), 1.5) << degrees;  // the step is felt
   }
 }
 
@@ -788,7 +792,9 @@ TEST(HybridMethod, ALineOneOrTwoTexelsWideIsNoStepAndAWiderOneIs) {
 // the heights change by 0.9 of it across an edge, so the heights change by more than the normals explain, in pairs
 // of opposite sign within two texels, where the slopes beside the edge change by more than twice as much. No step
 // is there: with only an opposite change on the next edge taken as taking one back, and the slopes beside an edge
-// allowed to change by four times the unexplained change, 9 % of the texels were marked.
+// allowed to change by four times the unexplained change, 1088 of the 8100 inner texels were marked (the region's
+// border, where the generator's filter repeats the edge texels, is left out); now 80, with their bands (111 when the
+// band was passed on to neighbours sloping against it).
 TEST(HybridMethod, TheFinestOctaveOfAGeneratorsRoughMapsIsNoStep) {
   const int n = 96;
   DepthField exact(n, n);
@@ -816,9 +822,14 @@ TEST(HybridMethod, TheFinestOctaveOfAGeneratorsRoughMapsIsNoStep) {
   fields.gradient = gradient_from_normals(stored_normals(sobel_normals(*fields.depth), 255, &normals_report));
   fields.gradient_rounding = gradient_rounding_of_normals(normals_report.value_step);
   prepare_hybrid_fields(HybridParams{}, fields);
-  int marked = 0;
-  for (std::uint8_t mark : fields.discontinuity->values) marked += mark;
-  EXPECT_LT(marked, n * n / 100) << marked << " of " << n * n << " texels marked";
+  int marked = 0, inner = 0;
+  for (int y = 3; y < n - 3; ++y) {
+    for (int x = 3; x < n - 3; ++x) {
+      marked += fields.discontinuity->at(x, y);
+      ++inner;
+    }
+  }
+  EXPECT_LT(marked, inner / 80) << marked << " of " << inner << " inner texels marked";
 }
 
 TEST(HybridMethod, NeverGivesNanOrLeavesItsBounds) {
