@@ -148,17 +148,33 @@ DiscontinuityField find_discontinuities(const GradientField& g, const DepthField
   auto along_y = [&](std::int32_t x, std::int32_t y) {
     return y < 0 || y + 1 >= h ? 0.0 : unexplained(d.at(x, y + 1) - d.at(x, y), slopes_y(x, y));
   };
+  // Each edge's change is read by itself and by the four edges nearest along its axis: computed once, a row of the
+  // edges along x at a time and the rows of edges along y two either side of the one being tested.
+  std::vector<double> across_x(static_cast<std::size_t>(w));
+  constexpr std::int32_t kRows = 5;
+  std::vector<std::vector<double>> across_y(kRows, std::vector<double>(static_cast<std::size_t>(w)));
+  auto fill_row_y = [&](std::int32_t y) {
+    for (std::int32_t x = 0; x < w; ++x)
+      across_y[static_cast<std::size_t>(y % kRows)][static_cast<std::size_t>(x)] = along_y(x, y);
+  };
+  auto edge_x = [&](std::int32_t x) { return x < 0 || x + 1 >= w ? 0.0 : across_x[static_cast<std::size_t>(x)]; };
+  auto edge_y = [&](std::int32_t x, std::int32_t y) {
+    return y < 0 || y + 1 >= h ? 0.0 : across_y[static_cast<std::size_t>(y % kRows)][static_cast<std::size_t>(x)];
+  };
+  for (std::int32_t y = 0; y < std::min(h, 2); ++y) fill_row_y(y);
   DiscontinuityField marks(w, h, 0);
   for (std::int32_t y = 0; y < h; ++y) {
+    if (y + 2 < h) fill_row_y(y + 2);
+    for (std::int32_t x = 0; x < w; ++x) across_x[static_cast<std::size_t>(x)] = along_x(x, y);
     for (std::int32_t x = 0; x < w; ++x) {
       if (x + 1 < w) {
-        const double e = along_x(x, y);
-        const std::array<double, 4> nearby{along_x(x - 2, y), along_x(x - 1, y), along_x(x + 1, y), along_x(x + 2, y)};
+        const double e = edge_x(x);
+        const std::array<double, 4> nearby{edge_x(x - 2), edge_x(x - 1), edge_x(x + 1), edge_x(x + 2)};
         if (is_step(e, nearby, threshold) && resolved(slopes_x(x, y), e)) marks.at(x, y) = marks.at(x + 1, y) = 1;
       }
       if (y + 1 < h) {
-        const double e = along_y(x, y);
-        const std::array<double, 4> nearby{along_y(x, y - 2), along_y(x, y - 1), along_y(x, y + 1), along_y(x, y + 2)};
+        const double e = edge_y(x, y);
+        const std::array<double, 4> nearby{edge_y(x, y - 2), edge_y(x, y - 1), edge_y(x, y + 1), edge_y(x, y + 2)};
         if (is_step(e, nearby, threshold) && resolved(slopes_y(x, y), e)) marks.at(x, y) = marks.at(x, y + 1) = 1;
       }
     }
