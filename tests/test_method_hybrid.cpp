@@ -832,6 +832,34 @@ TEST(HybridMethod, TheFinestOctaveOfAGeneratorsRoughMapsIsNoStep) {
   EXPECT_LT(marked, inner / 80) << marked << " of " << inner << " inner texels marked";
 }
 
+// Regions of every size from 1 x 1 to 7 x 7 px holding a 2 px step under flat normals, across x and then across y:
+// the step test reads the edges two either side of each one (along y from a ring of rows), and at every size
+// exactly the two texels either side of the step are marked, down to regions one texel across.
+TEST(HybridMethod, FindsAStepInRegionsOfEverySmallSize) {
+  for (int w = 1; w <= 7; ++w) {
+    for (int h = 1; h <= 7; ++h) {
+      for (const bool across_x : {true, false}) {
+        const int length = across_x ? w : h;
+        if (length < 2) continue;
+        RegionFields fields;
+        fields.gradient = GradientField(w, h, Gradient{});
+        fields.depth = DepthField(w, h, 0.0f);
+        for (int y = 0; y < h; ++y) {
+          for (int x = 0; x < w; ++x) fields.depth->at(x, y) = (across_x ? x : y) >= length / 2 ? 2.0f : 0.0f;
+        }
+        prepare_hybrid_fields(HybridParams{}, fields);
+        for (int y = 0; y < h; ++y) {
+          for (int x = 0; x < w; ++x) {
+            const int along = across_x ? x : y;
+            EXPECT_EQ(fields.discontinuity->at(x, y), along == length / 2 - 1 || along == length / 2 ? 1 : 0)
+                << w << " x " << h << (across_x ? " across x" : " across y") << ", texel " << x << ", " << y;
+          }
+        }
+      }
+    }
+  }
+}
+
 TEST(HybridMethod, NeverGivesNanOrLeavesItsBounds) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
