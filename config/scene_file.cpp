@@ -628,17 +628,24 @@ std::optional<ReliefScale> relief_scale(const RegionSpec& region, const RegionFi
   return ReliefScale{*fields.normals_to_depth_slope_ratio, region.sources.depth_options.relief_px};
 }
 
+std::string ReliefScale::described() const {
+  std::string line =
+      fmt::format("the normal map's slopes are {:.2g} times the depth map's where both show the relief sloping", ratio);
+  if (mismatched()) {
+    line += fmt::format("; if both hold the same relief, relief_px = {:.3g} (now {:.3g}) makes them agree",
+                        matching_relief_px(), relief_px);
+  }
+  return line;
+}
+
 std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scene& scene) {
   std::vector<std::string> out;
   for (std::size_t i = 0; i < spec.regions.size() && i < scene.regions().size(); ++i) {
     const RegionSpec& r = spec.regions[i];
     const std::optional<ReliefScale> scale = relief_scale(r, scene.regions()[i].fields);
     if (!scale || !scale->mismatched()) continue;
-    out.push_back(fmt::format(
-        "{}:{}: region '{}': the normal map's slopes are {:.2g} times the depth map's where both show the relief "
-        "sloping; if both hold the same relief, relief_px = {:.3g} (now {:.3g}) makes them agree (the hybrid method "
-        "compares them to find steps and noise)",
-        spec.file.string(), r.line, r.name, scale->ratio, scale->matching_relief_px(), scale->relief_px));
+    out.push_back(fmt::format("{}:{}: region '{}': {} (the hybrid method compares them to find steps and noise)",
+                              spec.file.string(), r.line, r.name, scale->described()));
   }
   return out;
 }

@@ -100,6 +100,9 @@ struct ReliefScale {
   double relief_px = 100.0;  // the region's
   double matching_relief_px() const { return relief_px * ratio; }
   bool mismatched() const { return !(ratio >= 0.8 && ratio <= 1.25); }  // off 1 by more than a quarter
+  // "the normal map's slopes are R times the depth map's ..." and, where mismatched, the relief_px that makes them
+  // agree.
+  std::string described() const;
 };
 std::optional<ReliefScale> relief_scale(const RegionSpec& region, const RegionFields& fields);
 

@@ -65,13 +65,7 @@ std::string fusion_line(const RegionFields& fields) {
 std::string scale_line(const RegionSpec& region, const RegionFields& fields) {
   const std::optional<ReliefScale> scale = relief_scale(region, fields);
   if (!scale) return "too little resolved slope to compare the normal map's slopes with the depth map's";
-  std::string line = fmt::format(
-      "the normal map's slopes are {:.2g} times the depth map's where both show the relief sloping", scale->ratio);
-  if (scale->mismatched()) {
-    line += fmt::format("; if both hold the same relief, relief_px = {:.3g} (now {:.3g}) makes them agree",
-                        scale->matching_relief_px(), scale->relief_px);
-  }
-  return line;
+  return scale->described();
 }
 
 std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadReport& report) {
