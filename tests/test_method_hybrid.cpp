@@ -132,14 +132,15 @@ std::vector<double> stroke_cds(const Scene& scene, Vec2 from, Vec2 m, double len
   return out;
 }
 
-// A step of 2 px and one of 4 px along a diagonal with their normals made from the heights by Sobel, as a generator
+// Steps of 1, 2 and 4 px along a diagonal with their normals made from the heights by Sobel, as a generator
 // does: the two texels of each edge carry gradients of length 0.53 h and the texels beside them 0.18 h where the
 // heights are level, so a texel two away from the marked edge pairs a flat normal with a smeared one behind it. The
 // band of depth's C/D reaches every such texel: crossed at 0, 30, 45 and 60 degrees the hybrid's C/D is the depth
 // method's, step for step (before, the flat texels two away kept curvature's and met the smeared normals as a ripple:
-// at 4 px until the band was passed on, at 2 px until its decrement became 0.4 `discontinuity_px`).
+// at 4 px until the band was passed on, at 2 px until its decrement became 0.4 `discontinuity_px`, at 1 px until a
+// jump between level treads was all unexplained and the band passed on to a residue of a quarter of the steepness).
 TEST(HybridMethod, TakesTheDepthCdWhereverAGeneratorSmearedADiagonalStep) {
-  for (const float height : {2.0f, 4.0f}) {
+  for (const float height : {1.0f, 2.0f, 4.0f}) {
     const auto diagonal_step = [height] {
       RegionFields fields;
       fields.depth = DepthField(48, 48, 0.0f);
@@ -162,6 +163,82 @@ TEST(HybridMethod, TakesTheDepthCdWhereverAGeneratorSmearedADiagonalStep) {
         EXPECT_EQ(by_hybrid[i], by_depth[i]) << height << " px at " << degrees << " degrees, step " << i;
       EXPECT_GT(*std::max_element(by_hybrid.begin(), by_hybrid.end()), 1.5) << degrees;  // the step is felt
     }
+  }
+}
+
+// A step of 1 px across the rows, its normals the heights' own reading: Sobel's (a generator's) or, where no normal
+// map is given, the central differences the region's gradient is then made of. Either gives the edge's two texels a
+// slope of 0.5, which explains 0.54 of the step (unexplained: the trapezoid rule with its end correction), so it
+// stayed below the default threshold of 0.5 px and the curvature method felt the smeared normals as a ridge. The
+// heights are level on both sides: all of it is unexplained, and it is a step.
+TEST(HybridMethod, TakesAOnePixelStepBetweenLevelTreadsWhateverReadTheNormals) {
+  const auto step_fields = [](bool normal_map) {
+    RegionFields fields;
+    fields.depth = DepthField(40, 12, 0.0f);
+    for (int y = 0; y < 12; ++y) {
+      for (int x = 20; x < 40; ++x) fields.depth->at(x, y) = 1.0f;
+    }
+    fields.gradient =
+        normal_map ? gradient_from_normals(sobel_normals(*fields.depth)) : gradient_from_depth(*fields.depth);
+    return fields;
+  };
+  for (const bool normal_map : {true, false}) {
+    SCOPED_TRACE(normal_map ? "Sobel normals" : "no normal map");
+    const Scene hybrid =
+        one_region(step_fields(normal_map), {0, 0, 40, 12}, std::make_shared<HybridMethod>(HybridParams{}));
+    EXPECT_FLOAT_EQ(hybrid.regions()[0].fields.gradient->at(19, 6).x, 0.5f);
+    const Scene depth =
+        one_region(step_fields(normal_map), {0, 0, 40, 12}, std::make_shared<DepthMethod>(DepthParams{}));
+    EXPECT_EQ(row_cds(hybrid, 3.0, 37.0), row_cds(depth, 3.0, 37.0));
+    EXPECT_EQ(row_cds(hybrid, 37.0, 3.0), row_cds(depth, 37.0, 3.0));
+  }
+}
+
+// A gentle slope (0.03 px a texel) in a depth map stored in steps of 0.64 px: its heights are level for 21 texels and
+// then rise by one step, which its exact normals explain only in part. A single step of the storage is how the map
+// rounds the slope, and it is not taken for a jump between level treads (the level edges beside it, whose slopes
+// the flat heights leave unexplained by 0.03 each, take back 0.12 of it: 0.52 px left as a jump, 0.49 px as what the
+// normals leave unexplained, against the default threshold of 0.5 px); a rise of two steps (1.28 px) onto a tread is
+// a step.
+TEST(HybridMethod, TakesNoStepOfTheDepthMapsStorageForAJump) {
+  for (const bool with_jump : {false, true}) {
+    RegionFields fields;
+    fields.depth = DepthField(40, 8, 0.0f);
+    fields.gradient = GradientField(40, 8, Gradient{0.03f, 0.0f});
+    fields.depth_rounding = 0.64 / std::sqrt(12.0);
+    for (int y = 0; y < 8; ++y) {
+      for (int x = 0; x < 40; ++x) {
+        const double exact = 0.03 * (x + 0.5) + (with_jump && x >= 30 ? 1.28 : 0.0);
+        fields.depth->at(x, y) = static_cast<float>(0.64 * std::floor(exact / 0.64));
+      }
+    }
+    HybridParams params;
+    params.noise_slope = 0.0;  // the normals as given
+    prepare_hybrid_fields(params, fields);
+    for (int x = 0; x < 40; ++x) EXPECT_EQ(fields.discontinuity->at(x, 4), with_jump && (x == 29 || x == 30)) << x;
+  }
+}
+
+// A wall 1 px wide between level ground and a plateau 2 px higher, with its exact normals: a texel whose centre lies
+// on the wall has the wall's slope, which explains the change across its edge however the wall falls between the
+// centres, and no texel is marked (the curvature method's rim and foot, as the paper counts them). Heights and
+// normals are sampled with the wall's start at every tenth of a texel, off the centres by a twentieth (a wall that
+// starts on one centre and ends on the next is flat at both, and its samples are a jump's).
+TEST(HybridMethod, MarksNoTexelOfAWallItsExactNormalsShow) {
+  for (int tenth = 0; tenth < 10; ++tenth) {
+    const double start = 20.05 + tenth / 10.0;
+    RegionFields fields;
+    fields.depth = DepthField(40, 8, 0.0f);
+    fields.gradient = GradientField(40, 8);
+    for (int y = 0; y < 8; ++y) {
+      for (int x = 0; x < 40; ++x) {
+        const double u = x + 0.5 - start;
+        fields.depth->at(x, y) = static_cast<float>(2.0 * std::clamp(u, 0.0, 1.0));
+        fields.gradient->at(x, y) = {u > 0.0 && u < 1.0 ? 2.0f : 0.0f, 0.0f};
+      }
+    }
+    prepare_hybrid_fields(HybridParams{}, fields);
+    for (std::uint8_t mark : fields.discontinuity->values) ASSERT_EQ(mark, 0) << "wall from " << start;
   }
 }
 

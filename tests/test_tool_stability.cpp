@@ -123,7 +123,7 @@ TEST(ToolStability, SmallRunWritesEveryModeMethodAndVariantWithinItsBounds) {
       {"jump", "hybrid", {0.069, 0.4, 3.3, 0.09, 4.6}},
       {"terraces", "curvature", {8.3, 1.5, 3.4e+02, 0.001, 2.2e+02}},
       {"terraces", "depth", {0.3, 0.79, 6, 0.001, 8.5}},
-      {"terraces", "hybrid", {2.7, 1.1, 60, 0.001, 25}},
+      {"terraces", "hybrid", {0.3, 0.79, 6, 0.001, 8.5}},
       {"cliff", "curvature", {1.3, 0.77, 8.8, 0.025, 13}},
       {"cliff", "depth", {0.085, 0.4, 2.8, 0.052, 4.9}},
       {"cliff", "hybrid", {1.3, 0.77, 8.8, 0.025, 13}},

@@ -133,9 +133,38 @@ bool is_step(double e, const std::array<double, 4>& nearby, double threshold) {
   return kept * e > threshold * std::abs(e);
 }
 
+// Whether a height change `dh` across an edge is a jump between level treads: the two edges before it and the two
+// after it along its axis each change by at most kLevelBeside of it, and the slopes of its own two texels
+// fall short of it by more than a quarter. Normals that a generator made from the heights (Sobel) or the heights'
+// own central differences (a region given no normal map) give the two texels of a step of height h a slope of h / 2
+// along an axis-aligned step (3h / 8 across a diagonal one), which explains about half of it: by unexplained alone a
+// step of 1 px was no step at the default 0.5 px. Where the heights are level on both sides, nothing of a smooth
+// relief is there to explain the change, and all of it is unexplained. A wall the normals show (a cliff 1 px wide, its
+// exact normals) gives one of the two texels the wall's slope, at least the change: no jump. The edges beside a step
+// change by none of it; on a generator's 8-bit maps of a rough relief (the suite's `fbm`, ad hoc) no edge has four
+// such neighbours within a fifth.
+constexpr double kLevelBeside = 0.2;
+constexpr double kSmearedSlope = 0.75;
+// `change_at(k)`: the height change across the edge k edges further along the axis. The slopes, at hand, are read
+// first: on a relief the normals explain they are the change's own size, and its neighbours are not read.
+template <typename ChangeAt>
+bool between_level_treads(double dh, const EdgeSlopes& s, const ChangeAt& change_at) {
+  const double size = std::abs(dh);
+  if (std::max(std::abs(s[1]), std::abs(s[2])) > kSmearedSlope * size) return false;
+  for (const std::int32_t k : {-2, -1, 1, 2}) {
+    if (std::abs(change_at(k)) > kLevelBeside * size) return false;
+  }
+  return true;
+}
+
 // Marks both texels of every edge across which the height changes by more than `threshold` beyond what the
-// normals explain, keeps it changed (is_step) and lies in relief the texels resolve (resolved).
-DiscontinuityField find_discontinuities(const GradientField& g, const DepthField& d, double threshold) {
+// normals explain (all of it between level treads: between_level_treads), keeps it changed (is_step) and lies in
+// relief the texels resolve (resolved).
+DiscontinuityField find_discontinuities(const GradientField& g, const DepthField& d, double threshold,
+                                        double depth_step) {
+  // A jump between level treads must be more than one step of the depth map's storage: a single one is how the map
+  // rounds a gentle slope (an 8-bit map of a relief 150 px high steps by 0.6 px every few texels), not relief.
+  const double jump_floor = std::max(threshold, 1.5 * depth_step);
   const std::int32_t w = g.width, h = g.height;
   auto slopes_x = [&](std::int32_t x, std::int32_t y) {  // across the edge between (x, y) and (x + 1, y)
     return EdgeSlopes{g.at(std::max(x - 1, 0), y).x, g.at(x, y).x, g.at(x + 1, y).x, g.at(std::min(x + 2, w - 1), y).x};
@@ -143,11 +172,27 @@ DiscontinuityField find_discontinuities(const GradientField& g, const DepthField
   auto slopes_y = [&](std::int32_t x, std::int32_t y) {  // between (x, y) and (x, y + 1)
     return EdgeSlopes{g.at(x, std::max(y - 1, 0)).y, g.at(x, y).y, g.at(x, y + 1).y, g.at(x, std::min(y + 2, h - 1)).y};
   };
+  auto change_x = [&](std::int32_t x, std::int32_t y) {  // 0 outside
+    return x < 0 || x + 1 >= w ? 0.0 : static_cast<double>(d.at(x + 1, y)) - d.at(x, y);
+  };
+  auto change_y = [&](std::int32_t x, std::int32_t y) {
+    return y < 0 || y + 1 >= h ? 0.0 : static_cast<double>(d.at(x, y + 1)) - d.at(x, y);
+  };
   auto along_x = [&](std::int32_t x, std::int32_t y) {  // 0 outside
-    return x < 0 || x + 1 >= w ? 0.0 : unexplained(d.at(x + 1, y) - d.at(x, y), slopes_x(x, y));
+    if (x < 0 || x + 1 >= w) return 0.0;
+    const double dh = change_x(x, y);
+    const EdgeSlopes s = slopes_x(x, y);
+    if (std::abs(dh) > jump_floor && between_level_treads(dh, s, [&](std::int32_t k) { return change_x(x + k, y); }))
+      return dh;
+    return unexplained(dh, s);
   };
   auto along_y = [&](std::int32_t x, std::int32_t y) {
-    return y < 0 || y + 1 >= h ? 0.0 : unexplained(d.at(x, y + 1) - d.at(x, y), slopes_y(x, y));
+    if (y < 0 || y + 1 >= h) return 0.0;
+    const double dh = change_y(x, y);
+    const EdgeSlopes s = slopes_y(x, y);
+    if (std::abs(dh) > jump_floor && between_level_treads(dh, s, [&](std::int32_t k) { return change_y(x, y + k); }))
+      return dh;
+    return unexplained(dh, s);
   };
   // Each edge's change is read by itself and by the four edges nearest along its axis: computed once, a row of the
   // edges along x at a time and the rows of edges along y two either side of the one being tested.
@@ -185,22 +230,26 @@ DiscontinuityField find_discontinuities(const GradientField& g, const DepthField
 
 // The marks and the band a generator smeared around them: every 8-neighbour of a texel of the band that is level with
 // it (heights within `threshold` px), flatter than it (the length of the gradient less by more than
-// kSmearDecrement x `threshold`) and not sloping against it (the two gradients' dot product not negative) joins the
-// band, and passes it on in turn. A generator smears a step's normals over the texels of its edge and the ones
-// beside them (Sobel across a diagonal step of height h: 3h/8 and h/8 along each axis either side of the line), and
-// curvature's reading of a texel, which pairs its normal with those of the texels behind it (any of its 8
-// neighbours, by the direction of the motion), would feel the smeared normals as a wall where the heights are level.
-// Depth's C/D there is the height change along the motion: the step's where the motion crosses it, none beside it.
-// A smear slopes one way, up the step; a level neighbour sloping the other way is relief of its own (a crest beside a
-// false mark on a rough relief). Each texel that joins is flatter than the one that passed the band on by more than
-// kSmearDecrement x `threshold`, so the band reaches at most a mark's steepness / (kSmearDecrement x `threshold`)
-// texels from it.
+// kSmearDecrement x `threshold`, or less than a quarter of it: a residue) and not sloping against it (the two
+// gradients' dot product not negative) joins the band, and passes it on in turn. A generator smears a step's normals
+// over the texels of its edge and the ones beside them (Sobel across a diagonal step of height h: 3h/8 and h/8 along
+// each axis either side of the line), and curvature's reading of a texel, which pairs its normal with those of the
+// texels behind it (any of its 8 neighbours, by the direction of the motion), would feel the smeared normals as a
+// wall where the heights are level. Depth's C/D there is the height change along the motion: the step's where the
+// motion crosses it, none beside it. A smear slopes one way, up the step; a level neighbour sloping the other way is
+// relief of its own (a crest beside a false mark on a rough relief). Each texel that joins is flatter than the one
+// that passed the band on, by more than kSmearDecrement x `threshold` or to less than a quarter of its steepness, so
+// the band ends where the gradients stop falling that fast.
 // A diagonal step of height h smeared by Sobel has gradients of length 0.53 h on its edge's texels, 0.18 h beside them
 // and 0 beyond: the band falls by 0.35 h and then by 0.18 h. A decrement of 0.4 x `threshold` passes it on to the flat
-// texels beyond from h = 2.26 x `threshold` (1.13 px at the default 0.5 px), where `threshold` itself did from 5.66 x
-// (2.83 px): the suite's terraces of 2 px lay between. A diagonal step is marked from 2.83 x `threshold` (its smear's
-// residues beside the edge take back h / 4 of its 0.6 h: is_step), so every marked one now passes its band on.
+// texels beyond from h = 2.26 x `threshold` (1.13 px at the default 0.5 px; `threshold` itself did from 5.66 x,
+// 2.83 px); below that the fall from 0.18 h to 0, to none of it, does (the suite's terraces of 1 px: C/D error 0.188
+// against depth's 0.179 and a travel sensitivity above curvature's without it, depth's to every digit with it). A
+// smooth relief's gradients fall by a quarter and more between neighbours only where they are small (a dome's foot):
+// on the hybrid's 32 px dome whose depth map holds half the normals' relief, where the step test marks a third of the
+// texels (tests/test_tool.cpp), a decrement of 0.3 x `threshold` instead took the band over two thirds.
 constexpr double kSmearDecrement = 0.4;
+constexpr double kSmearResidue = 0.75;
 DiscontinuityField with_smeared_neighbours(const DiscontinuityField& marks, const GradientField& g, const DepthField& d,
                                            double threshold) {
   const std::int32_t w = marks.width, h = marks.height;
@@ -219,7 +268,8 @@ DiscontinuityField with_smeared_neighbours(const DiscontinuityField& marks, cons
     for (std::int32_t v = std::max(0, y - 1); v <= std::min(h - 1, y + 1); ++v) {
       for (std::int32_t u = std::max(0, x - 1); u <= std::min(w - 1, x + 1); ++u) {
         if (out.at(u, v) != 0 || std::abs(d.at(u, v) - level) > threshold) continue;
-        if (steep - steepness(u, v) <= kSmearDecrement * threshold) continue;
+        const double flatter_by = steep - steepness(u, v);
+        if (flatter_by <= kSmearDecrement * threshold && !(flatter_by > kSmearResidue * steep)) continue;
         const Gradient a = g.at(x, y), b = g.at(u, v);
         if (static_cast<double>(a.x) * b.x + static_cast<double>(a.y) * b.y < 0.0) continue;
         out.at(u, v) = 1;
@@ -514,7 +564,8 @@ void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields) {
     reread = reread_from_depth(*from_depth, *disagreement, fields.depth_rounding, g, fields.gradient_rounding);
   }
   fields.discontinuity = has_depth
-                             ? with_smeared_neighbours(find_discontinuities(g, *fields.depth, params.discontinuity_px),
+                             ? with_smeared_neighbours(find_discontinuities(g, *fields.depth, params.discontinuity_px,
+                                                                            std::sqrt(12.0) * fields.depth_rounding),
                                                        g, *fields.depth, params.discontinuity_px)
                              : DiscontinuityField(g.width, g.height, 0);
   if (has_depth) {
