@@ -970,6 +970,23 @@ TEST(HybridMethod, FindsAStepInRegionsOfEverySmallSize) {
   }
 }
 
+// A float depth map may hold values near the float's limit (3e38): every reading of its heights stays finite, and so
+// does the prepared gradient (across this cliff of 6e38 the band-limited derivative's sum is 4e38, beyond a float).
+TEST(HybridMethod, PreparesFiniteFieldsFromHeightsNearTheFloatLimit) {
+  RegionFields fields;
+  fields.gradient = GradientField(40, 40, Gradient{0.1f, -0.2f});
+  fields.depth = DepthField(40, 40);
+  for (int y = 0; y < 40; ++y) {
+    for (int x = 0; x < 40; ++x) fields.depth->at(x, y) = x < 20 ? 3.0e38f : -3.0e38f;
+  }
+  fields.gradient->at(20, 20) = {2.0f, 0.0f};  // not the heights' reading: the normals are compared, and fused
+  prepare_hybrid_fields(HybridParams{}, fields);
+  for (const Gradient& g : fields.gradient->values) {
+    ASSERT_TRUE(std::isfinite(g.x) && std::isfinite(g.y));
+    ASSERT_LE(std::max(std::abs(g.x), std::abs(g.y)), kMaxSlope);
+  }
+}
+
 TEST(HybridMethod, NeverGivesNanOrLeavesItsBounds) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -366,7 +366,8 @@ class BandLimitedDerivative {
   float sum(const Difference& difference) const {
     double s = 0.0;
     for (std::int32_t n = 1; n <= kBandLimitedTaps; ++n) s += taps_[static_cast<std::size_t>(n - 1)] * difference(n);
-    return static_cast<float>(s);
+    // Clamped as gradient_from_depth clamps: heights near the float's limit would sum beyond it.
+    return static_cast<float>(std::clamp(s, -static_cast<double>(kMaxSlope), static_cast<double>(kMaxSlope)));
   }
   std::array<double, kBandLimitedTaps> taps_{};
 };
