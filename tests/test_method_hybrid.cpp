@@ -508,17 +508,22 @@ double rms_difference(const GradientField& a, const GradientField& b) {
   return std::sqrt(sum / static_cast<double>(a.values.size()));
 }
 
+// `fields` with Gaussian noise of standard deviation `sigma` added to both slopes of every texel's normal.
+RegionFields with_gaussian_noise(RegionFields fields, double sigma, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma);
+  for (Gradient& g : fields.gradient->values) {
+    g.x += static_cast<float>(noise(rng));
+    g.y += static_cast<float>(noise(rng));
+  }
+  return fields;
+}
+
 // Normals far noisier than the map's rounding over a clean depth map: the noise is estimated from the maps and the
 // gradient pulled to the depth map's slopes, which the smoothing within the fixed band alone could not do.
 TEST(HybridMethod, PullsNoisyNormalsToTheSlopesOfACleanDepthMap) {
   const RegionFields clean = hill_fields();
-  std::mt19937_64 rng(5);
-  std::normal_distribution<double> noise(0.0, 0.05);
-  RegionFields noisy = clean;
-  for (Gradient& g : noisy.gradient->values) {
-    g.x += static_cast<float>(noise(rng));
-    g.y += static_cast<float>(noise(rng));
-  }
+  RegionFields noisy = with_gaussian_noise(clean, 0.05, 5);
   const double before = rms_difference(*noisy.gradient, *clean.gradient);
   RegionFields normals_only = noisy;
   normals_only.depth.reset();
@@ -754,13 +759,7 @@ TEST(HybridMethod, DoesNotFuseTheExactNormalsOfAGratingOf3PxButTheirNoise) {
     SCOPED_TRACE(cx);
     const RegionFields exact = grating_fields(3.0, cx, cy, 96);
     expect_exact_normals_kept(exact);
-    RegionFields noisy = exact;
-    std::mt19937_64 rng(3);
-    std::normal_distribution<double> noise(0.0, 0.05);
-    for (Gradient& g : noisy.gradient->values) {
-      g.x += static_cast<float>(noise(rng));
-      g.y += static_cast<float>(noise(rng));
-    }
+    RegionFields noisy = with_gaussian_noise(exact, 0.05, 3);
     prepare_hybrid_fields(HybridParams{}, noisy);
     EXPECT_TRUE(noisy.fused_normals_weight);
   }
