@@ -3,6 +3,7 @@
 // gives).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -13,6 +14,7 @@
 #include "core/engine/method_curvature.hpp"
 #include "core/engine/method_depth.hpp"
 #include "core/engine/method_flat.hpp"
+#include "core/engine/method_hybrid.hpp"
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
 
@@ -368,6 +370,77 @@ TEST(DirectionLut, QuantisesDirectionsAndCodesCdAroundOne) {
   EXPECT_EQ(lut.cd(3, {1, 0}), 30.0);
   lut.set(3, {1, 0}, NAN);
   EXPECT_EQ(lut.cd(3, {1, 0}), 1.0);
+}
+
+// Three regions side by side, one overlapping the next: curvature on a random normal map; the hybrid on a wavy surface
+// with a cliff (marked discontinuities) over part of it; depth on random heights right of the hybrid.
+Scene lut_reference_scene() {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<Region> regions;
+  Region curvature = gradient_region({0, 0, 40, 30}, {});
+  for (Gradient& g : curvature.fields.gradient->values) g = {u(rng), u(rng)};
+  regions.push_back(std::move(curvature));
+  Region hybrid;
+  hybrid.name = "hybrid";
+  hybrid.rect = {30, 10, 40, 30};
+  hybrid.fields.gradient = GradientField(40, 30, Gradient{});
+  hybrid.fields.depth = DepthField(40, 30, 0.0f);
+  for (int y = 0; y < 30; ++y) {
+    for (int x = 0; x < 40; ++x) {
+      const double wave = 3.0 * std::sin(0.3 * x) * std::cos(0.2 * y);
+      hybrid.fields.depth->at(x, y) = static_cast<float>(wave + (x >= 20 ? 8.0 : 0.0));
+      hybrid.fields.gradient->at(x, y) = {static_cast<float>(0.9 * std::cos(0.3 * x) * std::cos(0.2 * y)),
+                                          static_cast<float>(-0.6 * std::sin(0.3 * x) * std::sin(0.2 * y))};
+    }
+  }
+  hybrid.method = std::make_shared<HybridMethod>(HybridParams{});
+  regions.push_back(std::move(hybrid));
+  regions.push_back(depth_region({70, 12, 20, 20}, [](int x, int y) { return float((x * 7 + y * 13) % 5); }));
+  return Scene(std::move(regions));
+}
+
+// The table's entry for texel p and direction k is the method's C/D of entering p from the texel behind it, each read
+// through the method's virtual interface: from the region's own fields inside it, from whatever lies there beyond
+// its edge (another region, or the flat outside).
+TEST(DirectionLut, EachEntryIsTheMethodsCdFromTheTexelBehind) {
+  Scene scene = lut_reference_scene();
+  ASSERT_TRUE(scene.regions()[1].fields.discontinuity);
+  const std::vector<std::uint8_t>& marks = scene.regions()[1].fields.discontinuity->values;
+  ASSERT_GT(std::count_if(marks.begin(), marks.end(), [](std::uint8_t mark) { return mark != 0; }), 0);
+  for (int directions : {8, 16}) {
+    scene.set_options({Traversal::direction_lut, Sampling::nearest, directions});
+    for (std::size_t i = 0; i < scene.regions().size(); ++i) {
+      const Region& region = scene.regions()[i];
+      const Method& method = *region.method;
+      const DirectionLut* lut = scene.direction_lut(i);
+      ASSERT_NE(lut, nullptr);
+      DirectionLut expected(region.rect.w, region.rect.h, directions, method.cd_lower_bound(), method.cd_upper_bound());
+      int differ = 0;
+      for (int k = 0; k < directions; ++k) {
+        const Vec2 m = lut->direction(k);
+        const int dx = static_cast<int>(std::floor(0.5 - m.x)), dy = static_cast<int>(std::floor(0.5 - m.y));
+        for (int y = 0; y < region.rect.h; ++y) {
+          for (int x = 0; x < region.rect.w; ++x) {
+            const Texel behind{x + dx, y + dy};
+            TexelSample from;
+            if (behind.x >= 0 && behind.x < region.rect.w && behind.y >= 0 && behind.y < region.rect.h) {
+              from = method.sample(&region.fields, behind, m);
+            } else {
+              const Texel screen{region.rect.x + behind.x, region.rect.y + behind.y};
+              const std::optional<std::size_t> owner = scene.owner(screen);
+              from = owner ? method.sample(&scene.regions()[*owner].fields, scene.regions()[*owner].local(screen), m)
+                           : method.sample(nullptr, {}, m);
+            }
+            const TexelSample here = method.sample(&region.fields, {x, y}, m);
+            expected.set(k, {x, y}, method.cd(from, here, std::hypot(dx, dy), nullptr));
+            if (lut->cd(k, {x, y}) != expected.cd(k, {x, y})) ++differ;
+          }
+        }
+      }
+      EXPECT_EQ(differ, 0) << region.name << ", " << directions << " directions";
+    }
+  }
 }
 
 }  // namespace

@@ -3,7 +3,9 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 
+#include "core/engine/grid_walk.hpp"
 #include "core/engine/methods.hpp"
 #include "core/engine/scene.hpp"
 
@@ -49,36 +51,42 @@ void DirectionLut::set(int k, Texel local, double cd) {
 
 namespace {
 
-// M: the method's concrete type, so that sample() and cd() inline (the build costs 2 samples per entry).
+// M: the method's concrete type, so that sample() and cd() inline. Each entry reads its texel as the nearest walk
+// does (the method's leg for the direction, worked out once per direction) and samples the texel behind only where
+// cd() reads it (a region's border, for the methods that read along the motion): a sample per entry, not two.
 template <typename M>
 DirectionLut build_with(const Scene& scene, const Region& region, const M& method, int directions) {
   const std::int32_t w = region.rect.w, h = region.rect.h;
   DirectionLut lut(w, h, directions, method.cd_lower_bound(), method.cd_upper_bound());
-  std::vector<TexelSample> samples(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
   for (int k = 0; k < directions; ++k) {
     const Vec2 m = lut.direction(k);
     // The neighbour behind: the texel holding (centre - m), centre at +0.5.
     const std::int32_t dx = static_cast<std::int32_t>(std::floor(0.5 - m.x));
     const std::int32_t dy = static_cast<std::int32_t>(std::floor(0.5 - m.y));
     const double step_px = std::hypot(dx, dy);
-    for (std::int32_t y = 0; y < h; ++y) {
-      for (std::int32_t x = 0; x < w; ++x)
-        samples[static_cast<std::size_t>(y) * w + x] = method.sample(&region.fields, {x, y}, m);
-    }
-    for (std::int32_t y = 0; y < h; ++y) {
-      for (std::int32_t x = 0; x < w; ++x) {
-        const Texel nb{x + dx, y + dy};
-        TexelSample from;
-        if (nb.x >= 0 && nb.x < w && nb.y >= 0 && nb.y < h) {
-          from = samples[static_cast<std::size_t>(nb.y) * w + nb.x];
-        } else {
-          const Texel screen{region.rect.x + nb.x, region.rect.y + nb.y};
-          const std::optional<std::size_t> owner = scene.owner(screen);
-          from = owner ? method.sample(&scene.regions()[*owner].fields, scene.regions()[*owner].local(screen), m)
-                       : method.sample(nullptr, {}, m);
+    // The texel behind p: from the region's own fields inside it, from whatever lies there beyond its edge.
+    const auto sample_behind = [&](Texel p) {
+      const Texel nb{p.x + dx, p.y + dy};
+      if (nb.x >= 0 && nb.x < w && nb.y >= 0 && nb.y < h) return method.sample(&region.fields, nb, m);
+      const Texel screen{region.rect.x + nb.x, region.rect.y + nb.y};
+      const std::optional<std::size_t> owner = scene.owner(screen);
+      return owner ? method.sample(&scene.regions()[*owner].fields, scene.regions()[*owner].local(screen), m)
+                   : method.sample(nullptr, {}, m);
+    };
+    const auto fill = [&](const auto& sample_here) {
+      for (std::int32_t y = 0; y < h; ++y) {
+        for (std::int32_t x = 0; x < w; ++x) {
+          const TexelSample here = sample_here(Texel{x, y});
+          const TexelSample from = cd_reads_from(method, here) ? sample_behind({x, y}) : TexelSample{};
+          lut.set(k, {x, y}, method.cd(from, here, step_px, nullptr));
         }
-        lut.set(k, {x, y}, method.cd(from, samples[static_cast<std::size_t>(y) * w + x], step_px, nullptr));
       }
+    };
+    if constexpr (requires { method.leg(&region.fields, m).sample(Texel{}); }) {
+      const auto leg = method.leg(&region.fields, m);
+      fill([&](Texel p) PH_ALWAYS_INLINE { return leg.sample(p); });
+    } else {
+      fill([&](Texel p) { return method.sample(&region.fields, p, m); });
     }
   }
   return lut;

@@ -57,6 +57,16 @@ inline Vec2 corner(const Region& region) {
 // The same as a texel: a region-local texel plus it is the screen texel.
 inline Texel corner_texel(const Region& region) { return {region.rect.x, region.rect.y}; }
 
+// Whether method.cd(from, to, ...) reads `from`; true for a method that does not say.
+template <typename M>
+bool cd_reads_from(const M& method, const TexelSample& to) {
+  if constexpr (requires { method.reads_from(to); }) {
+    return method.reads_from(to);
+  } else {
+    return true;
+  }
+}
+
 // What `method` reads at texel t for the motion direction m, from the fields of the region that owns t (the
 // flat surface's sample outside every region): the texel's value, or with `at` (screen px inside t) the
 // value interpolated there (Sampling::bilinear). M is a method's concrete class (calls inline) or Method.

@@ -139,16 +139,6 @@ class Walker {
     }
   }
 
-  // Whether method.cd(from, to, ...) reads `from`; true for a method that does not say.
-  template <typename M>
-  static bool reads_from(const M& method, const TexelSample& to) {
-    if constexpr (requires { method.reads_from(to); }) {
-      return method.reads_from(to);
-    } else {
-      return true;
-    }
-  }
-
   // Sample of the texel the walk came from, at the start of a leg.
   template <typename M>
   TexelSample sample_from(const M& method) {
@@ -203,7 +193,7 @@ class Walker {
                           [&](bool entered, FieldTexel at, const auto& from, bool observed) PH_ALWAYS_INLINE {
                             const TexelSample here = leg.sample(at);
                             TexelSample previous{};
-                            if (reads_from(method, here)) [[unlikely]]
+                            if (cd_reads_from(method, here)) [[unlikely]]
                               previous = sample_owner(scene_, method, from() + corner_texel(region), m_);
                             return step_cd(region, method, previous, here, entered, observed);
                           });
