@@ -16,6 +16,7 @@
 
 #include "config/exr_header.hpp"
 #include "config/image_backend.hpp"
+#include "config/image_png.hpp"
 
 namespace ph {
 namespace {
@@ -131,24 +132,37 @@ void write_unorm(const fs::path& path, std::int32_t width, std::int32_t height, 
   }
 }
 
+std::string lowercase_extension(const fs::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension;
+}
+
 // What can be refused before a decoder sees the file: an OpenEXR file whose headers claim more bytes than
 // it holds, or an image beyond the limits (config/exr_header.hpp). The module opens a file only with the
 // reader its extension names.
 void check_before_decoding(const fs::path& path, const ImageLimits& limits) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (extension == ".exr") check_exr_header(path, limits);
+  if (lowercase_extension(path) == ".exr") check_exr_header(path, limits);
 }
+
+// A file named .png is read with libpng here (config/image_png.hpp), without loading the module.
+bool read_here(const fs::path& path) { return lowercase_extension(path) == ".png"; }
 
 }  // namespace
 
 ImageSize read_image_size(const fs::path& path, const ImageLimits& limits) {
+  if (read_here(path)) return read_png_size(path, limits);
   check_before_decoding(path, limits);
   return backend(path).read_image_size(path, limits);
 }
 
 RawImage read_image(const fs::path& path, const ImageLimits& limits) {
+  if (read_here(path)) return read_png(path, limits);
+  return read_image_with_openimageio(path, limits);
+}
+
+RawImage read_image_with_openimageio(const fs::path& path, const ImageLimits& limits) {
   check_before_decoding(path, limits);
   return backend(path).read_image(path, limits);
 }

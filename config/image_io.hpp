@@ -1,6 +1,7 @@
-// Reading and writing images through OpenImageIO. Every error names the file.
+// Reading and writing images through OpenImageIO, and PNG files read with libpng. Every error names the file.
 // OpenImageIO lives in a module (ph_image_oiio.so, config/image_backend.hpp) loaded on the first call of
-// any function here, so a program that never touches an image never maps it.
+// any function here that needs it, so a program that never touches an image never maps it; a file named .png is
+// read without it (config/image_png.hpp: the same values), and one that only reads PNG maps never loads it.
 #pragma once
 
 #include <cstdint>
@@ -31,6 +32,9 @@ ImageSize read_image_size(const std::filesystem::path& path, const ImageLimits& 
 // Reads every channel as float (integer formats scaled to [0, 1] by OpenImageIO).
 // Throws FieldError("PATH: reason") for a missing, unreadable, truncated, zero-sized or too large image.
 RawImage read_image(const std::filesystem::path& path, const ImageLimits& limits = {});
+// The same through the image module whatever the file's name (read_image reads a .png without it; the tests
+// compare the two).
+RawImage read_image_with_openimageio(const std::filesystem::path& path, const ImageLimits& limits = {});
 
 // How an integer image is written: its file format (whatever the file name says) and 8 or 16 bits per channel.
 enum class ImageFormat { png, tiff };

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "config/image_backend.hpp"
+#include "config/image_header_check.hpp"
 
 namespace ph {
 namespace {
@@ -51,24 +52,11 @@ bool is_float_type(OIIO::TypeDesc format) {
 
 // Refuses, from the header alone, an image that is empty, not a plain 2D image, or larger than the limits.
 void check_spec(const std::filesystem::path& path, const OIIO::ImageSpec& spec, const ImageLimits& limits) {
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) throw file_error(path, "image has zero size");
   if (spec.depth > 1)
     throw file_error(path, "volume images (depth " + std::to_string(spec.depth) + ") are not supported");
   if (spec.deep) throw file_error(path, "deep images are not supported");
-  const std::string size = std::to_string(spec.width) + " x " + std::to_string(spec.height) + " px";
-  if (spec.width > limits.max_side || spec.height > limits.max_side) {
-    throw file_error(
-        path, "image is " + size + ", more than the limit of " + std::to_string(limits.max_side) + " px per side");
-  }
-  const std::int64_t pixels = std::int64_t{spec.width} * spec.height;
-  if (pixels > limits.max_pixels) {
-    throw file_error(path,
-                     "image is " + size + ", more than the limit of " + std::to_string(limits.max_pixels) + " pixels");
-  }
-  if (spec.nchannels > limits.max_channels) {
-    throw file_error(path, "image has " + std::to_string(spec.nchannels) + " channels, more than the limit of " +
-                               std::to_string(limits.max_channels));
-  }
+  const std::string refusal = image_size_refusal(spec.width, spec.height, spec.nchannels, limits);
+  if (!refusal.empty()) throw file_error(path, refusal);
 }
 
 // Writes pixels of the given type in the given format, whatever the file name says.

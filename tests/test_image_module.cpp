@@ -111,7 +111,7 @@ TEST(ImageModule, ReadingAnImageSizeLoadsIt) {
   const ScratchDir dir("image-module");
   const std::string failure = in_child([&]() -> std::string {
     if (std::string f = oiio_mapped_state(false, "at start"); !f.empty()) return f;
-    const std::string missing = (dir / "missing.png").string();
+    const std::string missing = (dir / "missing.tif").string();  // a PNG's size is read without the module
     try {
       read_image_size(missing);
       return "no error for a missing file";
@@ -123,11 +123,28 @@ TEST(ImageModule, ReadingAnImageSizeLoadsIt) {
   EXPECT_EQ(failure, "");
 }
 
+// A PNG map (the normal and depth maps the project's tools write) is read with libpng: OpenImageIO stays unmapped,
+// and a module that could not be loaded does not matter.
+TEST(ImageModule, ReadingAPngDoesNotLoadIt) {
+  const std::string failure = in_child([&]() -> std::string {
+    ::setenv("PH_IMAGE_MODULE", "/nonexistent/ph_image_oiio.so", 1);
+    const fs::path seeds = PH_IMAGE_SEEDS_DIR;
+    const RawImage depth = read_image(seeds / "depth16.png");
+    const RawImage normals = read_image(seeds / "normal16.png");
+    const ImageSize size = read_image_size(seeds / "depth8.png");
+    if (depth.channels != 1 || normals.channels != 3 || depth.code_max != 65535 || size.code_max != 255 ||
+        size.width != depth.width)
+      return "read back the wrong image";
+    return oiio_mapped_state(false, "after reading PNG files");
+  });
+  EXPECT_EQ(failure, "");
+}
+
 // FieldError is thrown inside the module (its own copy of the type's typeinfo, hidden there) and caught here
 // by type: libstdc++ matches exception types by their names.
 TEST(ImageModule, ErrorsFromTheModuleAreCaughtAsFieldError) {
   const ScratchDir dir("image-module");
-  std::ofstream(dir / "truncated.png", std::ios::binary) << "\x89PNG\r\n\x1a\n\0\0\0\rIHDR";
+  std::ofstream(dir / "truncated.tif", std::ios::binary) << "II*\0\x08\0\0\0\x0e\0";  // TIFF: the module reads it
   const std::string failure = in_child([&]() -> std::string {
     std::string failures;
     const auto expect_field_error = [&](const char* what, const std::function<void()>& action) {
@@ -141,8 +158,8 @@ TEST(ImageModule, ErrorsFromTheModuleAreCaughtAsFieldError) {
         failures += std::string(what) + ": caught as " + typeid(e).name() + ", not FieldError: " + e.what() + "\n";
       }
     };
-    expect_field_error("missing file", [&] { read_image(dir / "missing.png"); });
-    expect_field_error("truncated file", [&] { read_image(dir / "truncated.png"); });
+    expect_field_error("missing file", [&] { read_image(dir / "missing.tif"); });
+    expect_field_error("truncated file", [&] { read_image(dir / "truncated.tif"); });
     expect_field_error("unwritable path", [&] { write_float_exr(dir / "no-such-dir" / "x.exr", Grid<float>(2, 2)); });
     if (!mapped("ph_image_oiio")) failures += "the module was not loaded\n";
     return failures;
@@ -153,7 +170,7 @@ TEST(ImageModule, ErrorsFromTheModuleAreCaughtAsFieldError) {
 TEST(ImageModule, AModuleThatCannotBeLoadedIsAFieldErrorThatSaysWhatWasTried) {
   const ScratchDir dir("image-module");
   const fs::path module = dir / "no-such-module.so";
-  const fs::path image = dir / "image.png";
+  const fs::path image = dir / "image.tif";  // not a PNG: those are read without the module
   const std::string failure = in_child([&]() -> std::string {
     ::setenv("PH_IMAGE_MODULE", module.c_str(), 1);
     std::string failures;

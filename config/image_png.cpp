@@ -1,0 +1,161 @@
+#include "config/image_png.hpp"
+
+#include <png.h>
+
+#include <bit>
+#include <cerrno>
+#include <csetjmp>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "config/image_header_check.hpp"
+
+namespace ph {
+namespace {
+
+// What libpng said last, filled by its error callback before it jumps back: plain chars, since no C++ object may
+// live in a frame that a longjmp leaves.
+struct PngMessage {
+  char text[200] = {};
+};
+
+[[noreturn]] void on_error(png_structp png, png_const_charp message) {
+  auto* said = static_cast<PngMessage*>(png_get_error_ptr(png));
+  std::snprintf(said->text, sizeof said->text, "%s", message != nullptr ? message : "unknown error");
+  png_longjmp(png, 1);
+}
+
+void on_warning(png_structp /*png*/, png_const_charp /*message*/) {}
+
+// libpng's own reader says only "Read Error" when the file ends early, the usual way a PNG is broken.
+void read_from_file(png_structp png, png_bytep data, std::size_t length) {
+  auto* file = static_cast<std::FILE*>(png_get_io_ptr(png));
+  if (std::fread(data, 1, length, file) != length)
+    png_error(png, std::ferror(file) != 0 ? "read error" : "the file ends before its image does");
+}
+
+// The header after the transforms OpenImageIO asks for.
+struct PngHeader {
+  png_uint_32 width = 0, height = 0;
+  int channels = 0;
+  int bit_depth = 0;
+  std::size_t row_bytes = 0;
+};
+
+// An open PNG file and libpng's state for reading it; closes and frees both, however far open() got.
+class PngFile {
+ public:
+  explicit PngFile(std::filesystem::path path) : path_(std::move(path)) {}
+  ~PngFile() {
+    if (png_ != nullptr) png_destroy_read_struct(&png_, info_ != nullptr ? &info_ : nullptr, nullptr);
+    if (file_ != nullptr) std::fclose(file_);
+  }
+  PngFile(const PngFile&) = delete;
+  PngFile& operator=(const PngFile&) = delete;
+
+  void open() {
+    file_ = std::fopen(path_.c_str(), "rb");
+    if (file_ == nullptr) throw image_file_error(path_, std::string("cannot open: ") + std::strerror(errno));
+    unsigned char signature[8] = {};
+    if (std::fread(signature, 1, sizeof signature, file_) != sizeof signature ||
+        png_sig_cmp(signature, 0, sizeof signature) != 0) {
+      throw image_file_error(path_, "cannot open: not a PNG file");
+    }
+    png_ = png_create_read_struct(PNG_LIBPNG_VER_STRING, &message_, on_error, on_warning);
+    if (png_ != nullptr) info_ = png_create_info_struct(png_);
+    if (png_ == nullptr || info_ == nullptr) throw image_file_error(path_, "cannot open: out of memory");
+  }
+
+  // The header, refused by the limits as the image module refuses it.
+  PngHeader header(const ImageLimits& limits) {
+    PngHeader header;
+    if (!read_header(header)) throw image_file_error(path_, std::string("cannot open: ") + message_.text);
+    const std::string refusal = image_size_refusal(header.width, header.height, header.channels, limits);
+    if (!refusal.empty()) throw image_file_error(path_, refusal);
+    return header;
+  }
+
+  // Every row of the image into `pixels` (header.row_bytes each).
+  void read_rows(const PngHeader& header, std::vector<unsigned char>& pixels) {
+    pixels.resize(header.row_bytes * header.height);
+    std::vector<png_bytep> rows(header.height);
+    for (png_uint_32 y = 0; y < header.height; ++y) rows[y] = pixels.data() + header.row_bytes * y;
+    if (!read_image(rows.data())) throw image_file_error(path_, std::string("truncated or corrupt: ") + message_.text);
+  }
+
+ private:
+  // libpng's calls, each in a function whose frame holds nothing a longjmp back to it would have to destroy.
+  bool read_header(PngHeader& header) {
+    if (setjmp(png_jmpbuf(png_)) != 0) return false;
+    png_set_read_fn(png_, file_, read_from_file);
+    png_set_sig_bytes(png_, 8);
+    png_read_info(png_, info_);
+    png_set_expand(png_);  // 1, 2 and 4-bit grey to 8 bits, a palette to RGB, a transparent colour to alpha
+    if constexpr (std::endian::native == std::endian::little) png_set_swap(png_);  // 16-bit samples as the machine
+    png_set_interlace_handling(png_);                                              // an interlaced file's 7 passes
+    png_read_update_info(png_, info_);
+    header.width = png_get_image_width(png_, info_);
+    header.height = png_get_image_height(png_, info_);
+    header.channels = png_get_channels(png_, info_);
+    header.bit_depth = png_get_bit_depth(png_, info_);
+    header.row_bytes = png_get_rowbytes(png_, info_);
+    return true;
+  }
+  bool read_image(png_bytepp rows) {
+    if (setjmp(png_jmpbuf(png_)) != 0) return false;
+    png_read_image(png_, rows);
+    png_read_end(png_, nullptr);
+    return true;
+  }
+
+  std::filesystem::path path_;
+  std::FILE* file_ = nullptr;
+  png_structp png_ = nullptr;
+  png_infop info_ = nullptr;
+  PngMessage message_;
+};
+
+}  // namespace
+
+ImageSize read_png_size(const std::filesystem::path& path, const ImageLimits& limits) {
+  PngFile file(path);
+  file.open();
+  const PngHeader header = file.header(limits);
+  return {static_cast<std::int32_t>(header.width), static_cast<std::int32_t>(header.height),
+          header.bit_depth == 16 ? 65535u : 255u};
+}
+
+RawImage read_png(const std::filesystem::path& path, const ImageLimits& limits) {
+  PngFile file(path);
+  file.open();
+  const PngHeader header = file.header(limits);
+  std::vector<unsigned char> stored;
+  file.read_rows(header, stored);
+  RawImage image;
+  image.width = static_cast<std::int32_t>(header.width);
+  image.height = static_cast<std::int32_t>(header.height);
+  image.channels = header.channels;
+  image.is_float = false;
+  image.code_max = header.bit_depth == 16 ? 65535 : 255;
+  const std::size_t values = static_cast<std::size_t>(header.width) * header.height * header.channels;
+  image.pixels.resize(values);
+  // As OpenImageIO converts integer codes to float: times the reciprocal of the largest code, in float.
+  if (header.bit_depth == 16) {
+    constexpr float kScale = 1.0f / 65535.0f;
+    for (std::size_t i = 0; i < values; ++i) {
+      std::uint16_t code;
+      std::memcpy(&code, stored.data() + 2 * i, sizeof code);
+      image.pixels[i] = static_cast<float>(code) * kScale;
+    }
+  } else {
+    constexpr float kScale = 1.0f / 255.0f;
+    for (std::size_t i = 0; i < values; ++i) image.pixels[i] = static_cast<float>(stored[i]) * kScale;
+  }
+  return image;
+}
+
+}  // namespace ph
