@@ -29,7 +29,7 @@ struct ImageSize {
 // The size from the file's header alone, with the same checks and errors as read_image.
 ImageSize read_image_size(const std::filesystem::path& path, const ImageLimits& limits = {});
 
-// Reads every channel as float (integer formats scaled to [0, 1] by OpenImageIO).
+// Reads every channel as float (integer formats scaled to [0, 1] as OpenImageIO scales them).
 // Throws FieldError("PATH: reason") for a missing, unreadable, truncated, zero-sized or too large image.
 RawImage read_image(const std::filesystem::path& path, const ImageLimits& limits = {});
 // The same through the image module whatever the file's name (read_image reads a .png without it; the tests

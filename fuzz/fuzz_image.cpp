@@ -1,9 +1,9 @@
 // libFuzzer target for what the daemon's image reader child does with an image (config/image_reader.cpp):
-// OpenImageIO's PNG, TIFF and OpenEXR readers through the image module, then decoding, repair and
-// resampling to a region's size; and the answer as the daemon checks it (config/image_wire.cpp). The
-// first byte picks the file's extension (which reader OpenImageIO tries first) and whether it is read as a
-// normal map or a depth map; the rest is the file. Any input must give fields the daemon accepts or a
-// Failure; a crash here is one the child would have had (and only the child, in the daemon).
+// libpng for PNG (config/image_png.cpp), OpenImageIO's TIFF and OpenEXR readers through the image module, then
+// decoding, repair and resampling to a region's size; and the answer as the daemon checks it
+// (config/image_wire.cpp). The first byte picks the file's extension (which reader reads it) and whether it is read as
+// a normal map or a depth map; the rest is the file. Any input must give fields the daemon accepts or a Failure; a
+// crash here is one the child would have had (and only the child, in the daemon).
 #include <fcntl.h>
 #include <unistd.h>
 
