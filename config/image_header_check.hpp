@@ -1,6 +1,6 @@
 // Why an image's header alone refuses it (empty, larger than the limits), as one reason the caller puts after the
-// file's name, and that error: shared by the image module (config/image_oiio.cpp) and the PNG reader
-// (config/image_png.cpp), so that a file is refused alike whichever reads it. Internal to config/.
+// file's name, and that error: shared by config/image_io.cpp, the image module (config/image_oiio.cpp) and the PNG
+// reader (config/image_png.cpp), so that a file is refused alike whichever reads it. Internal to config/.
 #pragma once
 
 #include <cstdint>

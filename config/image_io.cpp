@@ -16,16 +16,13 @@
 
 #include "config/exr_header.hpp"
 #include "config/image_backend.hpp"
+#include "config/image_header_check.hpp"
 #include "config/image_png.hpp"
 
 namespace ph {
 namespace {
 
 namespace fs = std::filesystem;
-
-FieldError file_error(const fs::path& path, const std::string& reason) {
-  return FieldError(path.string() + ": " + reason);
-}
 
 // Raised by load_module, turned into a FieldError that names the image.
 class ModuleError : public std::runtime_error {
@@ -103,7 +100,7 @@ const image_backend::Table& backend(const fs::path& image) {
     static const image_backend::Table* const table = load_module();
     return *table;
   } catch (const ModuleError& e) {
-    throw file_error(image, e.what());
+    throw image_file_error(image, e.what());
   }
 }
 
@@ -117,7 +114,7 @@ std::uint16_t unorm_code(double v, double code_max) {
 void write_unorm(const fs::path& path, std::int32_t width, std::int32_t height, int channels,
                  const std::vector<double>& values, ImageEncoding encoding) {
   if (encoding.bits != 8 && encoding.bits != 16) {
-    throw file_error(path, "cannot write " + std::to_string(encoding.bits) + "-bit images, only 8 or 16");
+    throw image_file_error(path, "cannot write " + std::to_string(encoding.bits) + "-bit images, only 8 or 16");
   }
   const char* format = encoding.format == ImageFormat::tiff ? "tiff" : "png";
   if (encoding.bits == 8) {
@@ -200,7 +197,7 @@ void write_float_exr(const std::filesystem::path& path, const Grid<float>& value
 void write_rgb_png8(const std::filesystem::path& path, std::int32_t width, std::int32_t height,
                     const std::vector<std::uint8_t>& rgb) {
   if (rgb.size() != static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0)) * 3)
-    throw file_error(path, "cannot write: pixel count does not match the size");
+    throw image_file_error(path, "cannot write: pixel count does not match the size");
   backend(path).write_image(path, "png", width, height, 3, image_backend::PixelType::uint8, rgb.data());
 }
 

@@ -22,10 +22,6 @@ std::string one_line(std::string message) {
   return message.empty() ? "unknown error" : message;
 }
 
-FieldError file_error(const std::filesystem::path& path, const std::string& reason) {
-  return FieldError(path.string() + ": " + reason);
-}
-
 // OpenImageIO 2.4 decompresses a deflate TIFF's strips on its thread pool and, where a scanline after them fails
 // to read, returns before those tasks end, which then write to its stack and freed buffers (a use after scope,
 // mended in later OpenImageIO releases). The image fuzzer found it as heap corruption that no input reproduced alone.
@@ -53,23 +49,23 @@ bool is_float_type(OIIO::TypeDesc format) {
 // Refuses, from the header alone, an image that is empty, not a plain 2D image, or larger than the limits.
 void check_spec(const std::filesystem::path& path, const OIIO::ImageSpec& spec, const ImageLimits& limits) {
   if (spec.depth > 1)
-    throw file_error(path, "volume images (depth " + std::to_string(spec.depth) + ") are not supported");
-  if (spec.deep) throw file_error(path, "deep images are not supported");
+    throw image_file_error(path, "volume images (depth " + std::to_string(spec.depth) + ") are not supported");
+  if (spec.deep) throw image_file_error(path, "deep images are not supported");
   const std::string refusal = image_size_refusal(spec.width, spec.height, spec.nchannels, limits);
-  if (!refusal.empty()) throw file_error(path, refusal);
+  if (!refusal.empty()) throw image_file_error(path, refusal);
 }
 
 // Writes pixels of the given type in the given format, whatever the file name says.
 void write_pixels(const std::filesystem::path& path, const char* format, std::int32_t width, std::int32_t height,
                   int channels, OIIO::TypeDesc type, const void* pixels) {
-  if (width <= 0 || height <= 0) throw file_error(path, "cannot write an image of zero size");
+  if (width <= 0 || height <= 0) throw image_file_error(path, "cannot write an image of zero size");
   auto out = OIIO::ImageOutput::create(format);
-  if (!out) throw file_error(path, "cannot write: " + one_line(OIIO::geterror()));
+  if (!out) throw image_file_error(path, "cannot write: " + one_line(OIIO::geterror()));
   const OIIO::ImageSpec spec(width, height, channels, type);
-  if (!out->open(path.string(), spec)) throw file_error(path, "cannot write: " + one_line(out->geterror()));
+  if (!out->open(path.string(), spec)) throw image_file_error(path, "cannot write: " + one_line(out->geterror()));
   const bool written = out->write_image(type, pixels);
   const bool closed = out->close();
-  if (!written || !closed) throw file_error(path, "cannot write: " + one_line(out->geterror()));
+  if (!written || !closed) throw image_file_error(path, "cannot write: " + one_line(out->geterror()));
 }
 
 OIIO::TypeDesc type_desc(image_backend::PixelType type) {
@@ -87,14 +83,14 @@ OIIO::TypeDesc type_desc(image_backend::PixelType type) {
 void write_image(const std::filesystem::path& path, const char* format, std::int32_t width, std::int32_t height,
                  std::int32_t channels, image_backend::PixelType type, const void* pixels) {
   const OIIO::TypeDesc desc = type_desc(type);
-  if (desc == OIIO::TypeDesc::UNKNOWN) throw file_error(path, "cannot write: unknown pixel type");
+  if (desc == OIIO::TypeDesc::UNKNOWN) throw image_file_error(path, "cannot write: unknown pixel type");
   write_pixels(path, format, width, height, channels, desc, pixels);
 }
 
 ImageSize read_size(const std::filesystem::path& path, const ImageLimits& limits) {
   const OIIO::ImageSpec config = as_stored_config();
   auto in = OIIO::ImageInput::open(path.string(), &config);
-  if (!in) throw file_error(path, "cannot open: " + one_line(OIIO::geterror()));
+  if (!in) throw image_file_error(path, "cannot open: " + one_line(OIIO::geterror()));
   check_spec(path, in->spec(), limits);
   const OIIO::TypeDesc format = in->spec().format;
   const std::uint32_t code_max = format == OIIO::TypeDesc::UINT8 ? 255 : format == OIIO::TypeDesc::UINT16 ? 65535 : 0;
@@ -121,7 +117,7 @@ bool read_as_float(OIIO::ImageInput& in, std::size_t values, float* pixels) {
 RawImage read_pixels(const std::filesystem::path& path, const ImageLimits& limits) {
   const OIIO::ImageSpec config = as_stored_config();
   auto in = OIIO::ImageInput::open(path.string(), &config);
-  if (!in) throw file_error(path, "cannot open: " + one_line(OIIO::geterror()));
+  if (!in) throw image_file_error(path, "cannot open: " + one_line(OIIO::geterror()));
   const OIIO::ImageSpec& spec = in->spec();
   check_spec(path, spec, limits);
 
@@ -136,7 +132,7 @@ RawImage read_pixels(const std::filesystem::path& path, const ImageLimits& limit
                              static_cast<std::size_t>(spec.nchannels);
   image.pixels.resize(values);
   if (!read_as_float(*in, values, image.pixels.data())) {
-    throw file_error(path, "truncated or corrupt: " + one_line(in->geterror()));
+    throw image_file_error(path, "truncated or corrupt: " + one_line(in->geterror()));
   }
   in->close();
   return image;

@@ -3,7 +3,6 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
-#include <optional>
 
 #include "core/engine/grid_walk.hpp"
 #include "core/engine/methods.hpp"
@@ -68,10 +67,7 @@ DirectionLut build_with(const Scene& scene, const Region& region, const M& metho
     const auto sample_behind = [&](Texel p) {
       const Texel nb{p.x + dx, p.y + dy};
       if (nb.x >= 0 && nb.x < w && nb.y >= 0 && nb.y < h) return method.sample(&region.fields, nb, m);
-      const Texel screen{region.rect.x + nb.x, region.rect.y + nb.y};
-      const std::optional<std::size_t> owner = scene.owner(screen);
-      return owner ? method.sample(&scene.regions()[*owner].fields, scene.regions()[*owner].local(screen), m)
-                   : method.sample(nullptr, {}, m);
+      return sample_owner(scene, method, nb + corner_texel(region), m);
     };
     const auto fill = [&](const auto& sample_here) {
       for (std::int32_t y = 0; y < h; ++y) {
