@@ -5,8 +5,9 @@
                                                            (one panel per failure mode, the metric against
                                                            the severity, one line per method and variant),
                                                            print the summary table, where each method is worse
-                                                           than every other, and the tests' bounds (Markdown)
-                                                           to stdout
+                                                           than every other, the hybrid against the better of
+                                                           its parents, and the tests' bounds (Markdown) to
+                                                           stdout
 
 Reads stability.csv (mode, severity, method, variant and the metric columns) and modes.csv (mode, family,
 severity, has_features, description). Writes stability_<metric>.png for each metric. The exact input's own
@@ -205,6 +206,55 @@ def worse_than_every_other(rows, modes, methods, variant):
                     lines.append(f"| {method} | {mode['mode']} | {metric} | {sevs} | {fmt(value)} at {fmt(sev, 3)} "
                                  f"({theirs}) |")
     return "\n".join(lines)
+# Methods built from others, and what they are built from, for docs/STABILITY.md's "The hybrid against the better of
+# its parents" (its aim: at least as good as the better parent on every failure mode).
+COMPOSITES = {"hybrid": ("curvature", "depth")}
+METRIC_NAMES = {"cd_err_rms": "C/D error", "jitter_rms": "jitter", "travel_err_pct": "travel error",
+                "travel_sens_pct": "travel sensitivity", "iso_pct": "isotropy"}
+
+
+def against_better_parent(rows, modes, methods, variant):
+    """Per failure mode, how a method built from others (COMPOSITES) compares with the better of them on each BOUNDED
+    metric, severity by severity: as good (within a tenth, or 0.001), better than both (by more), or behind the
+    better one, with the largest gap's severity and values. Lower is better on every one of these metrics."""
+    lines = []
+    at = {(r["mode"], r["severity"], r["method"]): r for r in rows if r["variant"] == variant}
+    for method, parents in COMPOSITES.items():
+        if method not in methods or any(p not in methods for p in parents):
+            continue
+        lines += [f"`{method}` against the better of {' and '.join(parents)} (variant `{variant}`), severity by "
+                  "severity: where it is behind the better one by more than a tenth (and 0.001), the metric, its "
+                  "severities and, at the one with the largest gap, its value against the better parent's; where it "
+                  "is better than both by as much, the metrics.", "",
+                  "| mode | behind the better parent | better than both on |", "|---|---|---|"]
+        for mode in modes:
+            behind, ahead = [], []
+            for metric in BOUNDED:
+                gaps, better = [], False
+                for sev in severities_of(rows, mode["mode"]):
+                    mine = at.get((mode["mode"], sev, method))
+                    theirs = [at.get((mode["mode"], sev, p)) for p in parents]
+                    if mine is None or None in theirs or not finite(mine[metric]):
+                        continue
+                    values = [(r[metric], p) for r, p in zip(theirs, parents) if finite(r[metric])]
+                    if not values:
+                        continue
+                    best, who = min(values)
+                    if mine[metric] > 1.1 * best + WORSE_MARGIN:
+                        gaps.append((mine[metric] / max(best, WORSE_MARGIN), sev, mine[metric], best, who))
+                    elif mine[metric] * 1.1 + WORSE_MARGIN < best:
+                        better = True
+                if gaps:
+                    _, sev, value, best, who = max(gaps)
+                    sevs = ", ".join(fmt(g[1], 3) for g in sorted(gaps, key=lambda g: g[1]))
+                    behind.append(f"{METRIC_NAMES[metric]} at {sevs} ({fmt(value)} against {who}'s {fmt(best)} at "
+                                  f"{fmt(sev, 3)})")
+                elif better:
+                    ahead.append(METRIC_NAMES[metric])
+            lines.append(f"| {mode['mode']} | {'; '.join(behind) or '–'} | {', '.join(ahead) or '–'} |")
+    return "\n".join(lines)
+
+
 FLOOR = 1e-3  # no bound below this: values under it are rounding, and may differ between builds
 
 
@@ -270,6 +320,10 @@ def main(argv):
     print(summary_table(rows, modes, methods, variants[0]))
     print()
     print(worse_than_every_other(rows, modes, methods, variants[0]))
+    parents = against_better_parent(rows, modes, methods, variants[0])
+    if parents:
+        print()
+        print(parents)
     bounds = bounds_of(rows, modes, methods, variants[0])
     print()
     print(bounds_table(bounds, variants[0]))
