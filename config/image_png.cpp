@@ -8,11 +8,13 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "config/image_header_check.hpp"
+#include "config/png_whole.hpp"
 
 namespace ph {
 namespace {
@@ -44,6 +46,7 @@ struct PngHeader {
   int channels = 0;
   int bit_depth = 0;
   std::size_t row_bytes = 0;
+  bool interlaced = false;
 };
 
 // An open PNG file and libpng's state for reading it; closes and frees both, however far open() got.
@@ -79,12 +82,27 @@ class PngFile {
     return header;
   }
 
-  // Every row of the image into `pixels` (header.row_bytes each).
-  void read_rows(const PngHeader& header, std::vector<unsigned char>& pixels) {
-    pixels.resize(header.row_bytes * header.height);
-    std::vector<png_bytep> rows(header.height);
-    for (png_uint_32 y = 0; y < header.height; ++y) rows[y] = pixels.data() + header.row_bytes * y;
-    if (!read_image(rows.data())) throw image_file_error(path_, std::string("truncated or corrupt: ") + message_.text);
+  // Every row of the image in turn, each given to `take(y, row)` (header.row_bytes each) as soon as it is read: a
+  // file stored row by row is read into one row's buffer, so that the stored codes of a large map never lie in
+  // memory whole beside their floats; an interlaced one, whose seven passes each fill every row in part, is read
+  // whole first.
+  template <typename Take>
+  void read_rows(const PngHeader& header, const Take& take) {
+    auto corrupt = [&] { return image_file_error(path_, std::string("truncated or corrupt: ") + message_.text); };
+    if (header.interlaced) {
+      std::vector<unsigned char> pixels(header.row_bytes * header.height);
+      std::vector<png_bytep> rows(header.height);
+      for (png_uint_32 y = 0; y < header.height; ++y) rows[y] = pixels.data() + header.row_bytes * y;
+      if (!read_image(rows.data())) throw corrupt();
+      for (png_uint_32 y = 0; y < header.height; ++y) take(y, rows[y]);
+    } else {
+      std::vector<unsigned char> row(header.row_bytes);
+      for (png_uint_32 y = 0; y < header.height; ++y) {
+        if (!read_row(row.data())) throw corrupt();
+        take(y, row.data());
+      }
+    }
+    if (!read_end()) throw corrupt();
   }
 
  private:
@@ -103,11 +121,21 @@ class PngFile {
     header.channels = png_get_channels(png_, info_);
     header.bit_depth = png_get_bit_depth(png_, info_);
     header.row_bytes = png_get_rowbytes(png_, info_);
+    header.interlaced = png_get_interlace_type(png_, info_) != PNG_INTERLACE_NONE;
     return true;
   }
   bool read_image(png_bytepp rows) {
     if (setjmp(png_jmpbuf(png_)) != 0) return false;
     png_read_image(png_, rows);
+    return true;
+  }
+  bool read_row(png_bytep row) {
+    if (setjmp(png_jmpbuf(png_)) != 0) return false;
+    png_read_row(png_, row, nullptr);
+    return true;
+  }
+  bool read_end() {
+    if (setjmp(png_jmpbuf(png_)) != 0) return false;
     png_read_end(png_, nullptr);
     return true;
   }
@@ -130,31 +158,33 @@ ImageSize read_png_size(const std::filesystem::path& path, const ImageLimits& li
 }
 
 RawImage read_png(const std::filesystem::path& path, const ImageLimits& limits) {
+  if (std::optional<RawImage> whole = read_png_whole(path, limits)) return std::move(*whole);
   PngFile file(path);
   file.open();
   const PngHeader header = file.header(limits);
-  std::vector<unsigned char> stored;
-  file.read_rows(header, stored);
   RawImage image;
   image.width = static_cast<std::int32_t>(header.width);
   image.height = static_cast<std::int32_t>(header.height);
   image.channels = header.channels;
   image.is_float = false;
   image.code_max = header.bit_depth == 16 ? 65535 : 255;
-  const std::size_t values = static_cast<std::size_t>(header.width) * header.height * header.channels;
-  image.pixels.resize(values);
+  const std::size_t row_values = static_cast<std::size_t>(header.width) * header.channels;
+  image.pixels.resize(row_values * header.height);
   // As OpenImageIO converts integer codes to float: times the reciprocal of the largest code, in float.
-  if (header.bit_depth == 16) {
-    constexpr float kScale = 1.0f / 65535.0f;
-    for (std::size_t i = 0; i < values; ++i) {
-      std::uint16_t code;
-      std::memcpy(&code, stored.data() + 2 * i, sizeof code);
-      image.pixels[i] = static_cast<float>(code) * kScale;
+  file.read_rows(header, [&](png_uint_32 y, const unsigned char* row) {
+    float* out = image.pixels.data() + row_values * y;
+    if (header.bit_depth == 16) {
+      constexpr float kScale = 1.0f / 65535.0f;
+      for (std::size_t i = 0; i < row_values; ++i) {
+        std::uint16_t code;
+        std::memcpy(&code, row + 2 * i, sizeof code);
+        out[i] = static_cast<float>(code) * kScale;
+      }
+    } else {
+      constexpr float kScale = 1.0f / 255.0f;
+      for (std::size_t i = 0; i < row_values; ++i) out[i] = static_cast<float>(row[i]) * kScale;
     }
-  } else {
-    constexpr float kScale = 1.0f / 255.0f;
-    for (std::size_t i = 0; i < values; ++i) image.pixels[i] = static_cast<float>(stored[i]) * kScale;
-  }
+  });
   return image;
 }
 

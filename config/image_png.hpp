@@ -3,8 +3,9 @@
 // is a new process for every load), and under the test VM's emulation several seconds, while a PNG is what most
 // maps are. The values are OpenImageIO's to the bit (tests/test_image_png.cpp compares every code): 1, 2 and
 // 4-bit grey widened to 8 bits, a palette to RGB, a transparent colour to an alpha channel, colour as stored
-// (never multiplied by alpha), integer codes scaled to [0, 1] as OpenImageIO scales them. Internal to config/:
-// callers use config/image_io.hpp, which sends files named .png here.
+// (never multiplied by alpha), integer codes scaled to [0, 1] as OpenImageIO scales them. The common PNG is read
+// whole first (config/png_whole.hpp), libpng reading what that leaves. Internal to config/: callers use
+// config/image_io.hpp, which sends files named .png here.
 #pragma once
 
 #include <filesystem>

@@ -1,6 +1,8 @@
 // PNG files read with libpng (config/image_png.hpp) give what the image module's OpenImageIO gives, to the bit:
 // every 8- and 16-bit code, every colour type and bit depth PNG has, palettes, transparent colours and
-// interlacing; and a file beyond the limits is refused with the same words.
+// interlacing; and a file beyond the limits is refused with the same words. The common PNG is read whole, its
+// image data inflated in one call (config/png_whole.hpp): every filter, pixel size and chunking, and what it
+// leaves to libpng.
 #include "config/image_png.hpp"
 
 #include <png.h>
@@ -17,6 +19,7 @@
 #include <vector>
 
 #include "config/image_io.hpp"
+#include "config/png_whole.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/thrown_message.hpp"
 
@@ -35,6 +38,8 @@ struct PngLayout {
   const png_byte* transparent_entries = nullptr;  // tRNS of a palette: alpha of its first entries
   int transparent_count = 0;
   const png_color_16* transparent_colour = nullptr;  // tRNS of grey or RGB: the one colour that is transparent
+  int filters = PNG_ALL_FILTERS;  // which row filters the writer may choose from (PNG_FILTER_NONE ... _PAETH)
+  std::size_t idat_bytes = 0;     // the largest IDAT chunk (0: libpng's 8 KiB)
 };
 
 // Writes a PNG with libpng itself (what OpenImageIO does not write: palettes, 1, 2 and 4-bit grey, a transparent
@@ -51,6 +56,8 @@ bool write_png(const char* path, png_uint_32 width, png_uint_32 height, const Pn
     return false;
   }
   png_init_io(png, file);
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, layout.filters);
+  if (layout.idat_bytes != 0) png_set_compression_buffer_size(png, layout.idat_bytes);
   png_set_IHDR(png, info, width, height, layout.bit_depth, layout.color_type, layout.interlace,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   if (layout.palette != nullptr) png_set_PLTE(png, info, layout.palette, layout.palette_size);
@@ -131,6 +138,7 @@ TEST(ImagePng, EveryCodeAsOpenImageIOReadsIt) {
   for (std::vector<png_byte>& row : rows) pointers.push_back(row.data());
   ASSERT_TRUE(write_png((dir / "all16.png").c_str(), 256, 256, {.bit_depth = 16}, pointers.data()));
   expect_same_as_openimageio(dir / "all16.png");
+  EXPECT_TRUE(read_png_whole(dir / "all16.png", {}).has_value());
   // 8-bit grey, 16 x 16: each of the 256 codes once.
   std::vector<std::vector<png_byte>> rows8(16, std::vector<png_byte>(16));
   for (int y = 0; y < 16; ++y) {
@@ -140,6 +148,7 @@ TEST(ImagePng, EveryCodeAsOpenImageIOReadsIt) {
   for (std::vector<png_byte>& row : rows8) pointers8.push_back(row.data());
   ASSERT_TRUE(write_png((dir / "all8.png").c_str(), 16, 16, {}, pointers8.data()));
   expect_same_as_openimageio(dir / "all8.png");
+  EXPECT_TRUE(read_png_whole(dir / "all8.png", {}).has_value());
 }
 
 TEST(ImagePng, EveryColourTypeAndDepthAsOpenImageIOReadsIt) {
@@ -224,6 +233,118 @@ TEST(ImagePng, TheProjectsOwnMapsAsOpenImageIOReadsThem) {
     expect_same_as_openimageio(dir / ("normal" + b + ".png"));
     expect_same_as_openimageio(dir / ("depth" + b + ".png"));
   }
+}
+
+// Each of the five row filters alone, for every pixel size the whole reader takes (1, 2, 3, 4, 6 and 8 bytes), in
+// rows long enough for the filters to meet every case of their neighbours, and in chunks of 100 bytes of image data.
+TEST(ImagePng, EveryFilterAndPixelSizeReadWholeAsOpenImageIOReadsIt) {
+  const ScratchDir dir("image-png");
+  const int filters[] = {PNG_FILTER_NONE, PNG_FILTER_SUB, PNG_FILTER_UP, PNG_FILTER_AVG, PNG_FILTER_PAETH};
+  const int colour_types[] = {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA, PNG_COLOR_TYPE_RGB,
+                              PNG_COLOR_TYPE_RGB_ALPHA};
+  std::uint64_t seed = 100;
+  for (int bit_depth : {8, 16}) {
+    for (int colour_type : colour_types) {
+      for (int f = 0; f < 5; ++f) {
+        const fs::path path = dir / ("f" + std::to_string(f) + "-c" + std::to_string(colour_type) + "-" +
+                                     std::to_string(bit_depth) + ".png");
+        write_random_png(path, 37, 11, {.bit_depth = bit_depth, .color_type = colour_type, .filters = filters[f]},
+                         seed++);
+        EXPECT_TRUE(read_png_whole(path, {}).has_value()) << path;
+        expect_same_as_openimageio(path);
+      }
+    }
+  }
+  const fs::path chunked = dir / "chunked.png";
+  write_random_png(chunked, 40, 30, {.bit_depth = 16, .color_type = PNG_COLOR_TYPE_RGB, .idat_bytes = 100}, 7);
+  EXPECT_TRUE(read_png_whole(chunked, {}).has_value());
+  expect_same_as_openimageio(chunked);
+}
+
+std::vector<unsigned char> file_bytes(const fs::path& path) {
+  std::vector<unsigned char> bytes(fs::file_size(path));
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  EXPECT_NE(file, nullptr);
+  if (file == nullptr) return {};
+  EXPECT_EQ(std::fread(bytes.data(), 1, bytes.size(), file), bytes.size());
+  std::fclose(file);
+  return bytes;
+}
+
+void write_bytes(const fs::path& path, const std::vector<unsigned char>& bytes) {
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(file, nullptr);
+  ASSERT_EQ(std::fwrite(bytes.data(), 1, bytes.size(), file), bytes.size());
+  std::fclose(file);
+}
+
+// The offset of the first chunk of that type's data.
+std::size_t chunk_data(const std::vector<unsigned char>& png, const char* type) {
+  for (std::size_t at = 8; at + 12 <= png.size();) {
+    const std::size_t length =
+        std::size_t{png[at]} << 24 | std::size_t{png[at + 1]} << 16 | std::size_t{png[at + 2]} << 8 | png[at + 3];
+    if (std::memcmp(&png[at + 4], type, 4) == 0) return at + 8;
+    at += 12 + length;
+  }
+  ADD_FAILURE() << "no " << type << " chunk";
+  return 0;
+}
+
+// What the whole reader leaves to libpng: the layouts libpng transforms, and every file with something wrong in it,
+// which libpng then reads, or refuses, as it did before there was a whole reader.
+TEST(ImagePng, WhatTheWholeReaderLeavesToLibpng) {
+  const ScratchDir dir("image-png");
+  std::vector<png_color> palette(4, png_color{10, 20, 30});
+  png_color_16 grey{};
+  grey.gray = 7;
+  const struct {
+    const char* name;
+    PngLayout layout;
+  } layouts[] = {
+      {"adam7", {.bit_depth = 16, .color_type = PNG_COLOR_TYPE_RGB, .interlace = PNG_INTERLACE_ADAM7}},
+      {"palette", {.color_type = PNG_COLOR_TYPE_PALETTE, .palette = palette.data(), .palette_size = 4}},
+      {"grey4", {.bit_depth = 4}},
+      {"grey8-trns", {.transparent_colour = &grey}},
+  };
+  for (const auto& [name, layout] : layouts) {
+    const fs::path path = dir / (std::string(name) + ".png");
+    write_random_png(path, 9, 6, layout, 3);
+    EXPECT_FALSE(read_png_whole(path, {}).has_value()) << name;
+    expect_same_as_openimageio(path);
+  }
+
+  const fs::path good = dir / "good.png";
+  write_random_png(good, 24, 16, {.bit_depth = 16, .color_type = PNG_COLOR_TYPE_RGB_ALPHA}, 5);
+  ASSERT_TRUE(read_png_whole(good, {}).has_value());
+  EXPECT_FALSE(read_png_whole(good, ImageLimits{.max_pixels = 100}).has_value());
+  const std::vector<unsigned char> bytes = file_bytes(good);
+
+  std::vector<unsigned char> bad_data = bytes;  // the deflate stream's first block header
+  bad_data[chunk_data(bytes, "IDAT") + 2] ^= 0x04;
+  write_bytes(dir / "bad-data.png", bad_data);
+  EXPECT_FALSE(read_png_whole(dir / "bad-data.png", {}).has_value());
+  EXPECT_NE(thrown_message<FieldError>([&] { read_image(dir / "bad-data.png"); }).find("truncated or corrupt: IDAT"),
+            std::string::npos);
+
+  std::vector<unsigned char> bad_crc = bytes;  // IEND's, the file's last 4 bytes
+  bad_crc.back() ^= 0x01;
+  write_bytes(dir / "bad-crc.png", bad_crc);
+  EXPECT_FALSE(read_png_whole(dir / "bad-crc.png", {}).has_value());
+  EXPECT_NE(thrown_message<FieldError>([&] { read_image(dir / "bad-crc.png"); }).find("CRC error"), std::string::npos);
+
+  const std::vector<unsigned char> truncated(bytes.begin(),
+                                             bytes.begin() + static_cast<std::ptrdiff_t>(bytes.size() / 2));
+  write_bytes(dir / "truncated.png", truncated);
+  EXPECT_FALSE(read_png_whole(dir / "truncated.png", {}).has_value());
+  EXPECT_NE(thrown_message<FieldError>([&] {
+              read_image(dir / "truncated.png");
+            }).find("truncated or corrupt: the file ends before its image does"),
+            std::string::npos);
+
+  // No IEND: libpng has the image before it looks for one, and reads it.
+  std::vector<unsigned char> no_end(bytes.begin(), bytes.end() - 12);
+  write_bytes(dir / "no-end.png", no_end);
+  EXPECT_FALSE(read_png_whole(dir / "no-end.png", {}).has_value());
 }
 
 TEST(ImagePng, ImagesBeyondTheLimitsAreRefusedInTheSameWords) {
