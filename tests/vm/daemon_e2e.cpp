@@ -751,12 +751,17 @@ void flat_part(Report& report, const Options& options, Latency& latency, Latency
         }
         // Moving steadily: a query at most every 50 ms, and one more 100 ms after the motion stops.
         const auto start = Clock::now();
+        auto stopped = start;  // when the last frame was sent: the daemon cannot have read it before
         for (int k = 0; k < 30; ++k) {
+          stopped = Clock::now();
           touchpad->send(make_frame({abs_event(ev::kAbsX, 300 + 5 * k)}));
           std::this_thread::sleep_for(10ms);
         }
-        const auto stopped = Clock::now();
         const int during = helper->queries_between(start, stopped);
+        // The settle query comes at least 100 ms after the daemon read the last frame, so after stopped + 90 ms,
+        // where the queries of the motion (at most one per 50 ms, each right after a frame) have all come. Measured
+        // from the end of the last sleep instead, a sleep that overran under the VM's emulation could put the
+        // settle query before the window, and the test took the 1 s query after it for the settle query.
         const std::optional<Clock::time_point> settle = helper->query_after(stopped + 90ms, 2s);
         const double settle_ms = settle ? std::chrono::duration<double, std::milli>(*settle - stopped).count() : -1.0;
         const double moving_ms = std::chrono::duration<double, std::milli>(stopped - start).count();
