@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <thread>
+#include <vector>
 
 namespace ph {
 
@@ -53,27 +56,66 @@ Grid<std::uint8_t> class_map(const CurvatureFields& fields, const ClassTolerance
 
 namespace {
 
+// How many bands of rows a class map of `height` rows is worked out in.
+unsigned band_count(std::int32_t height, unsigned threads) {
+  if (threads == 0) threads = std::min(std::max(std::thread::hardware_concurrency(), 1u), kMaxClassMapThreads);
+  const auto most = static_cast<unsigned>(std::max<std::int32_t>(height / kMinClassMapRows, 1));
+  return std::min(threads, most);
+}
+
+// Each band on a thread of its own but the first, which the caller's thread works out; an exception on any (memory)
+// is thrown again here once all have ended.
 template <typename Field, typename Rows>
 Grid<std::uint8_t> classes_by_row(const Field& field, const DerivativeFilter& filter, const ClassTolerances& tolerances,
-                                  Rows rows) {
+                                  unsigned threads, Rows rows) {
   Grid<std::uint8_t> out(field.width, field.height);
-  rows(field, filter, [&](std::int32_t y, const float* k1, const float* k2) {
-    std::uint8_t* row = &out.values[static_cast<std::size_t>(y) * static_cast<std::size_t>(out.width)];
-    for (std::int32_t x = 0; x < out.width; ++x) row[x] = static_cast<std::uint8_t>(classify(k1[x], k2[x], tolerances));
-  });
+  const auto classify_band = [&](RowRange band) {
+    rows(field, filter, band, [&](std::int32_t y, const float* k1, const float* k2) {
+      std::uint8_t* row = &out.values[static_cast<std::size_t>(y) * static_cast<std::size_t>(out.width)];
+      for (std::int32_t x = 0; x < out.width; ++x)
+        row[x] = static_cast<std::uint8_t>(classify(k1[x], k2[x], tolerances));
+    });
+  };
+  const std::int32_t h = field.height;
+  const auto bands = static_cast<std::int32_t>(band_count(h, threads));
+  auto band = [&](std::int32_t b) {
+    return RowRange{static_cast<std::int32_t>(std::int64_t{h} * b / bands),
+                    static_cast<std::int32_t>(std::int64_t{h} * (b + 1) / bands)};
+  };
+  std::vector<std::exception_ptr> failed(static_cast<std::size_t>(bands));
+  {
+    std::vector<std::jthread> workers;
+    for (std::int32_t b = 1; b < bands; ++b) {
+      workers.emplace_back([&, b] {
+        try {
+          classify_band(band(b));
+        } catch (...) {
+          failed[static_cast<std::size_t>(b)] = std::current_exception();
+        }
+      });
+    }
+    try {
+      classify_band(band(0));
+    } catch (...) {
+      failed[0] = std::current_exception();
+    }
+  }  // the workers join here
+  for (const std::exception_ptr& e : failed) {
+    if (e) std::rethrow_exception(e);
+  }
   return out;
 }
 
 }  // namespace
 
 Grid<std::uint8_t> class_map_from_depth(const DepthField& depth, const DerivativeFilter& filter,
-                                        const ClassTolerances& tolerances) {
-  return classes_by_row(depth, filter, tolerances, principal_rows_from_depth);
+                                        const ClassTolerances& tolerances, unsigned threads) {
+  return classes_by_row(depth, filter, tolerances, threads, principal_rows_from_depth);
 }
 
 Grid<std::uint8_t> class_map_from_gradient(const GradientField& gradient, const DerivativeFilter& filter,
-                                           const ClassTolerances& tolerances) {
-  return classes_by_row(gradient, filter, tolerances, principal_rows_from_gradient);
+                                           const ClassTolerances& tolerances, unsigned threads) {
+  return classes_by_row(gradient, filter, tolerances, threads, principal_rows_from_gradient);
 }
 
 }  // namespace ph

@@ -68,13 +68,16 @@ void filter_row(const double* __restrict in, std::int32_t w, const std::vector<d
 // ring, so no whole grid of intermediates is ever allocated and the rows stay in cache.
 class RowRing {
  public:
-  RowRing(std::int32_t width, std::int32_t r_y, std::vector<const std::vector<double>*> kernels, std::int32_t r_x)
+  // `first`: the first input row any window will need.
+  RowRing(std::int32_t width, std::int32_t r_y, std::vector<const std::vector<double>*> kernels, std::int32_t r_x,
+          std::int32_t first)
       : width_(width),
         span_(2 * r_y + 1),
         r_x_(r_x),
         kernels_(std::move(kernels)),
         input_(static_cast<std::size_t>(width)),
-        rows_(kernels_.size() * static_cast<std::size_t>(span_) * static_cast<std::size_t>(width)) {}
+        rows_(kernels_.size() * static_cast<std::size_t>(span_) * static_cast<std::size_t>(width)),
+        next_(first) {}
 
   // Filters the input rows up to `last` that are not filtered yet; load(y, row) writes input row y.
   template <typename Load>
@@ -96,7 +99,7 @@ class RowRing {
   std::vector<const std::vector<double>*> kernels_;
   std::vector<double> input_;
   std::vector<double> rows_;
-  std::int32_t next_ = 0;
+  std::int32_t next_;
 };
 
 // Correlation along columns, centred on row cy, for a whole row at once: out[x] = sum_t k[t] in(x, cy + t),
@@ -136,20 +139,29 @@ Window window_for(std::int32_t x, std::int32_t y, const Kernels& kx, const Kerne
   return win;
 }
 
+// The first input row the windows of rows [y, ...) read.
+std::int32_t first_row_read(std::int32_t y, const Kernels& kx, const Kernels& ky, std::int32_t w, std::int32_t h) {
+  return window_for(0, y, kx, ky, w, h).cy - ky.r;
+}
+
+// Both walk the rows [rows.begin, rows.end) (all: the whole field) and call visit(x, y, derivatives) for each texel
+// in order. A texel's derivatives are the same whichever rows are walked: its window's rows are filtered alike.
 template <typename F>
-void for_each_depth_derivatives(const DepthField& depth, const DerivativeFilter& filter, F&& visit) {
+void for_each_depth_derivatives(const DepthField& depth, const DerivativeFilter& filter, RowRange rows, F&& visit) {
   const std::int32_t w = depth.width, h = depth.height;
   const Kernels kx = make_kernels(filter.radius, w);
   const Kernels ky = make_kernels(filter.radius, h);
+  rows = rows.within(h);
+  if (rows.empty() || w <= 0) return;
   enum : std::size_t { kBox, kSlope, kCurve };
-  RowRing ring(w, ky.r, {&kx.box, &kx.slope, &kx.curve}, kx.r);
+  RowRing ring(w, ky.r, {&kx.box, &kx.slope, &kx.curve}, kx.r, first_row_read(rows.begin, kx, ky, w, h));
   auto load = [&](std::int32_t y, double* row) {
     for (std::int32_t x = 0; x < w; ++x) row[x] = tame(depth.at(x, y));
   };
   // The column filters of the window centred on row cy; rows near the border share their window's centre.
   std::vector<double> hxx_half, hyy_half, hxy, hx0, hy0;
   std::int32_t filtered_cy = -1;
-  for (std::int32_t y = 0; y < h; ++y) {
+  for (std::int32_t y = rows.begin; y < rows.end; ++y) {
     const std::int32_t cy = window_for(0, y, kx, ky, w, h).cy;
     if (cy != filtered_cy) {
       ring.filter_up_to(cy + ky.r, load);
@@ -175,13 +187,17 @@ void for_each_depth_derivatives(const DepthField& depth, const DerivativeFilter&
 }
 
 template <typename F>
-void for_each_gradient_derivatives(const GradientField& gradient, const DerivativeFilter& filter, F&& visit) {
+void for_each_gradient_derivatives(const GradientField& gradient, const DerivativeFilter& filter, RowRange rows,
+                                   F&& visit) {
   const std::int32_t w = gradient.width, h = gradient.height;
   const Kernels kx = make_kernels(filter.radius, w);
   const Kernels ky = make_kernels(filter.radius, h);
+  rows = rows.within(h);
+  if (rows.empty() || w <= 0) return;
   enum : std::size_t { kBox, kSlope };
-  RowRing p_ring(w, ky.r, {&kx.box, &kx.slope}, kx.r);
-  RowRing q_ring(w, ky.r, {&kx.box, &kx.slope}, kx.r);
+  const std::int32_t first = first_row_read(rows.begin, kx, ky, w, h);
+  RowRing p_ring(w, ky.r, {&kx.box, &kx.slope}, kx.r, first);
+  RowRing q_ring(w, ky.r, {&kx.box, &kx.slope}, kx.r, first);
   auto load_p = [&](std::int32_t y, double* row) {
     for (std::int32_t x = 0; x < w; ++x) row[x] = tame(gradient.at(x, y).x);
   };
@@ -191,7 +207,7 @@ void for_each_gradient_derivatives(const GradientField& gradient, const Derivati
   // The column filters of the window centred on row cy; rows near the border share their window's centre.
   std::vector<double> px_row, py_row, qx_row, qy_row, p0_row, q0_row;
   std::int32_t filtered_cy = -1;
-  for (std::int32_t y = 0; y < h; ++y) {
+  for (std::int32_t y = rows.begin; y < rows.end; ++y) {
     const std::int32_t cy = window_for(0, y, kx, ky, w, h).cy;
     if (cy != filtered_cy) {
       p_ring.filter_up_to(cy + ky.r, load_p);
@@ -235,7 +251,7 @@ CurvatureFields curvature_fields(const Input& input, const DerivativeFilter& fil
   if (request.gaussian) out.gaussian = Grid<float>(w, h);
   if (request.mean) out.mean = Grid<float>(w, h);
   if (request.principal) out.k1 = Grid<float>(w, h), out.k2 = Grid<float>(w, h);
-  for_each(input, filter, [&](std::int32_t x, std::int32_t y, const HeightDerivatives& d) {
+  for_each(input, filter, RowRange{}, [&](std::int32_t x, std::int32_t y, const HeightDerivatives& d) {
     const Curvatures c = curvatures_from_derivatives(d);
     if (request.gaussian) out.gaussian.at(x, y) = static_cast<float>(c.gaussian);
     if (request.mean) out.mean.at(x, y) = static_cast<float>(c.mean);
@@ -246,11 +262,11 @@ CurvatureFields curvature_fields(const Input& input, const DerivativeFilter& fil
 
 // Hands k1 and k2 on row by row.
 template <typename ForEach, typename Input>
-void principal_rows(const Input& input, const DerivativeFilter& filter, const PrincipalRowVisitor& visit,
+void principal_rows(const Input& input, const DerivativeFilter& filter, RowRange rows, const PrincipalRowVisitor& visit,
                     ForEach for_each) {
   std::vector<float> k1(static_cast<std::size_t>(input.width)), k2(k1.size());
   const std::int32_t last = input.width - 1;
-  for_each(input, filter, [&](std::int32_t x, std::int32_t y, const HeightDerivatives& d) {
+  for_each(input, filter, rows, [&](std::int32_t x, std::int32_t y, const HeightDerivatives& d) {
     const Curvatures c = curvatures_from_derivatives(d);
     k1[static_cast<std::size_t>(x)] = static_cast<float>(c.k1);
     k2[static_cast<std::size_t>(x)] = static_cast<float>(c.k2);
@@ -277,41 +293,42 @@ Curvatures curvatures_from_derivatives(const HeightDerivatives& d) {
 
 Grid<HeightDerivatives> derivatives_from_depth(const DepthField& depth, const DerivativeFilter& filter) {
   Grid<HeightDerivatives> out(depth.width, depth.height);
-  for_each_depth_derivatives(depth, filter,
+  for_each_depth_derivatives(depth, filter, RowRange{},
                              [&](std::int32_t x, std::int32_t y, const HeightDerivatives& d) { out.at(x, y) = d; });
   return out;
 }
 
 Grid<HeightDerivatives> derivatives_from_gradient(const GradientField& gradient, const DerivativeFilter& filter) {
   Grid<HeightDerivatives> out(gradient.width, gradient.height);
-  for_each_gradient_derivatives(gradient, filter,
+  for_each_gradient_derivatives(gradient, filter, RowRange{},
                                 [&](std::int32_t x, std::int32_t y, const HeightDerivatives& d) { out.at(x, y) = d; });
   return out;
 }
 
-void principal_rows_from_depth(const DepthField& depth, const DerivativeFilter& filter,
+void principal_rows_from_depth(const DepthField& depth, const DerivativeFilter& filter, RowRange rows,
                                const PrincipalRowVisitor& visit) {
-  principal_rows(depth, filter, visit,
-                 [](const auto& in, const auto& f, auto&& v) { for_each_depth_derivatives(in, f, v); });
+  principal_rows(depth, filter, rows, visit,
+                 [](const auto& in, const auto& f, RowRange r, auto&& v) { for_each_depth_derivatives(in, f, r, v); });
 }
 
-void principal_rows_from_gradient(const GradientField& gradient, const DerivativeFilter& filter,
+void principal_rows_from_gradient(const GradientField& gradient, const DerivativeFilter& filter, RowRange rows,
                                   const PrincipalRowVisitor& visit) {
-  principal_rows(gradient, filter, visit,
-                 [](const auto& in, const auto& f, auto&& v) { for_each_gradient_derivatives(in, f, v); });
+  principal_rows(gradient, filter, rows, visit, [](const auto& in, const auto& f, RowRange r, auto&& v) {
+    for_each_gradient_derivatives(in, f, r, v);
+  });
 }
 
 CurvatureFields curvature_from_depth(const DepthField& depth, const DerivativeFilter& filter,
                                      const CurvatureRequest& request) {
-  return curvature_fields(depth, filter, request, [](const auto& in, const auto& f, auto&& visit) {
-    for_each_depth_derivatives(in, f, visit);
+  return curvature_fields(depth, filter, request, [](const auto& in, const auto& f, RowRange r, auto&& visit) {
+    for_each_depth_derivatives(in, f, r, visit);
   });
 }
 
 CurvatureFields curvature_from_gradient(const GradientField& gradient, const DerivativeFilter& filter,
                                         const CurvatureRequest& request) {
-  return curvature_fields(gradient, filter, request, [](const auto& in, const auto& f, auto&& visit) {
-    for_each_gradient_derivatives(in, f, visit);
+  return curvature_fields(gradient, filter, request, [](const auto& in, const auto& f, RowRange r, auto&& visit) {
+    for_each_gradient_derivatives(in, f, r, visit);
   });
 }
 

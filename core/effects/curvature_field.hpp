@@ -5,8 +5,10 @@
 // h_xx < 0) has H < 0 and a hole H > 0; K > 0 on both (elliptic), K < 0 on a saddle (hyperbolic).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
+#include <limits>
 
 #include "core/engine/field.hpp"
 
@@ -68,12 +70,22 @@ Grid<HeightDerivatives> derivatives_from_depth(const DepthField& depth, const De
 // h_xy = (p_y + q_x) / 2. Slopes beyond +-1e6 (a vertical wall) are clamped to +-1e6 first.
 Grid<HeightDerivatives> derivatives_from_gradient(const GradientField& gradient, const DerivativeFilter& filter);
 
-// The principal curvatures k1 and k2 of every texel, one row at a time, rounded to float as the grids store
-// them: for callers that reduce them at once (class maps) and need no grid.
+// Rows [begin, end) of a field; the default is every row.
+struct RowRange {
+  std::int32_t begin = 0;
+  std::int32_t end = std::numeric_limits<std::int32_t>::max();
+  RowRange within(std::int32_t height) const { return {std::clamp(begin, 0, height), std::clamp(end, 0, height)}; }
+  bool empty() const { return end <= begin; }
+};
+
+// The principal curvatures k1 and k2 of every texel of `rows`, one row at a time, rounded to float as the grids
+// store them: for callers that reduce them at once (class maps) and need no grid. A row's values do not depend on
+// which other rows are asked for, so bands of rows may be worked out apart (on threads of their own) and agree to
+// the bit with the whole field's.
 using PrincipalRowVisitor = std::function<void(std::int32_t y, const float* k1, const float* k2)>;
-void principal_rows_from_depth(const DepthField& depth, const DerivativeFilter& filter,
+void principal_rows_from_depth(const DepthField& depth, const DerivativeFilter& filter, RowRange rows,
                                const PrincipalRowVisitor& visit);
-void principal_rows_from_gradient(const GradientField& gradient, const DerivativeFilter& filter,
+void principal_rows_from_gradient(const GradientField& gradient, const DerivativeFilter& filter, RowRange rows,
                                   const PrincipalRowVisitor& visit);
 
 CurvatureFields curvature_from_depth(const DepthField& depth, const DerivativeFilter& filter = {},
