@@ -234,6 +234,7 @@ double normal_value_step(const RawImage& image, bool unorm) {
 double gradient_rounding_of_normals(double value_step) { return value_step / std::sqrt(12.0); }
 double gradient_rounding_of_depth(double value_step) { return value_step / std::sqrt(24.0); }
 double height_rounding_of_depth(double value_step) { return value_step / std::sqrt(12.0); }
+double depth_step_of_rounding(double height_rounding) { return height_rounding * std::sqrt(12.0); }
 
 NormalImage decode_normals(const RawImage& image, const NormalDecodeOptions& options, DecodeReport& report) {
   require_normal_channels(image);

@@ -57,6 +57,9 @@ double gradient_rounding_of_normals(double value_step);
 double gradient_rounding_of_depth(double value_step);
 // The standard deviation of a height's rounding error from a depth map's storage: value_step / sqrt(12). 0 for float.
 double height_rounding_of_depth(double value_step);
+// Its inverse: the step between a depth map's stored heights (px) whose rounding has that standard deviation, for
+// fields that keep only the deviation (RegionFields::depth_rounding).
+double depth_step_of_rounding(double height_rounding);
 
 // Unit normals in the screen frame. A unorm image cannot store 0 (2c/cmax - 1 is +-1/cmax around it), so
 // tangent components within one code of 0 are taken as 0: a flat area of an 8- or 16-bit map is exactly

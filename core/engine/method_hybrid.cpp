@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/engine/decode.hpp"
+
 namespace ph {
 
 namespace {
@@ -564,11 +566,11 @@ void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields) {
     disagreement = disagreement_with_depth(g, *from_depth, *fields.depth);
     reread = reread_from_depth(*from_depth, *disagreement, fields.depth_rounding, g, fields.gradient_rounding);
   }
-  fields.discontinuity = has_depth
-                             ? with_smeared_neighbours(find_discontinuities(g, *fields.depth, params.discontinuity_px,
-                                                                            std::sqrt(12.0) * fields.depth_rounding),
-                                                       g, *fields.depth, params.discontinuity_px)
-                             : DiscontinuityField(g.width, g.height, 0);
+  fields.discontinuity =
+      has_depth ? with_smeared_neighbours(find_discontinuities(g, *fields.depth, params.discontinuity_px,
+                                                               depth_step_of_rounding(fields.depth_rounding)),
+                                          g, *fields.depth, params.discontinuity_px)
+                : DiscontinuityField(g.width, g.height, 0);
   if (has_depth) {
     fields.normals_to_depth_slope_ratio =
         slope_ratio_to_depth(g, from_depth ? *from_depth : gradient_from_depth(*fields.depth), *fields.discontinuity,
