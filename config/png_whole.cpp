@@ -183,29 +183,15 @@ bool unfilter(int filter, unsigned char* row, const unsigned char* prev, std::si
       for (std::size_t i = bpp; i < n; ++i)
         row[i] = static_cast<unsigned char>(row[i] + ((unsigned{row[i - bpp]} + prev[i]) >> 1));
       return true;
-    case 4:
-      switch (bpp) {  // the pixel sizes of 8- and 16-bit grey, grey and alpha, RGB, RGBA
-        case 1:
-          unpaeth<1>(row, prev, n);
-          return true;
-        case 2:
-          unpaeth<2>(row, prev, n);
-          return true;
-        case 3:
-          unpaeth<3>(row, prev, n);
-          return true;
-        case 4:
-          unpaeth<4>(row, prev, n);
-          return true;
-        case 6:
-          unpaeth<6>(row, prev, n);
-          return true;
-        case 8:
-          unpaeth<8>(row, prev, n);
-          return true;
-        default:
-          return false;
-      }
+    case 4: {
+      // One instance per pixel size of 8- and 16-bit grey, grey and alpha, RGB, RGBA.
+      using Unpaeth = void (*)(unsigned char*, const unsigned char*, std::size_t);
+      constexpr std::array<Unpaeth, 9> kByPixelSize{nullptr, unpaeth<1>, unpaeth<2>, unpaeth<3>, unpaeth<4>,
+                                                    nullptr, unpaeth<6>, nullptr,    unpaeth<8>};
+      if (bpp >= kByPixelSize.size() || kByPixelSize[bpp] == nullptr) return false;
+      kByPixelSize[bpp](row, prev, n);
+      return true;
+    }
     default:
       return false;
   }
