@@ -103,6 +103,8 @@ std::optional<std::vector<unsigned char>> image_data(const std::vector<unsigned 
     if (length > file.size() - at - kChunkFrame) return std::nullopt;
     const unsigned char* type_and_data = &file[at + 4];
     const std::uint32_t type = big_endian32(type_and_data);
+    const auto letter = [](unsigned char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z'); };
+    if (!std::all_of(type_and_data, type_and_data + 4, letter)) return std::nullopt;  // libpng refuses it
     const unsigned char* body = type_and_data + 4;
     if (libdeflate_crc32(0, type_and_data, std::size_t{length} + 4) != big_endian32(body + length)) return std::nullopt;
     const bool first = at == kSignature.size();
@@ -116,7 +118,7 @@ std::optional<std::vector<unsigned char>> image_data(const std::vector<unsigned 
     }
     idat_done = in_idat;
     if (type == chunk_type("IEND")) return idat_done ? std::optional(std::move(data)) : std::nullopt;
-    const bool critical = (type >> 24 & 0x20) == 0;
+    const bool critical = ((type >> 24) & 0x20) == 0;
     const bool suggested_palette = type == chunk_type("PLTE") && colour && !in_idat;
     if (type == chunk_type("tRNS") || (critical && !first && !suggested_palette)) return std::nullopt;
   }
@@ -130,7 +132,6 @@ using Bytes8 = unsigned char __attribute__((vector_size(8)));
 using Lanes = std::int16_t __attribute__((vector_size(16)));
 constexpr std::size_t kPad = 8;
 
-template <std::size_t Bpp>
 Lanes load_pixel(const unsigned char* p) {
   Bytes8 bytes;
   std::memcpy(&bytes, p, sizeof bytes);
@@ -155,7 +156,7 @@ template <std::size_t Bpp>
 void unpaeth(unsigned char* row, const unsigned char* prev, std::size_t n) {
   Lanes a{}, c{};
   for (std::size_t i = 0; i < n; i += Bpp) {
-    const Lanes b = load_pixel<Bpp>(prev + i), x = load_pixel<Bpp>(row + i);
+    const Lanes b = load_pixel(prev + i), x = load_pixel(row + i);
     const Lanes pa = abs_lanes(b - c), pb = abs_lanes(a - c), pc = abs_lanes(a + b - c - c);
     const Lanes take_a = (pa <= pb) & (pa <= pc), take_b = ~take_a & (pb <= pc);
     const Lanes predictor = (a & take_a) | (b & take_b) | (c & ~(take_a | take_b));

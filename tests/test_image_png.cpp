@@ -6,6 +6,7 @@
 #include "config/image_png.hpp"
 
 #include <png.h>
+#include <zlib.h>
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -340,6 +341,31 @@ TEST(ImagePng, WhatTheWholeReaderLeavesToLibpng) {
               read_image(dir / "truncated.png");
             }).find("truncated or corrupt: the file ends before its image does"),
             std::string::npos);
+
+  // A chunk of its own before IEND: an ancillary one (its type's first letter lower case) changes nothing; a type
+  // that is not four letters libpng refuses, so the whole reader leaves it to libpng.
+  const auto with_chunk_before_end = [&](const char* type) {
+    std::vector<unsigned char> out(bytes.begin(), bytes.end() - 12);
+    const unsigned char chunk[] = {0,
+                                   0,
+                                   0,
+                                   1,
+                                   static_cast<unsigned char>(type[0]),
+                                   static_cast<unsigned char>(type[1]),
+                                   static_cast<unsigned char>(type[2]),
+                                   static_cast<unsigned char>(type[3]),
+                                   42};
+    const uLong crc = crc32(0, chunk + 4, 5);
+    out.insert(out.end(), std::begin(chunk), std::end(chunk));
+    for (int shift : {24, 16, 8, 0}) out.push_back(static_cast<unsigned char>(crc >> shift));
+    out.insert(out.end(), bytes.end() - 12, bytes.end());
+    return out;
+  };
+  write_bytes(dir / "ancillary.png", with_chunk_before_end("teSt"));
+  EXPECT_TRUE(read_png_whole(dir / "ancillary.png", {}).has_value());
+  expect_same_as_openimageio(dir / "ancillary.png");
+  write_bytes(dir / "bad-type.png", with_chunk_before_end("te5t"));
+  EXPECT_FALSE(read_png_whole(dir / "bad-type.png", {}).has_value());
 
   // No IEND: libpng has the image before it looks for one, and reads it.
   std::vector<unsigned char> no_end(bytes.begin(), bytes.end() - 12);
