@@ -1,16 +1,21 @@
 // libFuzzer target for what the daemon's image reader child does with an image (config/image_reader.cpp):
 // libpng for PNG (config/image_png.cpp), OpenImageIO's TIFF and OpenEXR readers through the image module, then
 // decoding, repair and resampling to a region's size; and the answer as the daemon checks it
-// (config/image_wire.cpp). The first byte picks the file's extension (which reader reads it) and whether it is read as
-// a normal map or a depth map; the rest is the file. Any input must give fields the daemon accepts or a Failure; a
+// (config/image_wire.cpp). The first byte picks the file's extension (which reader reads it), whether it is read as
+// a normal map or a depth map and, for a PNG, whether every chunk's CRC is set right before it is read (so that
+// mutated chunks reach the inflating and unfiltering of config/png_whole.cpp and libpng instead of failing their
+// CRC); the rest is the file. Any input must give fields the daemon accepts or a Failure; a
 // crash here is one the child would have had (and only the child, in the daemon).
 #include <fcntl.h>
 #include <unistd.h>
+
+#include <libdeflate.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include "config/image_reader.hpp"
 #include "config/image_wire.hpp"
@@ -25,15 +30,30 @@ const std::string& scratch(const char* extension) {
   return paths[i];
 }
 
+// Sets the CRC of every whole chunk of a PNG file (after the 8-byte signature: length, type, data, CRC).
+void set_png_crcs(std::vector<std::uint8_t>& png) {
+  std::size_t at = 8;
+  while (at + 12 <= png.size()) {
+    const std::size_t length =
+        std::size_t{png[at]} << 24 | std::size_t{png[at + 1]} << 16 | std::size_t{png[at + 2]} << 8 | png[at + 3];
+    if (length > png.size() - at - 12) return;
+    const std::uint32_t crc = libdeflate_crc32(0, &png[at + 4], length + 4);
+    for (int k = 0; k < 4; ++k) png[at + 8 + length + k] = static_cast<std::uint8_t>(crc >> (24 - 8 * k));
+    at += 12 + length;
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
   static const char* const kExtensions[] = {".png", ".tif", ".exr"};
   const std::string& path = scratch(kExtensions[data[0] % 3]);
+  std::vector<std::uint8_t> file(data + 1, data + size);
+  if (data[0] % 3 == 0 && (data[0] / 6) % 2 == 1) set_png_crcs(file);
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0) return 0;
-  const bool written = ::write(fd, data + 1, size - 1) == static_cast<ssize_t>(size - 1);
+  const bool written = ::write(fd, file.data(), file.size()) == static_cast<ssize_t>(file.size());
   ::close(fd);
   if (!written) return 0;
 
