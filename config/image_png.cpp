@@ -159,6 +159,10 @@ ImageSize read_png_size(const std::filesystem::path& path, const ImageLimits& li
 
 RawImage read_png(const std::filesystem::path& path, const ImageLimits& limits) {
   if (std::optional<RawImage> whole = read_png_whole(path, limits)) return std::move(*whole);
+  return read_png_with_libpng(path, limits);
+}
+
+RawImage read_png_with_libpng(const std::filesystem::path& path, const ImageLimits& limits) {
   PngFile file(path);
   file.open();
   const PngHeader header = file.header(limits);

@@ -17,5 +17,7 @@ namespace ph {
 // As read_image_size and read_image (config/image_io.hpp), errors included, for a PNG file.
 ImageSize read_png_size(const std::filesystem::path& path, const ImageLimits& limits);
 RawImage read_png(const std::filesystem::path& path, const ImageLimits& limits);
+// read_png without the whole-file reader: libpng alone (for the fuzzer's comparison of the two).
+RawImage read_png_with_libpng(const std::filesystem::path& path, const ImageLimits& limits);
 
 }  // namespace ph

@@ -1,7 +1,8 @@
 // libFuzzer target for what the daemon's image reader child does with an image (config/image_reader.cpp):
 // libpng for PNG (config/image_png.cpp), OpenImageIO's TIFF and OpenEXR readers through the image module, then
 // decoding, repair and resampling to a region's size; and the answer as the daemon checks it
-// (config/image_wire.cpp). The first byte picks the file's extension (which reader reads it), whether it is read as
+// (config/image_wire.cpp); and a PNG that config/png_whole.cpp reads whole must be what libpng reads, to the bit. The
+// first byte picks the file's extension (which reader reads it), whether it is read as
 // a normal map or a depth map and, for a PNG, whether every chunk's CRC is set right before it is read (so that
 // mutated chunks reach the inflating and unfiltering of config/png_whole.cpp and libpng instead of failing their
 // CRC); the rest is the file. Any input must give fields the daemon accepts or a Failure; a
@@ -13,12 +14,16 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
 
+#include "config/image_png.hpp"
 #include "config/image_reader.hpp"
 #include "config/image_wire.hpp"
+#include "config/png_whole.hpp"
 
 namespace {
 
@@ -81,6 +86,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // of the reader, so the WireError escapes and counts as a crash.
   const ph::image_wire::Answer checked = ph::image_wire::decode_answer(ph::image_wire::encode(answer), as_request);
   if (answer.index() != checked.index()) __builtin_trap();
+  // A PNG the whole-file reader takes must be what libpng reads, to the bit.
+  if (data[0] % 3 == 0) {
+    if (const std::optional<ph::RawImage> whole = ph::read_png_whole(path, limits)) {
+      const ph::RawImage libpng = ph::read_png_with_libpng(path, limits);  // throws: a file libpng refuses
+      if (whole->width != libpng.width || whole->height != libpng.height || whole->channels != libpng.channels ||
+          whole->code_max != libpng.code_max || whole->pixels.size() != libpng.pixels.size() ||
+          std::memcmp(whole->pixels.data(), libpng.pixels.data(), whole->pixels.size() * sizeof(float)) != 0) {
+        __builtin_trap();
+      }
+    }
+  }
   // The size request (materials ask it) opens the file as the fields request did: not repeated here,
   // which would halve the executions for no new path.
   return 0;
