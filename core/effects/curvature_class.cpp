@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -63,8 +64,8 @@ unsigned band_count(std::int32_t height, unsigned threads) {
   return std::min(threads, most);
 }
 
-// Each band on a thread of its own but the first, which the caller's thread works out; an exception on any (memory)
-// is thrown again here once all have ended.
+// Each band on a thread of its own but the first, which the caller's thread works out, as it does any band whose
+// thread cannot be started; an exception in any band (memory) is thrown again here once all have ended.
 template <typename Field, typename Rows>
 Grid<std::uint8_t> classes_by_row(const Field& field, const DerivativeFilter& filter, const ClassTolerances& tolerances,
                                   unsigned threads, Rows rows) {
@@ -83,22 +84,24 @@ Grid<std::uint8_t> classes_by_row(const Field& field, const DerivativeFilter& fi
                     static_cast<std::int32_t>(std::int64_t{h} * (b + 1) / bands)};
   };
   std::vector<std::exception_ptr> failed(static_cast<std::size_t>(bands));
+  const auto run_band = [&](std::int32_t b) {
+    try {
+      classify_band(band(b));
+    } catch (...) {
+      failed[static_cast<std::size_t>(b)] = std::current_exception();
+    }
+  };
   {
     std::vector<std::jthread> workers;
+    std::vector<std::int32_t> here{0};
     for (std::int32_t b = 1; b < bands; ++b) {
-      workers.emplace_back([&, b] {
-        try {
-          classify_band(band(b));
-        } catch (...) {
-          failed[static_cast<std::size_t>(b)] = std::current_exception();
-        }
-      });
+      try {
+        workers.emplace_back(run_band, b);
+      } catch (const std::system_error&) {
+        here.push_back(b);
+      }
     }
-    try {
-      classify_band(band(0));
-    } catch (...) {
-      failed[0] = std::current_exception();
-    }
+    for (std::int32_t b : here) run_band(b);
   }  // the workers join here
   for (const std::exception_ptr& e : failed) {
     if (e) std::rethrow_exception(e);
