@@ -2,7 +2,6 @@
 
 #include <png.h>
 
-#include <bit>
 #include <cerrno>
 #include <csetjmp>
 #include <cstdint>
@@ -112,9 +111,8 @@ class PngFile {
     png_set_read_fn(png_, file_, read_from_file);
     png_set_sig_bytes(png_, 8);
     png_read_info(png_, info_);
-    png_set_expand(png_);  // 1, 2 and 4-bit grey to 8 bits, a palette to RGB, a transparent colour to alpha
-    if constexpr (std::endian::native == std::endian::little) png_set_swap(png_);  // 16-bit samples as the machine
-    png_set_interlace_handling(png_);                                              // an interlaced file's 7 passes
+    png_set_expand(png_);              // 1, 2 and 4-bit grey to 8 bits, a palette to RGB, a transparent colour to alpha
+    png_set_interlace_handling(png_);  // an interlaced file's 7 passes; 16-bit samples stay big-endian, as stored
     png_read_update_info(png_, info_);
     header.width = png_get_image_width(png_, info_);
     header.height = png_get_image_height(png_, info_);
@@ -166,28 +164,10 @@ RawImage read_png_with_libpng(const std::filesystem::path& path, const ImageLimi
   PngFile file(path);
   file.open();
   const PngHeader header = file.header(limits);
-  RawImage image;
-  image.width = static_cast<std::int32_t>(header.width);
-  image.height = static_cast<std::int32_t>(header.height);
-  image.channels = header.channels;
-  image.is_float = false;
-  image.code_max = header.bit_depth == 16 ? 65535 : 255;
+  RawImage image = png_raw_image(header.width, header.height, header.channels, header.bit_depth);
   const std::size_t row_values = static_cast<std::size_t>(header.width) * header.channels;
-  image.pixels.resize(row_values * header.height);
-  // As OpenImageIO converts integer codes to float: times the reciprocal of the largest code, in float.
   file.read_rows(header, [&](png_uint_32 y, const unsigned char* row) {
-    float* out = image.pixels.data() + row_values * y;
-    if (header.bit_depth == 16) {
-      constexpr float kScale = 1.0f / 65535.0f;
-      for (std::size_t i = 0; i < row_values; ++i) {
-        std::uint16_t code;
-        std::memcpy(&code, row + 2 * i, sizeof code);
-        out[i] = static_cast<float>(code) * kScale;
-      }
-    } else {
-      constexpr float kScale = 1.0f / 255.0f;
-      for (std::size_t i = 0; i < row_values; ++i) out[i] = static_cast<float>(row[i]) * kScale;
-    }
+    png_row_to_float(row, header.bit_depth, row_values, image.pixels.data() + row_values * y);
   });
   return image;
 }

@@ -37,8 +37,9 @@ constexpr std::uint32_t chunk_type(const char (&name)[5]) {
 struct Layout {
   std::uint32_t width = 0, height = 0;
   int channels = 0;
-  int bytes_per_sample = 0;  // 1 or 2
-  std::size_t row_bytes() const { return std::size_t{width} * channels * bytes_per_sample; }
+  int bit_depth = 0;  // 8 or 16
+  std::size_t pixel_bytes() const { return static_cast<std::size_t>(channels * bit_depth / 8); }
+  std::size_t row_bytes() const { return std::size_t{width} * pixel_bytes(); }
 };
 
 std::optional<Layout> read_layout(const unsigned char* file) {
@@ -67,26 +68,17 @@ std::optional<Layout> read_layout(const unsigned char* file) {
     default:
       return std::nullopt;
   }
-  layout.bytes_per_sample = bit_depth / 8;
+  layout.bit_depth = bit_depth;
   // Compression and filter method 0 (the only ones defined); interlace 0 (none: Adam7's passes are libpng's).
   if (ihdr[10] != 0 || ihdr[11] != 0 || ihdr[12] != 0) return std::nullopt;
   return layout;
 }
 
-// The whole file, or nullopt when it cannot be read in one piece or is longer than an image of `raw_bytes` stored
-// in the worst case could be (deflate's stored blocks add 5 bytes per 65535; chunks and ancillary data a little
-// more): libpng reads such a file as a stream.
-std::optional<std::vector<unsigned char>> read_file(const std::filesystem::path& path, std::size_t raw_bytes) {
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (file == nullptr || std::fseek(file.get(), 0, SEEK_END) != 0) return std::nullopt;
-  const long size = std::ftell(file.get());
-  if (size < 0 || static_cast<std::size_t>(size) > raw_bytes + raw_bytes / 8 + (std::size_t{1} << 20) ||
-      std::fseek(file.get(), 0, SEEK_SET) != 0) {
-    return std::nullopt;
-  }
-  std::vector<unsigned char> bytes(static_cast<std::size_t>(size));
-  if (std::fread(bytes.data(), 1, bytes.size(), file.get()) != bytes.size()) return std::nullopt;
-  return bytes;
+// Whether a file of `size` bytes is no longer than an image of `raw_bytes` stored in the worst case could be
+// (deflate's stored blocks add 5 bytes per 65535; chunks and ancillary data a little more): libpng reads a longer one
+// as a stream.
+bool plausible_size(long size, std::size_t raw_bytes) {
+  return size >= 0 && static_cast<std::size_t>(size) <= raw_bytes + raw_bytes / 8 + (std::size_t{1} << 20);
 }
 
 // The zlib stream of the image: the data of every IDAT chunk, which must follow one another. Every chunk's CRC
@@ -198,14 +190,25 @@ bool unfilter(int filter, unsigned char* row, const unsigned char* prev, std::si
   }
 }
 
-// A row's `count` samples (8-bit, or 16-bit big-endian) as OpenImageIO converts integer codes to float: times the
-// reciprocal of the largest code, in float. Eight at a time in vector lanes, each lane the scalar conversion and
-// product, so the same bits.
-using Codes8 = std::uint16_t __attribute__((vector_size(16)));
-using Floats8 = float __attribute__((vector_size(32)));
-void to_float(const unsigned char* row, int bytes_per_sample, std::size_t count, float* out) {
+}  // namespace
+
+RawImage png_raw_image(std::uint32_t width, std::uint32_t height, int channels, int bit_depth) {
+  RawImage image;
+  image.width = static_cast<std::int32_t>(width);
+  image.height = static_cast<std::int32_t>(height);
+  image.channels = channels;
+  image.is_float = false;
+  image.code_max = bit_depth == 16 ? 65535 : 255;
+  image.pixels.resize(std::size_t{width} * height * static_cast<std::size_t>(channels));
+  return image;
+}
+
+// Eight samples at a time in vector lanes, each lane the scalar conversion and product, so the same bits.
+void png_row_to_float(const unsigned char* row, int bit_depth, std::size_t count, float* out) {
+  using Codes8 = std::uint16_t __attribute__((vector_size(16)));
+  using Floats8 = float __attribute__((vector_size(32)));
   std::size_t i = 0;
-  if (bytes_per_sample == 2) {
+  if (bit_depth == 16) {
     constexpr float kScale = 1.0f / 65535.0f;
     for (; i + 8 <= count; i += 8) {
       Codes8 codes;
@@ -227,23 +230,22 @@ void to_float(const unsigned char* row, int bytes_per_sample, std::size_t count,
   }
 }
 
-}  // namespace
-
 std::optional<RawImage> read_png_whole(const std::filesystem::path& path, const ImageLimits& limits) {
   // The header first, from the file's first bytes: a file beyond the limits is never read whole.
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> stream(std::fopen(path.c_str(), "rb"), &std::fclose);
   std::array<unsigned char, kHeaderBytes> head{};
-  {
-    std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
-    if (file == nullptr || std::fread(head.data(), 1, head.size(), file.get()) != head.size()) return std::nullopt;
-  }
+  if (stream == nullptr || std::fread(head.data(), 1, head.size(), stream.get()) != head.size()) return std::nullopt;
   const std::optional<Layout> layout = read_layout(head.data());
   if (!layout || !image_size_refusal(layout->width, layout->height, layout->channels, limits).empty())
     return std::nullopt;
   const std::size_t row_bytes = layout->row_bytes(), stride = row_bytes + 1;  // each row starts with its filter type
   const std::size_t raw_bytes = stride * layout->height;
-  std::optional<std::vector<unsigned char>> file = read_file(path, raw_bytes);
-  if (!file || file->size() < kHeaderBytes || std::memcmp(file->data(), head.data(), head.size()) != 0)
-    return std::nullopt;
+  if (std::fseek(stream.get(), 0, SEEK_END) != 0) return std::nullopt;
+  const long size = std::ftell(stream.get());
+  if (!plausible_size(size, raw_bytes) || std::fseek(stream.get(), 0, SEEK_SET) != 0) return std::nullopt;
+  std::optional<std::vector<unsigned char>> file(static_cast<std::size_t>(size));
+  if (std::fread(file->data(), 1, file->size(), stream.get()) != file->size()) return std::nullopt;
+  stream.reset();
   const std::optional<std::vector<unsigned char>> compressed = image_data(*file, layout->channels >= 3);
   file.reset();  // the image data is all it needs of the file
   if (!compressed) return std::nullopt;
@@ -262,21 +264,14 @@ std::optional<RawImage> read_png_whole(const std::filesystem::path& path, const 
     }
   }
 
-  RawImage image;
-  image.width = static_cast<std::int32_t>(layout->width);
-  image.height = static_cast<std::int32_t>(layout->height);
-  image.channels = layout->channels;
-  image.is_float = false;
-  image.code_max = layout->bytes_per_sample == 2 ? 65535 : 255;
+  RawImage image = png_raw_image(layout->width, layout->height, layout->channels, layout->bit_depth);
   const std::size_t row_values = std::size_t{layout->width} * layout->channels;
-  image.pixels.resize(row_values * layout->height);
-  const std::size_t bpp = static_cast<std::size_t>(layout->channels) * layout->bytes_per_sample;
   const std::vector<unsigned char> zeros(row_bytes + kPad, 0);
   for (std::size_t y = 0; y < layout->height; ++y) {
     unsigned char* row = raw.data() + y * stride + 1;
     const unsigned char* prev = y == 0 ? zeros.data() : row - stride;
-    if (!unfilter(row[-1], row, prev, row_bytes, bpp)) return std::nullopt;
-    to_float(row, layout->bytes_per_sample, row_values, image.pixels.data() + row_values * y);
+    if (!unfilter(row[-1], row, prev, row_bytes, layout->pixel_bytes())) return std::nullopt;
+    png_row_to_float(row, layout->bit_depth, row_values, image.pixels.data() + row_values * y);
   }
   return image;
 }

@@ -7,6 +7,8 @@
 // config/: config/image_png.cpp tries it first.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 
@@ -16,5 +18,11 @@ namespace ph {
 
 // The image as read_png (config/image_png.hpp) gives it, to the bit; nullopt where libpng is to read the file.
 std::optional<RawImage> read_png_whole(const std::filesystem::path& path, const ImageLimits& limits);
+
+// What both PNG readers make of the samples: an image of that size for 8- or 16-bit codes (its pixels sized, to be
+// filled), and one row's `count` samples as a PNG stores them (bytes, or 16-bit big-endian) converted to float as
+// OpenImageIO converts integer codes: times the reciprocal of the largest code, in float.
+RawImage png_raw_image(std::uint32_t width, std::uint32_t height, int channels, int bit_depth);
+void png_row_to_float(const unsigned char* row, int bit_depth, std::size_t count, float* out);
 
 }  // namespace ph

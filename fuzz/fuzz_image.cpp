@@ -1,12 +1,11 @@
-// libFuzzer target for what the daemon's image reader child does with an image (config/image_reader.cpp):
-// libpng for PNG (config/image_png.cpp), OpenImageIO's TIFF and OpenEXR readers through the image module, then
-// decoding, repair and resampling to a region's size; and the answer as the daemon checks it
-// (config/image_wire.cpp); and a PNG that config/png_whole.cpp reads whole must be what libpng reads, to the bit. The
-// first byte picks the file's extension (which reader reads it), whether it is read as
-// a normal map or a depth map and, for a PNG, whether every chunk's CRC is set right before it is read (so that
-// mutated chunks reach the inflating and unfiltering of config/png_whole.cpp and libpng instead of failing their
-// CRC); the rest is the file. Any input must give fields the daemon accepts or a Failure; a
-// crash here is one the child would have had (and only the child, in the daemon).
+// libFuzzer target for what the daemon's image reader child does with an image (config/image_reader.cpp): libpng for
+// PNG (config/image_png.cpp), OpenImageIO's TIFF and OpenEXR readers through the image module, then decoding, repair
+// and resampling to a region's size; and the answer as the daemon checks it (config/image_wire.cpp); and a PNG that
+// config/png_whole.cpp reads whole must be what libpng reads, to the bit. The first byte picks the file's extension
+// (which reader reads it), whether it is read as a normal map or a depth map and, for a PNG, whether every chunk's
+// CRC is set right before it is read (so that mutated chunks reach the inflating and unfiltering of
+// config/png_whole.cpp and libpng instead of failing their CRC); the rest is the file. Any input must give fields the
+// daemon accepts or a Failure; a crash here is one the child would have had (and only the child, in the daemon).
 #include <fcntl.h>
 #include <unistd.h>
 
