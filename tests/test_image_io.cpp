@@ -1,6 +1,7 @@
 // Reading and writing images, and building a region's fields from files: every bad file gives a
 // FieldError that names it.
 #include "config/image_io.hpp"
+#include "tests/file_bytes.hpp"
 #include "tests/scratch_dir.hpp"
 
 #include <OpenImageIO/imageio.h>
@@ -33,16 +34,6 @@ namespace ph {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::vector<char> read_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void write_bytes(const fs::path& path, const std::vector<char>& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
 
 // Writes float pixels with OpenImageIO in whatever format the extension names, alpha kept as given.
 void write_float_image(const fs::path& path, std::int32_t width, std::int32_t height, int channels,
@@ -200,7 +191,7 @@ TEST(ImageIo, ExrFileClaimingMoreThanItHoldsIsRefusedBeforeDecoding) {
   const fs::path path = dir / "depth.EXR";
   write_float_image(path, 2, 2, 1, {0.0f, 0.25f, 0.5f, 1.0f});
   EXPECT_EQ(read_image(path).width, 2);
-  std::vector<char> bytes = read_bytes(path);
+  std::vector<char> bytes = read_file_bytes(path);
   const std::string attribute("compression\0compression\0", 24);
   const auto at = std::search(bytes.begin(), bytes.end(), attribute.begin(), attribute.end());
   ASSERT_NE(at, bytes.end());
@@ -208,8 +199,7 @@ TEST(ImageIo, ExrFileClaimingMoreThanItHoldsIsRefusedBeforeDecoding) {
   ASSERT_EQ(*size_field, 1);  // one byte: the compression code
   const char claim[4] = {'\xff', '\xff', '\xff', '\x7f'};
   std::copy(std::begin(claim), std::end(claim), size_field);
-  std::ofstream(path, std::ios::binary | std::ios::trunc)
-      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  write_file_bytes(path, bytes);
   const std::string message = thrown_message<FieldError>([&] { read_image(path); });
   EXPECT_NE(message.find(path.string() + ": attribute 'compression' claims 2147483647 bytes"), std::string::npos)
       << message;
@@ -250,7 +240,7 @@ void expect_maps_load(const ScratchDir& dir, ImageEncoding encoding, const std::
   write_normal_image(normal_path, normals, encoding);
   write_gray_image(depth_path, heights, encoding);
   for (const fs::path& path : {normal_path, depth_path}) {
-    const std::vector<char> bytes = read_bytes(path);
+    const std::vector<char> bytes = read_file_bytes(path);
     ASSERT_GE(bytes.size(), signature.size());
     EXPECT_EQ(std::string(bytes.data(), signature.size()), signature) << path << ": not the format asked for";
   }
@@ -371,9 +361,9 @@ TEST(ImageIoErrors, TruncatedPng) {
   const ScratchDir dir;
   const fs::path path = dir / "truncated.png";
   write_normal_png16(path, dome(64, 64));
-  std::vector<char> bytes = read_bytes(path);
+  std::vector<char> bytes = read_file_bytes(path);
   bytes.resize(bytes.size() / 2);
-  write_bytes(path, bytes);
+  write_file_bytes(path, bytes);
   // The header survives, so the file opens; the pixels do not.
   expect_error_names(
       path, [&] { read_image(path); }, "truncated or corrupt");
@@ -383,14 +373,14 @@ TEST(ImageIoErrors, HeaderClaimingAHugeImageIsRefusedBeforeReading) {
   const ScratchDir dir;
   const fs::path path = dir / "huge.png";
   write_gray_png16(path, Grid<float>(1, 1, 0.5f));
-  std::vector<char> bytes = read_bytes(path);
+  std::vector<char> bytes = read_file_bytes(path);
   // Signature (8), IHDR length (4), "IHDR" (4), width (4), height (4), 5 more bytes, CRC over type + data.
   ASSERT_GE(bytes.size(), 33u);
   ASSERT_EQ(std::string(bytes.data() + 12, 4), "IHDR");
   put_big_endian(bytes, 16, 100000);
   put_big_endian(bytes, 20, 100000);
   put_big_endian(bytes, 29, crc32(bytes.data() + 12, 17));
-  write_bytes(path, bytes);
+  write_file_bytes(path, bytes);
   expect_error_names(
       path, [&] { read_image(path); }, "image is 100000 x 100000 px, more than the limit of");
 }

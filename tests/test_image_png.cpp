@@ -21,6 +21,7 @@
 
 #include "config/image_io.hpp"
 #include "config/png_whole.hpp"
+#include "tests/file_bytes.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/thrown_message.hpp"
 
@@ -262,23 +263,6 @@ TEST(ImagePng, EveryFilterAndPixelSizeReadWholeAsOpenImageIOReadsIt) {
   expect_same_as_openimageio(chunked);
 }
 
-std::vector<unsigned char> file_bytes(const fs::path& path) {
-  std::vector<unsigned char> bytes(fs::file_size(path));
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  EXPECT_NE(file, nullptr);
-  if (file == nullptr) return {};
-  EXPECT_EQ(std::fread(bytes.data(), 1, bytes.size(), file), bytes.size());
-  std::fclose(file);
-  return bytes;
-}
-
-void write_bytes(const fs::path& path, const std::vector<unsigned char>& bytes) {
-  std::FILE* file = std::fopen(path.c_str(), "wb");
-  ASSERT_NE(file, nullptr);
-  ASSERT_EQ(std::fwrite(bytes.data(), 1, bytes.size(), file), bytes.size());
-  std::fclose(file);
-}
-
 // The offset of the first chunk of that type's data.
 std::size_t chunk_data(const std::vector<unsigned char>& png, const char* type) {
   for (std::size_t at = 8; at + 12 <= png.size();) {
@@ -318,24 +302,24 @@ TEST(ImagePng, WhatTheWholeReaderLeavesToLibpng) {
   write_random_png(good, 24, 16, {.bit_depth = 16, .color_type = PNG_COLOR_TYPE_RGB_ALPHA}, 5);
   ASSERT_TRUE(read_png_whole(good, {}).has_value());
   EXPECT_FALSE(read_png_whole(good, ImageLimits{.max_pixels = 100}).has_value());
-  const std::vector<unsigned char> bytes = file_bytes(good);
+  const std::vector<unsigned char> bytes = read_file_bytes<unsigned char>(good);
 
   std::vector<unsigned char> bad_data = bytes;  // the deflate stream's first block header
   bad_data[chunk_data(bytes, "IDAT") + 2] ^= 0x04;
-  write_bytes(dir / "bad-data.png", bad_data);
+  write_file_bytes(dir / "bad-data.png", bad_data);
   EXPECT_FALSE(read_png_whole(dir / "bad-data.png", {}).has_value());
   EXPECT_NE(thrown_message<FieldError>([&] { read_image(dir / "bad-data.png"); }).find("truncated or corrupt: IDAT"),
             std::string::npos);
 
   std::vector<unsigned char> bad_crc = bytes;  // IEND's, the file's last 4 bytes
   bad_crc.back() ^= 0x01;
-  write_bytes(dir / "bad-crc.png", bad_crc);
+  write_file_bytes(dir / "bad-crc.png", bad_crc);
   EXPECT_FALSE(read_png_whole(dir / "bad-crc.png", {}).has_value());
   EXPECT_NE(thrown_message<FieldError>([&] { read_image(dir / "bad-crc.png"); }).find("CRC error"), std::string::npos);
 
   const std::vector<unsigned char> truncated(bytes.begin(),
                                              bytes.begin() + static_cast<std::ptrdiff_t>(bytes.size() / 2));
-  write_bytes(dir / "truncated.png", truncated);
+  write_file_bytes(dir / "truncated.png", truncated);
   EXPECT_FALSE(read_png_whole(dir / "truncated.png", {}).has_value());
   EXPECT_NE(thrown_message<FieldError>([&] {
               read_image(dir / "truncated.png");
@@ -361,15 +345,15 @@ TEST(ImagePng, WhatTheWholeReaderLeavesToLibpng) {
     out.insert(out.end(), bytes.end() - 12, bytes.end());
     return out;
   };
-  write_bytes(dir / "ancillary.png", with_chunk_before_end("teSt"));
+  write_file_bytes(dir / "ancillary.png", with_chunk_before_end("teSt"));
   EXPECT_TRUE(read_png_whole(dir / "ancillary.png", {}).has_value());
   expect_same_as_openimageio(dir / "ancillary.png");
-  write_bytes(dir / "bad-type.png", with_chunk_before_end("te5t"));
+  write_file_bytes(dir / "bad-type.png", with_chunk_before_end("te5t"));
   EXPECT_FALSE(read_png_whole(dir / "bad-type.png", {}).has_value());
 
   // No IEND: libpng has the image before it looks for one, and reads it.
   std::vector<unsigned char> no_end(bytes.begin(), bytes.end() - 12);
-  write_bytes(dir / "no-end.png", no_end);
+  write_file_bytes(dir / "no-end.png", no_end);
   EXPECT_FALSE(read_png_whole(dir / "no-end.png", {}).has_value());
 }
 
