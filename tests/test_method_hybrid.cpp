@@ -799,6 +799,43 @@ TEST(HybridMethod, SmoothsOnlyWhatTheMapsStorageRounds) {
   EXPECT_LT(largest_change_to_a_cone(gradient_rounding_of_normals(2.0 / 65535.0)), 0.05 * eight_bit);
 }
 
+// `exact` as a normal map of `bits` per component stores it: each unit normal's x and y rounded to the map's codes.
+GradientField stored_as_normals(const GradientField& exact, int bits) {
+  const double codes = std::ldexp(1.0, bits) - 1.0;
+  auto rounded = [codes](double v) { return -1.0 + std::round((v + 1.0) * codes / 2.0) * 2.0 / codes; };
+  GradientField out = exact;
+  for (Gradient& g : out.values) {
+    const double length = std::sqrt(1.0 + g.x * g.x + g.y * g.y);
+    const double nx = rounded(g.x / length), ny = rounded(g.y / length), nz = std::sqrt(1.0 - nx * nx - ny * ny);
+    g = {static_cast<float>(nx / nz), static_cast<float>(ny / nz)};
+  }
+  return out;
+}
+
+// Smoothing flattens a relief as well as taking out its rounding; on a finely stored map (12 bits) the flattening is
+// the larger, and the preparation takes it off again: a broad hill's 12-bit normals come out closer to its exact
+// slopes than they were stored (RMS of both slopes over the region 2.04e-4), where the smoothing alone left them
+// further (2.15e-4); with the flattening taken off, 1.15e-4.
+TEST(HybridMethod, TakesTheSmoothingsFlatteningOffAFinelyStoredMap) {
+  RegionFields fields;
+  const int size = 128;
+  fields.gradient = GradientField(size, size);
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      const double dx = x + 0.5 - 64.0, dy = y + 0.5 - 64.0, s2 = 2.0 * 20.0 * 20.0;
+      const double h = 10.0 * std::exp(-(dx * dx + dy * dy) / s2);
+      fields.gradient->at(x, y) = {static_cast<float>(-2.0 * dx / s2 * h), static_cast<float>(-2.0 * dy / s2 * h)};
+    }
+  }
+  const GradientField exact = *fields.gradient;
+  *fields.gradient = stored_as_normals(exact, 12);
+  fields.gradient_rounding = gradient_rounding_of_normals(2.0 / 4095.0);
+  const double stored = rms_difference(*fields.gradient, exact);
+  prepare_hybrid_fields(HybridParams{}, fields);
+  const double prepared = rms_difference(*fields.gradient, exact);
+  EXPECT_LT(prepared, 0.8 * stored);
+}
+
 // A grating at the texel period, aliased to heights alternating by 1 px under flat normals, and a single texel
 // sticking out: changes taken back within a texel are no discontinuity. A step whose normals a generator smeared
 // over four texels (the Sobel filter across a diagonal step: slopes h/8, 3h/8, 3h/8, h/8) still is one, its
