@@ -19,22 +19,36 @@ namespace {
 bool finite_non_negative(double v) { return std::isfinite(v) && v >= 0.0; }
 
 // One pass of the binomial kernel [1 2 1] / 4 along x and then along y, the border texels repeated; written as
-// differences from the texel's own value, so that a constant field stays exactly constant.
+// differences from the texel's own value, so that a constant field stays exactly constant. The rows smoothed along x
+// are kept three at a time, the ones the output row reads.
+Gradient binomial(Gradient a, Gradient c, Gradient b) {
+  return {c.x + 0.25f * ((a.x - c.x) + (b.x - c.x)), c.y + 0.25f * ((a.y - c.y) + (b.y - c.y))};
+}
+void binomial_row_along_x(const Gradient* in, std::int32_t w, Gradient* out) {
+  if (w == 1) {
+    out[0] = in[0];
+    return;
+  }
+  out[0] = binomial(in[0], in[0], in[1]);
+  for (std::int32_t x = 1; x + 1 < w; ++x) out[x] = binomial(in[x - 1], in[x], in[x + 1]);
+  out[w - 1] = binomial(in[w - 2], in[w - 1], in[w - 1]);
+}
 GradientField binomial_pass(const GradientField& in) {
   const std::int32_t w = in.width, h = in.height;
-  auto smooth = [](Gradient a, Gradient c, Gradient b) {
-    return Gradient{c.x + 0.25f * ((a.x - c.x) + (b.x - c.x)), c.y + 0.25f * ((a.y - c.y) + (b.y - c.y))};
-  };
-  GradientField along_x(w, h);
-  for (std::int32_t y = 0; y < h; ++y) {
-    for (std::int32_t x = 0; x < w; ++x)
-      along_x.at(x, y) = smooth(in.at(std::max(x - 1, 0), y), in.at(x, y), in.at(std::min(x + 1, w - 1), y));
-  }
   GradientField out(w, h);
+  if (w == 0 || h == 0) return out;
+  const auto width = static_cast<std::size_t>(w);
+  std::vector<Gradient> ring(3 * width);  // the x-smoothed rows y - 1, y and y + 1 (clamped), at (row % 3) * width
+  auto row = [&](std::int32_t y) { return ring.data() + static_cast<std::size_t>(y % 3) * width; };
+  binomial_row_along_x(&in.at(0, 0), w, row(0));
+  if (h > 1) binomial_row_along_x(&in.at(0, 1), w, row(1));
   for (std::int32_t y = 0; y < h; ++y) {
-    for (std::int32_t x = 0; x < w; ++x) {
-      out.at(x, y) = smooth(along_x.at(x, std::max(y - 1, 0)), along_x.at(x, y), along_x.at(x, std::min(y + 1, h - 1)));
-    }
+    if (y + 1 < h && y >= 1) binomial_row_along_x(&in.at(0, y + 1), w, row(y + 1));
+    const Gradient* above = row(std::max(y - 1, 0));
+    const Gradient* here = row(y);
+    const Gradient* below = row(std::min(y + 1, h - 1));
+    Gradient* o = &out.at(0, y);
+    for (std::int32_t x = 0; x < w; ++x) o[x] = binomial(above[x], here[x], below[x]);
   }
   return out;
 }
