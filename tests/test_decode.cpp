@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
@@ -188,6 +189,40 @@ TEST(DecodeNormals, InvalidTexelsAreCountedAndTakeTheNearestValid) {
   expect_normal_near(n.at(4, 0), right, 1e-6);
   expect_normal_near(n.at(5, 0), right, 1e-6);
   expect_unit_and_finite(n);
+}
+
+// A unorm map decoded in bands of rows on several threads: every gradient the same to the bit as in one band, and
+// the invalid texels (black pixels beside the cuts between bands, and a whole row of them) counted and repaired alike.
+TEST(DecodeNormals, ToGradientInBandsAgreesWithOneBandToTheBit) {
+  const std::int32_t width = 97, height = 300;
+  RawImage image = raw(width, height, 3, false, std::vector<float>(static_cast<std::size_t>(width) * height * 3));
+  image.code_max = 255;
+  std::uint32_t state = 12345;
+  for (std::size_t i = 0; i < image.pixels.size(); ++i) {  // tilted every way, n_z > 0
+    state = state * 1664525u + 1013904223u;
+    const std::uint32_t code = i % 3 == 2 ? 192 + (state >> 24) % 64 : 64 + (state >> 24) % 128;
+    image.pixels[i] = static_cast<float>(code) / 255.0f;
+  }
+  auto blacken = [&](std::int32_t x, std::int32_t y) {
+    for (std::int32_t c = 0; c < 3; ++c) image.pixels[(static_cast<std::size_t>(y) * width + x) * 3 + c] = 0.0f;
+  };
+  for (const std::int32_t y : {74, 75, 149, 150, 224, 225}) blacken(y % width, y);
+  for (std::int32_t x = 0; x < width; ++x) blacken(x, 100);
+  DecodeReport one_report;
+  const GradientField one = decode_normals_to_gradient(image, unorm_options, one_report, 1);
+  EXPECT_EQ(one_report.invalid_texels, 6u + static_cast<std::size_t>(width));
+  for (const unsigned threads : {2u, 3u, 4u}) {
+    SCOPED_TRACE(threads);
+    DecodeReport report;
+    const GradientField banded = decode_normals_to_gradient(image, unorm_options, report, threads);
+    EXPECT_EQ(report.invalid_texels, one_report.invalid_texels);
+    ASSERT_EQ(banded.values.size(), one.values.size());
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < one.values.size(); ++i) {
+      differing += std::memcmp(&banded.values[i], &one.values[i], sizeof(Gradient)) != 0 ? 1 : 0;
+    }
+    EXPECT_EQ(differing, 0u);
+  }
 }
 
 TEST(DecodeNormals, RepairReachesDiagonally) {

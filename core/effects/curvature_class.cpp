@@ -2,10 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
-#include <system_error>
-#include <thread>
 #include <vector>
+
+#include "core/engine/row_bands.hpp"
 
 namespace ph {
 
@@ -57,15 +56,8 @@ Grid<std::uint8_t> class_map(const CurvatureFields& fields, const ClassTolerance
 
 namespace {
 
-// How many bands of rows a class map of `height` rows is worked out in.
-unsigned band_count(std::int32_t height, unsigned threads) {
-  if (threads == 0) threads = std::min(std::max(std::thread::hardware_concurrency(), 1u), kMaxClassMapThreads);
-  const auto most = static_cast<unsigned>(std::max<std::int32_t>(height / kMinClassMapRows, 1));
-  return std::min(threads, most);
-}
-
-// Each band on a thread of its own but the first, which the caller's thread works out, as it does any band whose
-// thread cannot be started; an exception in any band (memory) is thrown again here once all have ended.
+// Each band of rows on a thread of its own (for_each_row_band); a row's classes depend on the rows its filter's
+// window reads alone.
 template <typename Field, typename Rows>
 Grid<std::uint8_t> classes_by_row(const Field& field, const DerivativeFilter& filter, const ClassTolerances& tolerances,
                                   unsigned threads, Rows rows) {
@@ -77,35 +69,7 @@ Grid<std::uint8_t> classes_by_row(const Field& field, const DerivativeFilter& fi
         row[x] = static_cast<std::uint8_t>(classify(k1[x], k2[x], tolerances));
     });
   };
-  const std::int32_t h = field.height;
-  const auto bands = static_cast<std::int32_t>(band_count(h, threads));
-  auto band = [&](std::int32_t b) {
-    return RowRange{static_cast<std::int32_t>(std::int64_t{h} * b / bands),
-                    static_cast<std::int32_t>(std::int64_t{h} * (b + 1) / bands)};
-  };
-  std::vector<std::exception_ptr> failed(static_cast<std::size_t>(bands));
-  const auto run_band = [&](std::int32_t b) {
-    try {
-      classify_band(band(b));
-    } catch (...) {
-      failed[static_cast<std::size_t>(b)] = std::current_exception();
-    }
-  };
-  {
-    std::vector<std::jthread> workers;
-    std::vector<std::int32_t> here{0};
-    for (std::int32_t b = 1; b < bands; ++b) {
-      try {
-        workers.emplace_back(run_band, b);
-      } catch (const std::system_error&) {
-        here.push_back(b);
-      }
-    }
-    for (std::int32_t b : here) run_band(b);
-  }  // the workers join here
-  for (const std::exception_ptr& e : failed) {
-    if (e) std::rethrow_exception(e);
-  }
+  for_each_row_band(field.height, row_band_count(field.height, threads, kMinClassMapRows), classify_band);
   return out;
 }
 

@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "core/engine/field.hpp"
+#include "core/engine/row_bands.hpp"
 
 namespace ph {
 
@@ -69,14 +70,6 @@ Grid<HeightDerivatives> derivatives_from_depth(const DepthField& depth, const De
 // From a gradient field (p = h_x, q = h_y, e.g. decoded from a normal map): p and q are fitted with planes and
 // h_xy = (p_y + q_x) / 2. Slopes beyond +-1e6 (a vertical wall) are clamped to +-1e6 first.
 Grid<HeightDerivatives> derivatives_from_gradient(const GradientField& gradient, const DerivativeFilter& filter);
-
-// Rows [begin, end) of a field; the default is every row.
-struct RowRange {
-  std::int32_t begin = 0;
-  std::int32_t end = std::numeric_limits<std::int32_t>::max();
-  RowRange within(std::int32_t height) const { return {std::clamp(begin, 0, height), std::clamp(end, 0, height)}; }
-  bool empty() const { return end <= begin; }
-};
 
 // The principal curvatures k1 and k2 of every texel of `rows`, one row at a time, rounded to float as the grids
 // store them: for callers that reduce them at once (class maps) and need no grid. A row's values do not depend on

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -10,6 +11,8 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "core/engine/row_bands.hpp"
 
 namespace ph {
 namespace {
@@ -305,7 +308,7 @@ std::size_t decode_unorm_row(const float* pixels, std::int32_t channels, std::si
 }  // namespace
 
 GradientField decode_normals_to_gradient(const RawImage& image, const NormalDecodeOptions& options,
-                                         DecodeReport& report) {
+                                         DecodeReport& report, unsigned threads) {
   require_normal_channels(image);
   require_consistent(image);
   const bool unorm = stores_unorm(image, options.encoding);
@@ -315,13 +318,20 @@ GradientField decode_normals_to_gradient(const RawImage& image, const NormalDeco
   std::size_t invalid = 0;
   if (unorm) {
     const auto width = static_cast<std::size_t>(image.width);
-    std::vector<float> planes;
-    for (std::size_t row = 0; row < static_cast<std::size_t>(image.height); ++row) {
-      const std::size_t first = row * width;
-      invalid +=
-          decode_unorm_row(&image.pixels[first * image.channels], image.channels, width, zero_band,
-                           options.green == GreenConvention::opengl, planes, &gradient.values[first], &valid[first]);
-    }
+    const unsigned bands = row_band_count(image.height, threads, kMinDecodeRows);
+    std::atomic<std::size_t> invalid_in_bands{0};
+    for_each_row_band(image.height, bands, [&](RowRange rows) {
+      std::vector<float> planes;
+      std::size_t count = 0;
+      for (auto row = static_cast<std::size_t>(rows.begin); row < static_cast<std::size_t>(rows.end); ++row) {
+        const std::size_t first = row * width;
+        count +=
+            decode_unorm_row(&image.pixels[first * image.channels], image.channels, width, zero_band,
+                             options.green == GreenConvention::opengl, planes, &gradient.values[first], &valid[first]);
+      }
+      invalid_in_bands += count;
+    });
+    invalid = invalid_in_bands;
   } else {
     for (std::size_t i = 0; i < gradient.values.size(); ++i) {
       const std::optional<Normal> n =
