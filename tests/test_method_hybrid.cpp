@@ -834,6 +834,10 @@ TEST(HybridMethod, TakesTheSmoothingsFlatteningOffAFinelyStoredMap) {
   prepare_hybrid_fields(HybridParams{}, fields);
   const double prepared = rms_difference(*fields.gradient, exact);
   EXPECT_LT(prepared, 0.8 * stored);
+  // What check-config reports: smoothed nearly everywhere, and the flattening taken off at most of those texels.
+  EXPECT_GT(fields.smoothed_texels, fields.gradient->values.size() / 2);
+  EXPECT_GT(fields.unflattened_texels, fields.smoothed_texels / 2);
+  EXPECT_LE(fields.unflattened_texels, fields.smoothed_texels);
 }
 
 // A grating at the texel period, aliased to heights alternating by 1 px under flat normals, and a single texel

@@ -41,14 +41,19 @@ std::string steps_line(const RegionFields& fields) {
 // rounding below the normal map's own says that it read a generator's normals again from finer heights.
 std::string rounding_line(const RegionFields& fields, const FieldLoadReport& report) {
   if (fields.gradient_rounding <= 0.0) return "none (a float map): the normals are used as given";
+  const std::size_t texels = fields.gradient ? fields.gradient->values.size() : 0;
+  auto percent = [texels](std::size_t n) { return texels == 0 ? 0.0 : 100.0 * n / static_cast<double>(texels); };
+  const std::string smoothed =
+      fmt::format("smoothed within it ({:.1f} % of the texels; at {:.1f} % the smoothing's flattening taken off again)",
+                  percent(fields.smoothed_texels), percent(fields.unflattened_texels));
   if (report.normals.texels > 0 && fields.gradient_rounding < gradient_rounding_of_normals(report.normals.value_step)) {
     return fmt::format(
         "slope sigma {:.2g}: the normals are a generator's reading of the depth map's heights, which are stored "
-        "finer, so they are read again from them (normal map's own: {:.2g}) and smoothed within it",
-        fields.gradient_rounding, gradient_rounding_of_normals(report.normals.value_step));
+        "finer, so they are read again from them (normal map's own: {:.2g}) and {}",
+        fields.gradient_rounding, gradient_rounding_of_normals(report.normals.value_step), smoothed);
   }
-  return fmt::format("slope sigma {:.2g} from the map's storage: the normals are smoothed within it",
-                     fields.gradient_rounding);
+  return fmt::format("slope sigma {:.2g} from the map's storage: the normals are {}", fields.gradient_rounding,
+                     smoothed);
 }
 
 // Whether the hybrid method pulled the normals toward the depth map's slopes (docs/METHODS.md, "Hybrid"), which

@@ -104,6 +104,11 @@ struct RegionFields {
   // map's where both show the relief sloping (slope_ratio_to_depth in core/engine/method_hybrid.hpp): 1 where the two
   // maps hold it at one scale; empty where there was too little slope to tell (and for every other method).
   std::optional<double> normals_to_depth_slope_ratio;
+  // How many texels the hybrid method's preparation smoothed within the rounding of the map's storage, and at how
+  // many of those it took the smoothing's flattening off again (core/engine/method_hybrid.cpp); 0 for every other
+  // method.
+  std::size_t smoothed_texels = 0;
+  std::size_t unflattened_texels = 0;
 
   std::size_t bytes() const {
     return (gradient ? gradient->bytes() : 0) + (depth ? depth->bytes() : 0) +

@@ -510,8 +510,9 @@ Gradient with_bias_taken_off(Gradient s, Gradient ss, double least) {
 // viewer: within the band the difference is the map's noise (rounding, a generator's jitter); beyond it, a
 // feature (a rim, a kink), which stays sharp. The smoothed value's bias is taken off (with_bias_taken_off) where the
 // result is within the band too: beside a rim the twice-smoothed field is pulled by the rim, and so no texel moves
-// by more than the band.
-void smooth_within_band(const HybridParams& params, double rounding, const DepthField* depth, GradientField& g) {
+// by more than the band. Counts the texels smoothed, and those whose flattening was taken off, into `counts`.
+void smooth_within_band(const HybridParams& params, double rounding, const DepthField* depth, GradientField& g,
+                        RegionFields& counts) {
   if (rounding <= 0.0) return;  // a float map: no rounding to smooth
   const GradientField s = smoothed(g);
   const GradientField ss = smoothed(s);
@@ -532,7 +533,10 @@ void smooth_within_band(const HybridParams& params, double rounding, const Depth
     };
     if (!within_band(s.values[i])) continue;
     const Gradient t = with_bias_taken_off(s.values[i], ss.values[i], least_bias);
-    g.values[i] = within_band(t) ? t : s.values[i];
+    const bool unflattened = within_band(t) && (t.x != s.values[i].x || t.y != s.values[i].y);
+    g.values[i] = unflattened ? t : s.values[i];
+    ++counts.smoothed_texels;
+    counts.unflattened_texels += unflattened ? 1 : 0;
   }
 }
 
@@ -620,7 +624,7 @@ void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields) {
     fields.fused_normals_weight = fuse_with_depth_gradient(*from_depth, *disagreement, *fields.discontinuity,
                                                            params.noise_slope, fields.gradient_rounding, g);
   }
-  smooth_within_band(params, fields.gradient_rounding, has_depth ? &*fields.depth : nullptr, g);
+  smooth_within_band(params, fields.gradient_rounding, has_depth ? &*fields.depth : nullptr, g, fields);
 }
 
 void HybridMethod::prepare(RegionFields& fields) const { prepare_hybrid_fields(params_, fields); }
