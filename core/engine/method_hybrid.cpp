@@ -510,10 +510,14 @@ Gradient with_bias_taken_off(Gradient s, Gradient ss, double least) {
 // viewer: within the band the difference is the map's noise (rounding, a generator's jitter); beyond it, a
 // feature (a rim, a kink), which stays sharp. The smoothed value's bias is taken off (with_bias_taken_off) where the
 // result is within the band too: beside a rim the twice-smoothed field is pulled by the rim, and so no texel moves
-// by more than the band. Counts the texels smoothed, and those whose flattening was taken off, into `counts`.
-void smooth_within_band(const HybridParams& params, double rounding, const DepthField* depth, GradientField& g,
-                        RegionFields& counts) {
-  if (rounding <= 0.0) return;  // a float map: no rounding to smooth
+// by more than the band. Returns how many texels it smoothed, and at how many of those it took the flattening off.
+struct SmoothingCounts {
+  std::size_t smoothed = 0, unflattened = 0;
+};
+SmoothingCounts smooth_within_band(const HybridParams& params, double rounding, const DepthField* depth,
+                                   GradientField& g) {
+  SmoothingCounts counts;
+  if (rounding <= 0.0) return counts;  // a float map: no rounding to smooth
   const GradientField s = smoothed(g);
   const GradientField ss = smoothed(s);
   const double least_bias = universal_threshold(2 * g.values.size()) * kTwicingNoiseGain * rounding;
@@ -535,9 +539,10 @@ void smooth_within_band(const HybridParams& params, double rounding, const Depth
     const Gradient t = with_bias_taken_off(s.values[i], ss.values[i], least_bias);
     const bool unflattened = within_band(t) && (t.x != s.values[i].x || t.y != s.values[i].y);
     g.values[i] = unflattened ? t : s.values[i];
-    ++counts.smoothed_texels;
-    counts.unflattened_texels += unflattened ? 1 : 0;
+    ++counts.smoothed;
+    counts.unflattened += unflattened ? 1 : 0;
   }
+  return counts;
 }
 
 // Central differences whose rounding would move the slope ratio by more than a few per cent are not read: 10 times the
@@ -624,7 +629,10 @@ void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields) {
     fields.fused_normals_weight = fuse_with_depth_gradient(*from_depth, *disagreement, *fields.discontinuity,
                                                            params.noise_slope, fields.gradient_rounding, g);
   }
-  smooth_within_band(params, fields.gradient_rounding, has_depth ? &*fields.depth : nullptr, g, fields);
+  const SmoothingCounts counts =
+      smooth_within_band(params, fields.gradient_rounding, has_depth ? &*fields.depth : nullptr, g);
+  fields.smoothed_texels = counts.smoothed;
+  fields.unflattened_texels = counts.unflattened;
 }
 
 void HybridMethod::prepare(RegionFields& fields) const { prepare_hybrid_fields(params_, fields); }
