@@ -7,13 +7,17 @@
 // status is 1 when any failed.
 //
 //   daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--rounds N]
-//              [--baseline BARE_REEMITTER] [--baseline-polls] [--parts pfdr] [--scene-dir DIR] [-v]
+//              [--baseline BARE_REEMITTER] [--baseline-polls] [--profile-side daemon|bare] [--parts pfdr]
+//              [--scene-dir DIR] [-v]
 //
 // --tool: the pseudohaptic tool for `pseudohaptic status` (default: ../tools/pseudohaptic next to the
 // daemon's folder, as in the build tree); --cycles: hotplug create/destroy cycles (100); --latency-frames:
 // frames per latency figure (500); --rounds: interleaved rounds of the daemon against the bare re-emitter,
 // half as many frames each per round (10); --baseline: the bare re-emitter (bare_reemitter beside this
 // program); --baseline-polls: the re-emitter waits in poll() before each read(), as an event loop does;
+// --profile-side: [10d] times only that side's frames, between the lines "profile: begin" (then a pause of
+// 3 s, for a profiler on the host to attach to the emulator) and "profile: end, N frames", and first prints
+// that side's program's mappings ("profile: map ...") (for tests/vm/count-tcg-work);
 // --parts: the parts to run, by letter (below; all four by default); --scene-dir: where the default scene's
 // target maps are (x11_cursor_e2e --write-scene writes them on the host, faster than here; missing ones are
 // written in the scratch folder); -v passes -v to
@@ -64,6 +68,7 @@ struct Options {
   int rounds = 10;              // interleaved rounds of the daemon against the bare re-emitter
   std::string baseline;         // the bare re-emitter (bare_reemitter beside this program)
   bool baseline_polls = false;  // --baseline-polls: the re-emitter waits in poll() before each read()
+  std::string profile_side;     // --profile-side: "daemon" or "bare": [10d] times that side alone
   std::string parts = "pfdr";   // which parts run: passthrough, flat config, default scene, reload
   bool verbose = false;         // pass -v to the daemon
   std::filesystem::path scratch;
@@ -475,12 +480,21 @@ struct LatencyRatio {
 };
 
 void measure_against_bare(Check& check, TestMouse& mouse, EventReader& out, ph::Pipeline& model, TestMouse& bare_mouse,
-                          EventReader& bare_out, const Options& options, LatencyRatio& result) {
+                          EventReader& bare_out, const Options& options, pid_t profiled, LatencyRatio& result) {
   const int frames = std::max(2, options.latency_frames / 2);
+  const bool profiling = !options.profile_side.empty();
+  if (profiling) {  // the profiled program's mappings first, to tell its pages from everyone else's
+    std::ifstream maps(fmt::format("/proc/{}/maps", profiled));
+    for (std::string line; std::getline(maps, line);) std::printf("profile: map %s\n", line.c_str());
+    std::printf("profile: begin\n");
+    std::this_thread::sleep_for(3s);
+  }
   for (int round = 0; round < options.rounds; ++round) {
     Latency daemon, bare;
     for (int side = 0; side < 2; ++side) {
-      if ((side + round) % 2 == 0) {
+      const bool daemon_side = (side + round) % 2 == 0;
+      if (profiling && options.profile_side != (daemon_side ? "daemon" : "bare")) continue;
+      if (daemon_side) {
         time_frames(check, mouse, out, &model, frames, daemon);
       } else {
         time_frames(check, bare_mouse, bare_out, nullptr, frames, bare);
@@ -490,6 +504,7 @@ void measure_against_bare(Check& check, TestMouse& mouse, EventReader& out, ph::
     result.daemon.us.insert(result.daemon.us.end(), daemon.us.begin(), daemon.us.end());
     result.bare.us.insert(result.bare.us.end(), bare.us.begin(), bare.us.end());
   }
+  if (profiling) std::printf("profile: end, %zu frames\n", result.daemon.us.size() + result.bare.us.size());
   check.note(result.text());
 }
 
@@ -627,7 +642,8 @@ void flat_part(Report& report, const Options& options, Latency& latency, Latency
     if (node.empty()) throw Fatal("no '" + bare_name + "' device within 10 s: " + bare.log());
     EventReader bare_out(node);
     if (!wait_taken(bare_mouse, bare_out, kDeviceTimeout)) throw Fatal("nothing came out of the bare re-emitter");
-    measure_against_bare(check, *mouse, *out, model, bare_mouse, bare_out, options, ratio);
+    measure_against_bare(check, *mouse, *out, model, bare_mouse, bare_out, options,
+                         options.profile_side == "bare" ? bare.pid() : daemon->pid(), ratio);
   });
 
   session.run("[11] control socket: `pseudohaptic status` reports the mouse taken and the output", [&](Check& check) {
@@ -1647,10 +1663,10 @@ void reload_part(Report& report, const Options& options, Latency& steady, Latenc
 }
 
 int usage() {
-  std::fprintf(
-      stderr,
-      "usage: daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--rounds N]\n"
-      "                  [--baseline BARE_REEMITTER] [--baseline-polls] [--parts pfdr] [--scene-dir DIR] [-v]\n");
+  std::fprintf(stderr,
+               "usage: daemon_e2e DAEMON [--tool PSEUDOHAPTIC] [--cycles N] [--latency-frames N] [--rounds N]\n"
+               "                  [--baseline BARE_REEMITTER] [--baseline-polls] [--profile-side daemon|bare]\n"
+               "                  [--parts pfdr] [--scene-dir DIR] [-v]\n");
   return 2;
 }
 
@@ -1667,6 +1683,9 @@ int main(int argc, char** argv) {
                            : options.latency_frames) = std::atoi(argv[++i]);
     } else if (arg == "--baseline-polls") {
       options.baseline_polls = true;
+    } else if (arg == "--profile-side" && i + 1 < argc) {
+      options.profile_side = argv[++i];
+      if (options.profile_side != "daemon" && options.profile_side != "bare") return usage();
     } else if (arg == "--baseline" && i + 1 < argc) {
       options.baseline = argv[++i];
     } else if (arg == "--scene-dir" && i + 1 < argc) {
