@@ -21,6 +21,7 @@
 #include "core/engine/decode.hpp"
 #include "core/engine/engine_options.hpp"
 #include "core/engine/methods.hpp"
+#include "core/engine/row_bands.hpp"
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
 #include "core/lab/map_storage.hpp"
@@ -693,6 +694,40 @@ TEST(HybridMethod, ReadsAGeneratorsNormalsAgainFromFinerHeights) {
   EXPECT_LT(largest_inner_difference(*fields.gradient), 1e-5);  // measured 6e-8: float against double
   EXPECT_LT(fields.gradient_rounding, 0.01 * normals_rounding);
   EXPECT_GT(fields.gradient_rounding, 0.0);
+}
+
+// The step test in bands of rows on threads (a load's) marks what it marks in one band, to the bit: terraces crossing
+// every row diagonally over a rolling relief, stored as an 8-bit height image, and the normals a generator makes of it,
+// so that steps, smeared steps and smooth relief meet at every band's first and last rows.
+TEST(HybridMethod, FindsTheSameStepsInBandsOfRowsAsInOne) {
+  DepthField exact(173, 300);
+  for (int y = 0; y < exact.height; ++y) {
+    for (int x = 0; x < exact.width; ++x) {
+      const double terrace = std::floor((x + 2.0 * y) / 23.0);
+      exact.at(x, y) =
+          static_cast<float>(1.5 * terrace + 3.0 * std::sin(2.0 * std::numbers::pi * (x - 0.7 * y) / 37.0));
+    }
+  }
+  DecodeReport depth_report, normals_report;
+  const DepthField depth = stored_depth(exact, 255, &depth_report);
+  const GradientField g = gradient_from_normals(stored_normals(sobel_normals(depth), 255, &normals_report));
+  const double step = depth_step_of_rounding(height_rounding_of_depth(depth_report.value_step));
+  const DiscontinuityField one = find_discontinuities(g, depth, 0.5, step, 1);
+  const DiscontinuityField banded = find_discontinuities(g, depth, 0.5, step, 4);
+  ASSERT_EQ(row_band_count(exact.height, 4, kMinStepRows), 4u);  // bands from rows 75, 150 and 225
+  ASSERT_EQ(one.values.size(), banded.values.size());
+  for (std::size_t i = 0; i < one.values.size(); ++i) ASSERT_EQ(one.values[i], banded.values[i]) << i;
+  std::size_t marked = 0;
+  for (std::uint8_t mark : one.values) marked += mark;
+  EXPECT_GT(marked, one.values.size() / 20);  // steps, and relief that is none
+  EXPECT_LT(marked, one.values.size() / 2);
+  for (const int first : {75, 150, 225}) {
+    for (const int y : {first - 1, first}) {
+      int in_row = 0;
+      for (int x = 0; x < exact.width; ++x) in_row += one.at(x, y);
+      EXPECT_GT(in_row, 0) << "row " << y;
+    }
+  }
 }
 
 // A region given a depth map and no normal map: its gradient is the heights' central differences, which no

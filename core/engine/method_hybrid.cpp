@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/engine/decode.hpp"
+#include "core/engine/row_bands.hpp"
 
 namespace ph {
 
@@ -173,11 +174,10 @@ bool between_level_treads(double dh, const EdgeSlopes& s, const ChangeAt& change
   return true;
 }
 
-// Marks both texels of every edge across which the height changes by more than `threshold` beyond what the
-// normals explain (all of it between level treads: between_level_treads), keeps it changed (is_step) and lies in
-// relief the texels resolve (resolved).
+}  // namespace
+
 DiscontinuityField find_discontinuities(const GradientField& g, const DepthField& d, double threshold,
-                                        double depth_step) {
+                                        double depth_step, unsigned threads) {
   // A jump between level treads must be more than one step of the depth map's storage: a single one is how the map
   // rounds a gentle slope (an 8-bit map of a relief 150 px high steps by 0.6 px every few texels), not relief.
   const double jump_floor = std::max(threshold, 1.5 * depth_step);
@@ -210,39 +210,58 @@ DiscontinuityField find_discontinuities(const GradientField& g, const DepthField
       return dh;
     return unexplained(dh, s);
   };
-  // Each edge's change is read by itself and by the four edges nearest along its axis: computed once, a row of the
-  // edges along x at a time and the rows of edges along y two either side of the one being tested.
-  std::vector<double> across_x(static_cast<std::size_t>(w));
-  constexpr std::int32_t kRows = 5;
-  std::vector<std::vector<double>> across_y(kRows, std::vector<double>(static_cast<std::size_t>(w)));
-  auto fill_row_y = [&](std::int32_t y) {
-    for (std::int32_t x = 0; x < w; ++x)
-      across_y[static_cast<std::size_t>(y % kRows)][static_cast<std::size_t>(x)] = along_y(x, y);
+  // Which edges are steps, in bands of rows on threads of their own: bit 0 of a texel the edge to its right, bit 1
+  // the edge below it. A band writes only its own rows, so the bands agree to the bit with one band.
+  constexpr std::uint8_t kStepRight = 1, kStepBelow = 2;
+  Grid<std::uint8_t> steps(w, h, 0);
+  auto find_in_band = [&](RowRange rows) {
+    // Each edge's change is read by itself and by the four edges nearest along its axis: computed once, a row of the
+    // edges along x at a time and the rows of edges along y two either side of the one being tested.
+    std::vector<double> across_x(static_cast<std::size_t>(w));
+    constexpr std::int32_t kRows = 5;
+    std::vector<std::vector<double>> across_y(kRows, std::vector<double>(static_cast<std::size_t>(w)));
+    auto fill_row_y = [&](std::int32_t y) {
+      for (std::int32_t x = 0; x < w; ++x)
+        across_y[static_cast<std::size_t>(y % kRows)][static_cast<std::size_t>(x)] = along_y(x, y);
+    };
+    auto edge_x = [&](std::int32_t x) { return x < 0 || x + 1 >= w ? 0.0 : across_x[static_cast<std::size_t>(x)]; };
+    auto edge_y = [&](std::int32_t x, std::int32_t y) {
+      return y < 0 || y + 1 >= h ? 0.0 : across_y[static_cast<std::size_t>(y % kRows)][static_cast<std::size_t>(x)];
+    };
+    for (std::int32_t y = std::max(0, rows.begin - 2); y < std::min(h, rows.begin + 2); ++y) fill_row_y(y);
+    for (std::int32_t y = rows.begin; y < rows.end; ++y) {
+      if (y + 2 < h) fill_row_y(y + 2);
+      for (std::int32_t x = 0; x < w; ++x) across_x[static_cast<std::size_t>(x)] = along_x(x, y);
+      for (std::int32_t x = 0; x < w; ++x) {
+        std::uint8_t found = 0;
+        if (x + 1 < w) {
+          const double e = edge_x(x);
+          const std::array<double, 4> nearby{edge_x(x - 2), edge_x(x - 1), edge_x(x + 1), edge_x(x + 2)};
+          if (is_step(e, nearby, threshold) && resolved(slopes_x(x, y), e)) found |= kStepRight;
+        }
+        if (y + 1 < h) {
+          const double e = edge_y(x, y);
+          const std::array<double, 4> nearby{edge_y(x, y - 2), edge_y(x, y - 1), edge_y(x, y + 1), edge_y(x, y + 2)};
+          if (is_step(e, nearby, threshold) && resolved(slopes_y(x, y), e)) found |= kStepBelow;
+        }
+        steps.at(x, y) = found;
+      }
+    }
   };
-  auto edge_x = [&](std::int32_t x) { return x < 0 || x + 1 >= w ? 0.0 : across_x[static_cast<std::size_t>(x)]; };
-  auto edge_y = [&](std::int32_t x, std::int32_t y) {
-    return y < 0 || y + 1 >= h ? 0.0 : across_y[static_cast<std::size_t>(y % kRows)][static_cast<std::size_t>(x)];
-  };
-  for (std::int32_t y = 0; y < std::min(h, 2); ++y) fill_row_y(y);
+  for_each_row_band(h, row_band_count(h, threads, kMinStepRows), find_in_band);
+  // Both texels of each step.
   DiscontinuityField marks(w, h, 0);
   for (std::int32_t y = 0; y < h; ++y) {
-    if (y + 2 < h) fill_row_y(y + 2);
-    for (std::int32_t x = 0; x < w; ++x) across_x[static_cast<std::size_t>(x)] = along_x(x, y);
     for (std::int32_t x = 0; x < w; ++x) {
-      if (x + 1 < w) {
-        const double e = edge_x(x);
-        const std::array<double, 4> nearby{edge_x(x - 2), edge_x(x - 1), edge_x(x + 1), edge_x(x + 2)};
-        if (is_step(e, nearby, threshold) && resolved(slopes_x(x, y), e)) marks.at(x, y) = marks.at(x + 1, y) = 1;
-      }
-      if (y + 1 < h) {
-        const double e = edge_y(x, y);
-        const std::array<double, 4> nearby{edge_y(x, y - 2), edge_y(x, y - 1), edge_y(x, y + 1), edge_y(x, y + 2)};
-        if (is_step(e, nearby, threshold) && resolved(slopes_y(x, y), e)) marks.at(x, y) = marks.at(x, y + 1) = 1;
-      }
+      const bool marked = (steps.at(x, y) != 0) || (x > 0 && (steps.at(x - 1, y) & kStepRight) != 0) ||
+                          (y > 0 && (steps.at(x, y - 1) & kStepBelow) != 0);
+      marks.at(x, y) = marked ? 1 : 0;
     }
   }
   return marks;
 }
+
+namespace {
 
 // The marks and the band a generator smeared around them: every 8-neighbour of a texel of the band that is level with
 // it (heights within `threshold` px), flatter than it (the length of the gradient less by more than

@@ -44,6 +44,15 @@ std::string validate(const HybridParams& params);
 // field no texel is a discontinuity, nothing is read again or fused and the band is the same everywhere.
 void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields);
 
+// Marks both texels of every edge across which the height in `d` changes by more than `threshold` beyond what the
+// normals `g` explain (all of it between level treads, where the change exceeds 1.5 `depth_step`, one step of the depth
+// map's storage), keeps it changed (no opposite change beside it takes it back) and lies in relief the texels resolve:
+// the hybrid's step test (docs/METHODS.md, "Hybrid"). Worked out in bands of rows on `threads` threads (0: one per
+// core, at most kMaxRowBandThreads; bands of kMinStepRows rows at least), the same marks as in one band.
+inline constexpr std::int32_t kMinStepRows = 64;
+DiscontinuityField find_discontinuities(const GradientField& g, const DepthField& d, double threshold,
+                                        double depth_step, unsigned threads = 0);
+
 // The normals' slopes `g` over the depth map's, `from_depth` its central differences, where both show relief the
 // texels resolve: the median, over the slopes along each axis where neither the texel nor its two neighbours on that
 // axis is in `marks` (a step, where the two disagree by design), both slopes exceed `floor`, have one sign, and change
