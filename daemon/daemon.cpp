@@ -15,6 +15,7 @@
 #include <string_view>
 
 #include "config/scene_file.hpp"
+#include "core/engine/frame_path.hpp"
 
 namespace ph {
 
@@ -323,8 +324,8 @@ void Daemon::let_go_of_all(std::string_view why) {
 // The per-frame path, on the mouse's reader thread with the state lock held: what one read() gave, the frames
 // through the pipeline, one write() each; the time is the kernel's stamp on the events (CLOCK_MONOTONIC,
 // steady_clock's), not a clock read.
-[[gnu::hot]] void Daemon::on_mouse_batch(const std::string& node, Mouse& mouse, const std::vector<InputEvent>& events,
-                                         ReadStatus status, const std::string& error) {
+PH_FRAME_PATH void Daemon::on_mouse_batch(const std::string& node, Mouse& mouse, const std::vector<InputEvent>& events,
+                                          ReadStatus status, const std::string& error) {
   if (!mouse.ending.empty()) return;
   try {
     if (!events.empty()) {
@@ -564,7 +565,8 @@ void Daemon::on_resync_tick() {
 // The pixel the desktop shows the cursor on: floor of the model's position, what absolute output emits.
 // Not the traversal's texel: a model stopped on a pixel's left or top edge after moving right or down is
 // still in the texel before it, and the helper would report the pixel itself.
-[[gnu::hot]] void Daemon::remember_emitted(SteadyTime now) {
+// Inline in the frame's path: out of line it sat on a page of its own (core/engine/frame_path.hpp).
+[[gnu::always_inline]] inline void Daemon::remember_emitted(SteadyTime now) {
   const Texel pixel = cursor_pixel();
   if (emitted_.empty() || emitted_.back().second != pixel) emitted_.emplace_back(now, pixel);
   while (emitted_.size() > kEmittedAlwaysKept && now - emitted_.front().first > kEmittedMemory) emitted_.pop_front();

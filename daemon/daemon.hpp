@@ -89,7 +89,7 @@ class Daemon final : private ControlHandler {
   Texel cursor_pixel() const { return texel_at(pipeline_->cursor().position); }
   void start_holding();
   void release_held();
-  void remember_emitted(SteadyTime now);
+  inline void remember_emitted(SteadyTime now);  // (defined in daemon.cpp, its only user: the frame's path)
   bool emitted_recently(Texel pixel) const;
   void take_present_mice();
   void consider(const std::string& node);

@@ -12,6 +12,8 @@
 #include <cstring>
 #include <ctime>
 
+#include "core/engine/frame_path.hpp"
+
 namespace ph {
 
 namespace {
@@ -145,7 +147,8 @@ void EvdevDevice::set_blocking(bool blocking) {
   blocking_ = blocking;
 }
 
-ssize_t EvdevDevice::read_some(void* buffer, std::size_t size, Wait wait) {
+// Inline in read_batch, the frame's path: out of line it sat on a page of its own (core/engine/frame_path.hpp).
+[[gnu::always_inline]] inline ssize_t EvdevDevice::read_some(void* buffer, std::size_t size, Wait wait) {
   if (blocking_ && wait == Wait::no) {
     pollfd queued{fd_, POLLIN, 0};
     if (::poll(&queued, 1, 0) == 0) {
@@ -174,7 +177,7 @@ void EvdevDevice::resync(std::vector<InputEvent>& events, TimeUs time) {
   events.push_back({time, ev::kSyn, ev::kSynReport, 0});
 }
 
-[[gnu::hot]] ReadStatus EvdevDevice::read_batch(std::vector<InputEvent>& events, Wait wait) {
+PH_FRAME_PATH ReadStatus EvdevDevice::read_batch(std::vector<InputEvent>& events, Wait wait) {
   events.clear();
   std::array<input_event, 64> batch;
   for (;;) {

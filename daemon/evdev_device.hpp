@@ -80,7 +80,7 @@ class EvdevDevice {
 
   KeyBits keys_down_now() const;
   // One read() of the node; on a blocking node without `wait`, -1 and EAGAIN when nothing is queued.
-  ssize_t read_some(void* buffer, std::size_t size, Wait wait);
+  inline ssize_t read_some(void* buffer, std::size_t size, Wait wait);  // (defined in evdev_device.cpp, its only user)
   void resync(std::vector<InputEvent>& events, TimeUs time);
 
   std::string node_;

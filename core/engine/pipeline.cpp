@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/engine/fast_math.hpp"
+#include "core/engine/frame_path.hpp"
 
 namespace ph {
 
@@ -154,7 +155,7 @@ Frame Pipeline::process(const Frame& in, FrameReport* report) {
   return out;
 }
 
-[[gnu::hot]] void Pipeline::process(const Frame& in, Frame& out, FrameReport* report) {
+PH_FRAME_PATH void Pipeline::process(const Frame& in, Frame& out, FrameReport* report) {
   std::int64_t dx = 0, dy = 0;
   sum_motion(in, dx, dy);
   if (report != nullptr) *report = {frame_time(in), saturate(dx), saturate(dy), 0, 0, {}, 1.0, 1.0, false};
