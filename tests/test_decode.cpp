@@ -92,6 +92,26 @@ TEST(GradientFromDepth, HugeHeightsGiveBoundedFiniteSlopes) {
   EXPECT_EQ(g.at(1, 0).y, -kMaxSlope);  // 3e38 to 2e18
 }
 
+// In bands of rows on threads (a load's) the slopes are those of one band, to the bit, the band's first and last rows
+// (which read the rows either side, in the band before and after) included.
+TEST(GradientFromDepth, InBandsAgreesWithOneBandToTheBit) {
+  DepthField depth(97, 300);
+  std::uint32_t state = 4321;
+  for (float& h : depth.values) {
+    state = state * 1664525u + 1013904223u;
+    h = static_cast<float>(state >> 8) / 65536.0f;  // 0-256 px, every texel its own
+  }
+  const GradientField one = gradient_from_depth(depth, 1);
+  for (const unsigned threads : {2u, 3u, 4u}) {
+    const GradientField banded = gradient_from_depth(depth, threads);
+    ASSERT_EQ(banded.values.size(), one.values.size());
+    for (std::size_t i = 0; i < one.values.size(); ++i) {
+      ASSERT_EQ(banded.values[i].x, one.values[i].x) << threads << " threads, texel " << i;
+      ASSERT_EQ(banded.values[i].y, one.values[i].y) << threads << " threads, texel " << i;
+    }
+  }
+}
+
 TEST(DecodeNormals, OpenGlHemisphereGivesScreenFrameNormals) {
   const Hemisphere hemisphere = make_hemisphere(33, 14.0);
   DecodeReport report;

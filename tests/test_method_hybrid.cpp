@@ -730,6 +730,27 @@ TEST(HybridMethod, FindsTheSameStepsInBandsOfRowsAsInOne) {
   }
 }
 
+// The smoothing in bands of rows on threads gives what one band gives, to the bit: each band smooths the row above its
+// first along x itself.
+TEST(HybridMethod, SmoothsInBandsOfRowsAsInOne) {
+  GradientField g(131, 300);
+  std::uint32_t state = 99;
+  for (Gradient& s : g.values) {
+    state = state * 1664525u + 1013904223u;
+    s = {static_cast<float>(state >> 20) / 4096.0f - 0.5f, static_cast<float>((state >> 8) & 0xfff) / 4096.0f - 0.5f};
+  }
+  const GradientField one = binomial_smoothed(g, 1);
+  for (const unsigned threads : {2u, 3u, 4u}) {
+    const GradientField banded = binomial_smoothed(g, threads);
+    ASSERT_EQ(banded.values.size(), one.values.size());
+    for (std::size_t i = 0; i < one.values.size(); ++i) {
+      ASSERT_EQ(banded.values[i].x, one.values[i].x) << threads << " threads, texel " << i;
+      ASSERT_EQ(banded.values[i].y, one.values[i].y) << threads << " threads, texel " << i;
+    }
+  }
+  EXPECT_NE(one.at(60, 150).x, g.at(60, 150).x);  // it did smooth
+}
+
 // A region given a depth map and no normal map: its gradient is the heights' central differences, which no
 // generator's reading explains better (on a tilted plane every reading agrees exactly), and stays as it is, with the
 // rounding of its own storage.

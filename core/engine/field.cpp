@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/engine/row_bands.hpp"
+
 namespace ph {
 
 Normal normal_from_gradient(Gradient g) {
@@ -23,7 +25,7 @@ GradientField gradient_from_normals(const NormalImage& normals) {
   return gradient;
 }
 
-GradientField gradient_from_depth(const DepthField& depth) {
+GradientField gradient_from_depth(const DepthField& depth, unsigned threads) {
   const std::int32_t w = depth.width;
   const std::int32_t h = depth.height;
   GradientField out(w, h);
@@ -35,15 +37,18 @@ GradientField gradient_from_depth(const DepthField& depth) {
     const double d = (static_cast<double>(hi) - static_cast<double>(lo)) / span;
     return static_cast<float>(std::clamp(d, -static_cast<double>(kMaxSlope), static_cast<double>(kMaxSlope)));
   };
-  for (std::int32_t y = 0; y < h; ++y) {
-    const std::int32_t y0 = y > 0 ? y - 1 : y;
-    const std::int32_t y1 = y + 1 < h ? y + 1 : y;
-    for (std::int32_t x = 0; x < w; ++x) {
-      const std::int32_t x0 = x > 0 ? x - 1 : x;
-      const std::int32_t x1 = x + 1 < w ? x + 1 : x;
-      out.at(x, y) = {diff(depth.at(x0, y), depth.at(x1, y), x1 - x0), diff(depth.at(x, y0), depth.at(x, y1), y1 - y0)};
+  for_each_row_band(h, row_band_count(h, threads, kMinSlopeRows), [&](RowRange rows) {
+    for (std::int32_t y = rows.begin; y < rows.end; ++y) {
+      const std::int32_t y0 = y > 0 ? y - 1 : y;
+      const std::int32_t y1 = y + 1 < h ? y + 1 : y;
+      for (std::int32_t x = 0; x < w; ++x) {
+        const std::int32_t x0 = x > 0 ? x - 1 : x;
+        const std::int32_t x1 = x + 1 < w ? x + 1 : x;
+        out.at(x, y) = {diff(depth.at(x0, y), depth.at(x1, y), x1 - x0),
+                        diff(depth.at(x, y0), depth.at(x, y1), y1 - y0)};
+      }
     }
-  }
+  });
   return out;
 }
 

@@ -34,28 +34,38 @@ void binomial_row_along_x(const Gradient* in, std::int32_t w, Gradient* out) {
   for (std::int32_t x = 1; x + 1 < w; ++x) out[x] = binomial(in[x - 1], in[x], in[x + 1]);
   out[w - 1] = binomial(in[w - 2], in[w - 1], in[w - 1]);
 }
-GradientField binomial_pass(const GradientField& in) {
+GradientField binomial_pass(const GradientField& in, unsigned threads) {
   const std::int32_t w = in.width, h = in.height;
   GradientField out(w, h);
   if (w == 0 || h == 0) return out;
   const auto width = static_cast<std::size_t>(w);
-  std::vector<Gradient> ring(3 * width);  // the x-smoothed rows y - 1, y and y + 1 (clamped), at (row % 3) * width
-  auto row = [&](std::int32_t y) { return ring.data() + static_cast<std::size_t>(y % 3) * width; };
-  binomial_row_along_x(&in.at(0, 0), w, row(0));
-  if (h > 1) binomial_row_along_x(&in.at(0, 1), w, row(1));
-  for (std::int32_t y = 0; y < h; ++y) {
-    if (y + 1 < h && y >= 1) binomial_row_along_x(&in.at(0, y + 1), w, row(y + 1));
-    const Gradient* above = row(std::max(y - 1, 0));
-    const Gradient* here = row(y);
-    const Gradient* below = row(std::min(y + 1, h - 1));
-    Gradient* o = &out.at(0, y);
-    for (std::int32_t x = 0; x < w; ++x) o[x] = binomial(above[x], here[x], below[x]);
-  }
+  // In bands of rows, each with a ring of its own filled from the row above its first.
+  for_each_row_band(h, row_band_count(h, threads, kMinSmoothingRows), [&](RowRange rows) {
+    std::vector<Gradient> ring(3 * width);  // the x-smoothed rows y - 1, y and y + 1 (clamped), at (row % 3) * width
+    auto row = [&](std::int32_t y) { return ring.data() + static_cast<std::size_t>(y % 3) * width; };
+    std::int32_t smoothed_to = std::max(rows.begin - 1, 0) - 1;  // the last row smoothed along x
+    for (std::int32_t y = rows.begin; y < rows.end; ++y) {
+      while (smoothed_to < std::min(y + 1, h - 1)) {
+        ++smoothed_to;
+        binomial_row_along_x(&in.at(0, smoothed_to), w, row(smoothed_to));
+      }
+      const Gradient* above = row(std::max(y - 1, 0));
+      const Gradient* here = row(y);
+      const Gradient* below = row(std::min(y + 1, h - 1));
+      Gradient* o = &out.at(0, y);
+      for (std::int32_t x = 0; x < w; ++x) o[x] = binomial(above[x], here[x], below[x]);
+    }
+  });
   return out;
 }
 
-// Two passes: a Gaussian of about 1 px.
-GradientField smoothed(const GradientField& g) { return binomial_pass(binomial_pass(g)); }
+}  // namespace
+
+GradientField binomial_smoothed(const GradientField& g, unsigned threads) {
+  return binomial_pass(binomial_pass(g, threads), threads);
+}
+
+namespace {
 
 // The robust standard deviation of zero-centred values given as magnitudes: their median times 1.4826, which is
 // a Gaussian's sigma; features (rims, steps) are fewer than half the texels and do not move it.
@@ -91,13 +101,15 @@ std::vector<double> differences(const GradientField& a, const GradientField& b) 
   return out;
 }
 
-// White noise of sigma s leaves a residual g - smoothed(g) of sigma 0.891 s: sqrt(1 - 2 k0 + sum k^2) with the
+// White noise of sigma s leaves a residual g - binomial_smoothed(g) of sigma 0.891 s: sqrt(1 - 2 k0 + sum k^2) with the
 // two-pass kernel's centre k0 = 36/256 and sum k^2 = (70/256)^2.
 constexpr double kResidualGain = 0.891;
 
 // A gradient field's noise as the field itself shows it: the robust sigma of its residual from the smoothed field.
 // It counts the relief's own fine detail too (a grating, a rough surface), so it is an upper bound.
-double gradient_noise(const GradientField& g) { return robust_sigma(differences(g, smoothed(g))) / kResidualGain; }
+double gradient_noise(const GradientField& g) {
+  return robust_sigma(differences(g, binomial_smoothed(g))) / kResidualGain;
+}
 
 // The universal threshold (Donoho and Johnstone): of n Gaussian values of sigma 1, none is likely to exceed
 // sqrt(2 ln n); a difference beyond it times the noise's sigma is a feature, not noise.
@@ -537,8 +549,8 @@ SmoothingCounts smooth_within_band(const HybridParams& params, double rounding, 
                                    GradientField& g) {
   SmoothingCounts counts;
   if (rounding <= 0.0) return counts;  // a float map: no rounding to smooth
-  const GradientField s = smoothed(g);
-  const GradientField ss = smoothed(s);
+  const GradientField s = binomial_smoothed(g);
+  const GradientField ss = binomial_smoothed(s);
   const double least_bias = universal_threshold(2 * g.values.size()) * kTwicingNoiseGain * rounding;
   const double base = noise_band(params.noise_slope, rounding, g, s);
   float lowest = 0.0f, highest = 0.0f;

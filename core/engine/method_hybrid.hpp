@@ -44,6 +44,12 @@ std::string validate(const HybridParams& params);
 // field no texel is a discontinuity, nothing is read again or fused and the band is the same everywhere.
 void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields);
 
+// Two passes of the binomial kernel [1 2 1] / 4 along x and y, the border texels repeated (a Gaussian of about 1 px):
+// the hybrid's smoothing, in bands of rows on `threads` threads (0: one per core, at most kMaxRowBandThreads; bands of
+// kMinSmoothingRows rows at least), the same values as in one band.
+inline constexpr std::int32_t kMinSmoothingRows = 64;
+GradientField binomial_smoothed(const GradientField& g, unsigned threads = 0);
+
 // Marks both texels of every edge across which the height in `d` changes by more than `threshold` beyond what the
 // normals `g` explain (all of it between level treads, where the change exceeds 1.5 `depth_step`, one step of the depth
 // map's storage), keeps it changed (no opposite change beside it takes it back) and lies in relief the texels resolve:
