@@ -1,6 +1,7 @@
 // Decoding of normal and depth images and resampling to a region's size, as docs/METHODS.md specifies in
 // "Screen, regions and fields".
 #include "core/engine/decode.hpp"
+#include "tests/band_agreement.hpp"
 #include "tests/thrown_message.hpp"
 
 #include <gtest/gtest.h>
@@ -101,15 +102,7 @@ TEST(GradientFromDepth, InBandsAgreesWithOneBandToTheBit) {
     state = state * 1664525u + 1013904223u;
     h = static_cast<float>(state >> 8) / 65536.0f;  // 0-256 px, every texel its own
   }
-  const GradientField one = gradient_from_depth(depth, 1);
-  for (const unsigned threads : {2u, 3u, 4u}) {
-    const GradientField banded = gradient_from_depth(depth, threads);
-    ASSERT_EQ(banded.values.size(), one.values.size());
-    for (std::size_t i = 0; i < one.values.size(); ++i) {
-      ASSERT_EQ(banded.values[i].x, one.values[i].x) << threads << " threads, texel " << i;
-      ASSERT_EQ(banded.values[i].y, one.values[i].y) << threads << " threads, texel " << i;
-    }
-  }
+  expect_bands_agree_with_one([&](unsigned threads) { return gradient_from_depth(depth, threads); });
 }
 
 TEST(DecodeNormals, OpenGlHemisphereGivesScreenFrameNormals) {
