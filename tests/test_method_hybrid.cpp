@@ -715,7 +715,7 @@ TEST(HybridMethod, FindsTheSameStepsInBandsOfRowsAsInOne) {
   const double step = depth_step_of_rounding(height_rounding_of_depth(depth_report.value_step));
   const DiscontinuityField one = find_discontinuities(g, depth, 0.5, step, 1);
   const DiscontinuityField banded = find_discontinuities(g, depth, 0.5, step, 4);
-  ASSERT_EQ(row_band_count(exact.height, 4, kMinStepRows), 4u);  // bands from rows 75, 150 and 225
+  ASSERT_EQ(row_band_count(exact.height, 4), 4u);  // bands from rows 75, 150 and 225
   ASSERT_EQ(one.values.size(), banded.values.size());
   for (std::size_t i = 0; i < one.values.size(); ++i) ASSERT_EQ(one.values[i], banded.values[i]) << i;
   std::size_t marked = 0;

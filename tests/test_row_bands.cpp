@@ -16,11 +16,11 @@ TEST(RowBands, CoverEveryRowOnceInBandsOfAtLeastTheLeast) {
   for (const std::int32_t height : {0, 1, 5, 63, 64, 129, 1000}) {
     for (const unsigned threads : {0u, 1u, 2u, 3u, 4u, 9u}) {
       SCOPED_TRACE(testing::Message() << height << " rows, " << threads << " threads");
-      const unsigned bands = row_band_count(height, threads, 64);
+      const unsigned bands = row_band_count(height, threads);
       EXPECT_GE(bands, 1u);
       EXPECT_LE(bands, threads == 0 ? kMaxRowBandThreads : threads);
       if (bands > 1) {
-        EXPECT_GE(height / static_cast<std::int32_t>(bands), 64);
+        EXPECT_GE(height / static_cast<std::int32_t>(bands), kMinRowBandRows);
       }
       std::vector<std::atomic<int>> seen(static_cast<std::size_t>(height));
       std::atomic<unsigned> calls{0};

@@ -69,7 +69,7 @@ Grid<std::uint8_t> classes_by_row(const Field& field, const DerivativeFilter& fi
         row[x] = static_cast<std::uint8_t>(classify(k1[x], k2[x], tolerances));
     });
   };
-  for_each_row_band(field.height, row_band_count(field.height, threads, kMinClassMapRows), classify_band);
+  for_row_bands_on_threads(field.height, threads, classify_band);
   return out;
 }
 

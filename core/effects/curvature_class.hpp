@@ -39,8 +39,7 @@ Grid<std::uint8_t> class_map(const CurvatureFields& fields, const ClassTolerance
 // The same map straight from a field, without the curvature grids: equal to class_map(curvature_from_...(
 // field, filter, {false, false, true}), tolerances), in less time and memory. Bands of rows are worked out on
 // `threads` threads at once (0: one per core, at most kMaxRowBandThreads; never bands of fewer than
-// kMinClassMapRows rows), each texel's class the same whatever the number.
-inline constexpr std::int32_t kMinClassMapRows = 64;
+// kMinRowBandRows rows), each texel's class the same whatever the number.
 Grid<std::uint8_t> class_map_from_depth(const DepthField& depth, const DerivativeFilter& filter,
                                         const ClassTolerances& tolerances, unsigned threads = 0);
 Grid<std::uint8_t> class_map_from_gradient(const GradientField& gradient, const DerivativeFilter& filter,

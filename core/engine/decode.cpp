@@ -318,9 +318,8 @@ GradientField decode_normals_to_gradient(const RawImage& image, const NormalDeco
   std::size_t invalid = 0;
   if (unorm) {
     const auto width = static_cast<std::size_t>(image.width);
-    const unsigned bands = row_band_count(image.height, threads, kMinDecodeRows);
     std::atomic<std::size_t> invalid_in_bands{0};
-    for_each_row_band(image.height, bands, [&](RowRange rows) {
+    for_row_bands_on_threads(image.height, threads, [&](RowRange rows) {
       std::vector<float> planes;
       std::size_t count = 0;
       for (auto row = static_cast<std::size_t>(rows.begin); row < static_cast<std::size_t>(rows.end); ++row) {

@@ -69,9 +69,8 @@ NormalImage decode_normals(const RawImage& image, const NormalDecodeOptions& opt
 
 // The same normals as height gradients, gradient_from_normals(decode_normals(...)) in one pass and without the
 // image of normals: what a region whose map already has its size needs. A unorm map's rows are decoded in bands on
-// `threads` threads (0: one per core, at most kMaxRowBandThreads; bands of kMinDecodeRows rows at least), each
+// `threads` threads (0: one per core, at most kMaxRowBandThreads; bands of kMinRowBandRows rows at least), each
 // gradient the same whatever the number; the repair of invalid texels follows on the caller's thread.
-inline constexpr std::int32_t kMinDecodeRows = 64;
 GradientField decode_normals_to_gradient(const RawImage& image, const NormalDecodeOptions& options,
                                          DecodeReport& report, unsigned threads = 0);
 

@@ -37,7 +37,7 @@ GradientField gradient_from_depth(const DepthField& depth, unsigned threads) {
     const double d = (static_cast<double>(hi) - static_cast<double>(lo)) / span;
     return static_cast<float>(std::clamp(d, -static_cast<double>(kMaxSlope), static_cast<double>(kMaxSlope)));
   };
-  for_each_row_band(h, row_band_count(h, threads, kMinSlopeRows), [&](RowRange rows) {
+  for_row_bands_on_threads(h, threads, [&](RowRange rows) {
     for (std::int32_t y = rows.begin; y < rows.end; ++y) {
       const std::int32_t y0 = y > 0 ? y - 1 : y;
       const std::int32_t y1 = y + 1 < h ? y + 1 : y;

@@ -130,8 +130,7 @@ Gradient clamped_gradient(Normal n);
 Normal normal_from_gradient(Gradient g);
 
 // Gradient of a height field by central differences (one-sided at the border), in bands of rows on `threads` threads
-// (0: one per core, at most kMaxRowBandThreads; bands of kMinSlopeRows rows at least), the same values as in one.
-inline constexpr std::int32_t kMinSlopeRows = 64;
+// (0: one per core, at most kMaxRowBandThreads; bands of kMinRowBandRows rows at least), the same values as in one.
 GradientField gradient_from_depth(const DepthField& depth, unsigned threads = 0);
 
 }  // namespace ph

@@ -40,7 +40,7 @@ GradientField binomial_pass(const GradientField& in, unsigned threads) {
   if (w == 0 || h == 0) return out;
   const auto width = static_cast<std::size_t>(w);
   // In bands of rows, each with a ring of its own filled from the row above its first.
-  for_each_row_band(h, row_band_count(h, threads, kMinSmoothingRows), [&](RowRange rows) {
+  for_row_bands_on_threads(h, threads, [&](RowRange rows) {
     std::vector<Gradient> ring(3 * width);  // the x-smoothed rows y - 1, y and y + 1 (clamped), at (row % 3) * width
     auto row = [&](std::int32_t y) { return ring.data() + static_cast<std::size_t>(y % 3) * width; };
     std::int32_t smoothed_to = std::max(rows.begin - 1, 0) - 1;  // the last row smoothed along x
@@ -260,7 +260,7 @@ DiscontinuityField find_discontinuities(const GradientField& g, const DepthField
       }
     }
   };
-  for_each_row_band(h, row_band_count(h, threads, kMinStepRows), find_in_band);
+  for_row_bands_on_threads(h, threads, find_in_band);
   // Both texels of each step.
   DiscontinuityField marks(w, h, 0);
   for (std::int32_t y = 0; y < h; ++y) {

@@ -46,16 +46,14 @@ void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields);
 
 // Two passes of the binomial kernel [1 2 1] / 4 along x and y, the border texels repeated (a Gaussian of about 1 px):
 // the hybrid's smoothing, in bands of rows on `threads` threads (0: one per core, at most kMaxRowBandThreads; bands of
-// kMinSmoothingRows rows at least), the same values as in one band.
-inline constexpr std::int32_t kMinSmoothingRows = 64;
+// kMinRowBandRows rows at least), the same values as in one band.
 GradientField binomial_smoothed(const GradientField& g, unsigned threads = 0);
 
 // Marks both texels of every edge across which the height in `d` changes by more than `threshold` beyond what the
 // normals `g` explain (all of it between level treads, where the change exceeds 1.5 `depth_step`, one step of the depth
 // map's storage), keeps it changed (no opposite change beside it takes it back) and lies in relief the texels resolve:
 // the hybrid's step test (docs/METHODS.md, "Hybrid"). Worked out in bands of rows on `threads` threads (0: one per
-// core, at most kMaxRowBandThreads; bands of kMinStepRows rows at least), the same marks as in one band.
-inline constexpr std::int32_t kMinStepRows = 64;
+// core, at most kMaxRowBandThreads; bands of kMinRowBandRows rows at least), the same marks as in one band.
 DiscontinuityField find_discontinuities(const GradientField& g, const DepthField& d, double threshold,
                                         double depth_step, unsigned threads = 0);
 

@@ -44,4 +44,8 @@ void for_each_row_band(std::int32_t height, unsigned bands, const std::function<
   }
 }
 
+void for_row_bands_on_threads(std::int32_t height, unsigned threads, const std::function<void(RowRange)>& work) {
+  for_each_row_band(height, row_band_count(height, threads), work);
+}
+
 }  // namespace ph

@@ -21,13 +21,20 @@ struct RowRange {
 // A load makes at most this many threads for one pass: beyond it the passes wait for memory, not arithmetic.
 inline constexpr unsigned kMaxRowBandThreads = 4;
 
+// No band is cut of fewer rows than this: a thread costs tens of microseconds to start.
+inline constexpr std::int32_t kMinRowBandRows = 64;
+
 // How many bands a field of `height` rows is cut into for `threads` threads (0: one per core, at most
-// kMaxRowBandThreads), none of fewer than `min_rows` rows (a thread costs tens of microseconds to start); at least one.
-unsigned row_band_count(std::int32_t height, unsigned threads, std::int32_t min_rows);
+// kMaxRowBandThreads), none of fewer than `min_rows` rows; at least one.
+unsigned row_band_count(std::int32_t height, unsigned threads, std::int32_t min_rows = kMinRowBandRows);
 
 // Calls `work` for `bands` consecutive bands of rows that together cover [0, height), each but the first on a thread of
 // its own; the caller's thread works out the first, and any band whose thread cannot be started. An exception thrown
 // in any band (memory) is thrown again here once all have ended.
 void for_each_row_band(std::int32_t height, unsigned bands, const std::function<void(RowRange)>& work);
+
+// The passes' way in: `work` over bands of rows for `threads` threads (0: one per core, at most kMaxRowBandThreads;
+// bands of kMinRowBandRows rows at least), for_each_row_band(height, row_band_count(height, threads), work).
+void for_row_bands_on_threads(std::int32_t height, unsigned threads, const std::function<void(RowRange)>& work);
 
 }  // namespace ph
