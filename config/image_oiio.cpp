@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "config/image_backend.hpp"
@@ -97,6 +98,28 @@ ImageSize read_size(const std::filesystem::path& path, const ImageLimits& limits
   return {in->spec().width, in->spec().height, code_max};
 }
 
+// OpenImageIO 2.4 inverts each deflate strip of a white-is-zero TIFF (PhotometricInterpretation 0) over as many
+// strips' worth of values as a pixel has channels, and so past the last strip writes beyond the buffer it reads
+// into (heap corruption the image fuzzer found: docs/FUZZING.md). One scanline at a time it inverts just that row.
+// (Tiles, read one at a time, are inverted right.)
+bool reads_wrong_in_strips(const OIIO::ImageInput& in) {
+  return std::string_view(in.format_name()) == "tiff" && in.spec().tile_width == 0 &&
+         in.spec().get_int_attribute("tiff:PhotometricInterpretation", -1) == 0;
+}
+
+// The image a row at a time, in `format` (TypeDesc::UNKNOWN: the file's own).
+bool read_row_by_row(OIIO::ImageInput& in, OIIO::TypeDesc format, void* pixels) {
+  const OIIO::ImageSpec& spec = in.spec();
+  const std::size_t row_bytes = format == OIIO::TypeDesc::UNKNOWN
+                                    ? static_cast<std::size_t>(spec.scanline_bytes(true))
+                                    : static_cast<std::size_t>(spec.width) * spec.nchannels * format.size();
+  auto* row = static_cast<unsigned char*>(pixels);
+  for (int y = spec.y; y < spec.y + spec.height; ++y, row += row_bytes) {
+    if (!in.read_scanline(y, spec.z, format, row)) return false;
+  }
+  return true;
+}
+
 // Reads the whole image as floats. OpenImageIO 2.4 reads any image it is asked to convert through a
 // buffer of about 64 MB, whatever the image's size: the reader child pays for it in address space (under
 // its RLIMIT_AS), a sanitizer build in poisoning it (55 ms of the image fuzzer's 56 ms per input). Read
@@ -105,11 +128,14 @@ ImageSize read_size(const std::filesystem::path& path, const ImageLimits& limits
 // keep OpenImageIO's path.
 bool read_as_float(OIIO::ImageInput& in, std::size_t values, float* pixels) {
   const OIIO::ImageSpec& spec = in.spec();
-  if (!spec.channelformats.empty()) return in.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels);
-  if (spec.format == OIIO::TypeDesc::FLOAT)
-    return in.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UNKNOWN, pixels);
+  const auto read = [&](OIIO::TypeDesc format, void* into) {
+    return reads_wrong_in_strips(in) ? read_row_by_row(in, format, into)
+                                     : in.read_image(0, 0, 0, spec.nchannels, format, into);
+  };
+  if (!spec.channelformats.empty()) return read(OIIO::TypeDesc::FLOAT, pixels);
+  if (spec.format == OIIO::TypeDesc::FLOAT) return read(OIIO::TypeDesc::UNKNOWN, pixels);
   std::vector<unsigned char> native(values * spec.format.size());
-  return in.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UNKNOWN, native.data()) &&
+  return read(OIIO::TypeDesc::UNKNOWN, native.data()) &&
          OIIO::convert_pixel_values(spec.format, native.data(), OIIO::TypeDesc::FLOAT, pixels,
                                     static_cast<int>(values));
 }
