@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -98,13 +99,29 @@ ImageSize read_size(const std::filesystem::path& path, const ImageLimits& limits
   return {in->spec().width, in->spec().height, code_max};
 }
 
-// OpenImageIO 2.4 inverts each deflate strip of a white-is-zero TIFF (PhotometricInterpretation 0) over as many
-// strips' worth of values as a pixel has channels, and so past the last strip writes beyond the buffer it reads
-// into (heap corruption the image fuzzer found: docs/FUZZING.md). One scanline at a time it inverts just that row.
-// (Tiles, read one at a time, are inverted right.)
-bool reads_wrong_in_strips(const OIIO::ImageInput& in) {
-  return std::string_view(in.format_name()) == "tiff" && in.spec().tile_width == 0 &&
+// A white-is-zero TIFF (PhotometricInterpretation 0): its values are the stored codes inverted.
+bool is_white_is_zero_tiff(const OIIO::ImageInput& in) {
+  return std::string_view(in.format_name()) == "tiff" &&
          in.spec().get_int_attribute("tiff:PhotometricInterpretation", -1) == 0;
+}
+
+// OpenImageIO 2.4 inverts each deflate strip of such a file over as many strips' worth of values as a pixel has
+// channels, and so past the last strip writes beyond the buffer it reads into (heap corruption the image fuzzer
+// found: docs/FUZZING.md). One scanline at a time it inverts just that row; tiles, one at a time, are inverted right.
+bool reads_wrong_in_strips(const OIIO::ImageInput& in) {
+  return is_white_is_zero_tiff(in) && in.spec().tile_width == 0;
+}
+
+// It inverts 8-bit values only: a 16-bit white-is-zero image (a depth map, say) would come out as stored, its relief
+// upside down. Inverted here.
+void invert_white_is_zero_uint16(const OIIO::ImageInput& in, std::vector<unsigned char>& native) {
+  if (in.spec().format != OIIO::TypeDesc::UINT16 || !is_white_is_zero_tiff(in)) return;
+  for (std::size_t i = 0; i + 1 < native.size(); i += 2) {
+    std::uint16_t v = 0;
+    std::memcpy(&v, &native[i], 2);
+    v = static_cast<std::uint16_t>(65535 - v);
+    std::memcpy(&native[i], &v, 2);
+  }
 }
 
 // The image a row at a time, in `format` (TypeDesc::UNKNOWN: the file's own).
@@ -135,8 +152,9 @@ bool read_as_float(OIIO::ImageInput& in, std::size_t values, float* pixels) {
   if (!spec.channelformats.empty()) return read(OIIO::TypeDesc::FLOAT, pixels);
   if (spec.format == OIIO::TypeDesc::FLOAT) return read(OIIO::TypeDesc::UNKNOWN, pixels);
   std::vector<unsigned char> native(values * spec.format.size());
-  return read(OIIO::TypeDesc::UNKNOWN, native.data()) &&
-         OIIO::convert_pixel_values(spec.format, native.data(), OIIO::TypeDesc::FLOAT, pixels,
+  if (!read(OIIO::TypeDesc::UNKNOWN, native.data())) return false;
+  invert_white_is_zero_uint16(in, native);
+  return OIIO::convert_pixel_values(spec.format, native.data(), OIIO::TypeDesc::FLOAT, pixels,
                                     static_cast<int>(values));
 }
 
