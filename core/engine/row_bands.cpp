@@ -7,9 +7,9 @@
 
 namespace ph {
 
-unsigned row_band_count(std::int32_t height, unsigned threads, std::int32_t min_rows) {
+unsigned row_band_count(std::int32_t height, unsigned threads) {
   if (threads == 0) threads = std::min(std::max(std::thread::hardware_concurrency(), 1u), kMaxRowBandThreads);
-  const auto most = static_cast<unsigned>(std::max<std::int32_t>(height / std::max(min_rows, 1), 1));
+  const auto most = static_cast<unsigned>(std::max<std::int32_t>(height / kMinRowBandRows, 1));
   return std::max(std::min(threads, most), 1u);
 }
 

@@ -25,8 +25,8 @@ inline constexpr unsigned kMaxRowBandThreads = 4;
 inline constexpr std::int32_t kMinRowBandRows = 64;
 
 // How many bands a field of `height` rows is cut into for `threads` threads (0: one per core, at most
-// kMaxRowBandThreads), none of fewer than `min_rows` rows; at least one.
-unsigned row_band_count(std::int32_t height, unsigned threads, std::int32_t min_rows = kMinRowBandRows);
+// kMaxRowBandThreads), none of fewer than kMinRowBandRows rows; at least one.
+unsigned row_band_count(std::int32_t height, unsigned threads);
 
 // Calls `work` for `bands` consecutive bands of rows that together cover [0, height), each but the first on a thread of
 // its own; the caller's thread works out the first, and any band whose thread cannot be started. An exception thrown
