@@ -10,11 +10,17 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <iterator>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "config/daemon_config.hpp"
 #include "config/target_files.hpp"
+#include "core/engine/acceleration.hpp"
+#include "core/engine/method_curvature.hpp"
+#include "core/engine/method_depth.hpp"
+#include "core/engine/method_hybrid.hpp"
 #include "core/engine/targets.hpp"
 #include "tests/scratch_dir.hpp"
 
@@ -574,6 +580,73 @@ TEST(SceneFileEngine, TraversalAndSamplingAreDaemonKeysAppliedByTheLoader) {
                {"unknown 'fast'", "exact, unit_steps, frame_midpoint, direction_lut"});
   expect_error("[daemon]\nlut_directions = 12\n", 2, "daemon.lut_directions", {"8"});
   expect_error("[daemon]\ntraversal = \"direction_lut\"\nsampling = \"bilinear\"\n", 1, "daemon", {"nearest"});
+}
+
+// The shipped example's commented lines, uncommented: its [daemon] table and the [region.METHOD] tables say
+// "these are the defaults", and a user who uncomments them must get just that.
+std::string uncommented(std::string_view text) {
+  std::string out;
+  while (!text.empty()) {
+    const std::size_t end = text.find('\n');
+    std::string_view line = text.substr(0, end);
+    text = end == std::string_view::npos ? std::string_view{} : text.substr(end + 1);
+    if (line.starts_with("# ")) {
+      const std::string_view rest = line.substr(2);
+      const std::size_t key_end = rest.find_first_not_of("abcdefghijklmnopqrstuvwxyz_0123456789");
+      const bool table = rest.starts_with('[');
+      const bool assignment =
+          key_end != 0 && key_end != std::string_view::npos && rest.substr(key_end).starts_with(" = ");
+      if (table || assignment) line = rest;
+    }
+    out.append(line).append("\n");
+  }
+  return out;
+}
+
+TEST(SceneFileExample, ItsDefaultsAreTheParsersDefaults) {
+  std::ifstream in(PH_EXAMPLE_SCENE, std::ios::binary);
+  ASSERT_TRUE(in) << PH_EXAMPLE_SCENE;
+  const std::string example((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const SceneSpec as_shipped = parse_scene_text(example, PH_EXAMPLE_SCENE);
+  EXPECT_TRUE(as_shipped.regions.empty());
+
+  const std::string text = uncommented(example);
+  SCOPED_TRACE(text);
+  const SceneSpec spec = parse_scene_text(text, PH_EXAMPLE_SCENE);
+  const DaemonSettings& got = spec.daemon;
+  const DaemonSettings defaults;
+  EXPECT_TRUE(got.devices.empty());
+  EXPECT_EQ(got.output, defaults.output);
+  EXPECT_EQ(got.desktop, defaults.desktop);
+  const AccelSettings accel = acceleration_of(got), default_accel = acceleration_of(defaults);
+  EXPECT_EQ(accel.profile, default_accel.profile);
+  EXPECT_EQ(accel.speed, default_accel.speed);
+  EXPECT_EQ(accel.dpi, default_accel.dpi);
+  EXPECT_EQ(got.pointer_speed, defaults.pointer_speed);
+  EXPECT_EQ(got.engine, defaults.engine);
+
+  ASSERT_EQ(spec.regions.size(), 1u);
+  RegionSpec region = spec.regions[0];
+  // Each table the example shows was read (a table left out would give its defaults whatever the example says).
+  for (const char* method : {"curvature", "depth", "hybrid"}) {
+    EXPECT_TRUE(region.method_params.contains(method)) << method;
+  }
+  const CurvatureParams curvature = method_params<CurvatureMethod>(region), default_curvature;
+  EXPECT_EQ(curvature.kmax_prime, default_curvature.kmax_prime);
+  EXPECT_EQ(curvature.kmin_prime, default_curvature.kmin_prime);
+  EXPECT_EQ(curvature.kmax_lo, default_curvature.kmax_lo);
+  EXPECT_EQ(curvature.kmax_hi, default_curvature.kmax_hi);
+  EXPECT_EQ(curvature.kmin_lo, default_curvature.kmin_lo);
+  EXPECT_EQ(curvature.kmin_hi, default_curvature.kmin_hi);
+  EXPECT_EQ(curvature.delta_beta_sign, default_curvature.delta_beta_sign);
+  const DepthParams depth = method_params<DepthMethod>(region), default_depth;
+  EXPECT_EQ(depth.gain, default_depth.gain);
+  EXPECT_EQ(depth.kmax, default_depth.kmax);
+  EXPECT_EQ(depth.kmin, default_depth.kmin);
+  const HybridParams hybrid = method_params<HybridMethod>(region), default_hybrid;
+  EXPECT_EQ(hybrid.discontinuity_px, default_hybrid.discontinuity_px);
+  EXPECT_EQ(hybrid.noise_slope, default_hybrid.noise_slope);
+  EXPECT_EQ(hybrid.far_noise_gain, default_hybrid.far_noise_gain);
 }
 
 }  // namespace
