@@ -11,12 +11,15 @@
 #include <fstream>
 #include <initializer_list>
 #include <iterator>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "config/daemon_config.hpp"
 #include "config/target_files.hpp"
+#include "core/effects/effect_materials.hpp"
+#include "core/effects/effect_wells.hpp"
 #include "core/engine/acceleration.hpp"
 #include "core/engine/method_curvature.hpp"
 #include "core/engine/method_depth.hpp"
@@ -603,10 +606,14 @@ std::string uncommented(std::string_view text) {
   return out;
 }
 
-TEST(SceneFileExample, ItsDefaultsAreTheParsersDefaults) {
-  std::ifstream in(PH_EXAMPLE_SCENE, std::ios::binary);
-  ASSERT_TRUE(in) << PH_EXAMPLE_SCENE;
-  const std::string example((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+std::string read_file(const char* path) {
+  std::ifstream in(path, std::ios::binary);
+  EXPECT_TRUE(in) << path;
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST(SceneFileDocs, TheExamplesDefaultsAreTheParsersDefaults) {
+  const std::string example = read_file(PH_EXAMPLE_SCENE);
   const SceneSpec as_shipped = parse_scene_text(example, PH_EXAMPLE_SCENE);
   EXPECT_TRUE(as_shipped.regions.empty());
 
@@ -647,6 +654,76 @@ TEST(SceneFileExample, ItsDefaultsAreTheParsersDefaults) {
   EXPECT_EQ(hybrid.discontinuity_px, default_hybrid.discontinuity_px);
   EXPECT_EQ(hybrid.noise_slope, default_hybrid.noise_slope);
   EXPECT_EQ(hybrid.far_noise_gain, default_hybrid.far_noise_gain);
+
+  ASSERT_TRUE(region.materials.has_value());
+  const MaterialsParams default_materials;
+  EXPECT_EQ(region.materials->source, default_materials.source);
+  EXPECT_EQ(region.materials->materials, default_materials.materials);
+  ASSERT_TRUE(region.wells.has_value());
+  const WellsParams default_wells;
+  EXPECT_EQ(region.wells->pattern, default_wells.pattern);
+  EXPECT_EQ(region.wells->radius_px, default_wells.radius_px);
+  EXPECT_EQ(region.wells->strength, default_wells.strength);
+  EXPECT_EQ(region.wells->max_gain, default_wells.max_gain);
+  EXPECT_EQ(region.wells->min_gain, default_wells.min_gain);
+}
+
+// The keys the parser allows in a table, as its error for an unknown key lists them.
+std::vector<std::string> allowed_keys(const std::string& table_path) {
+  constexpr std::string_view region = "[[region]]\nwidth = 9\nheight = 9\nnormal_map = \"a.png\"\n";
+  const std::string text = table_path == "daemon" ? "[daemon]\nunknown_key = 1\n"
+                           : table_path == "region"
+                               ? std::string(region) + "unknown_key = 1\n"
+                               : std::string(region) + "[region." + table_path + "]\nunknown_key = 1\n";
+  const std::string message = parse_error(text);
+  const std::size_t from = message.find("(allowed: ");
+  const std::size_t to = message.rfind(')');
+  if (from == std::string::npos || to == std::string::npos || to < from) {
+    ADD_FAILURE() << message;
+    return {};
+  }
+  std::vector<std::string> keys;
+  std::string_view list = std::string_view(message).substr(from + 10, to - from - 10);
+  while (!list.empty()) {
+    const std::size_t comma = list.find(", ");
+    keys.emplace_back(list.substr(0, comma));
+    list = comma == std::string_view::npos ? std::string_view{} : list.substr(comma + 2);
+  }
+  return keys;
+}
+
+// The words the man page sets in bold (.B, .BR and .RB lines), where it names keys.
+std::set<std::string, std::less<>> bold_words(std::string_view roff) {
+  std::set<std::string, std::less<>> words;
+  while (!roff.empty()) {
+    const std::size_t end = roff.find('\n');
+    const std::string_view line = roff.substr(0, end);
+    roff = end == std::string_view::npos ? std::string_view{} : roff.substr(end + 1);
+    if (!line.starts_with(".B ") && !line.starts_with(".BR ") && !line.starts_with(".RB ")) continue;
+    std::string word;
+    for (const char c : line.substr(line.find(' '))) {
+      if ((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_') {
+        word += c;
+      } else {
+        if (!word.empty()) words.insert(word);
+        word.clear();
+      }
+    }
+    if (!word.empty()) words.insert(word);
+  }
+  return words;
+}
+
+TEST(SceneFileDocs, TheManPageNamesEveryKeyTheParserAllows) {
+  const std::set<std::string, std::less<>> documented = bold_words(read_file(PH_DAEMON_MAN_PAGE));
+  for (const char* table : {"daemon", "region", "curvature", "depth", "hybrid", "materials", "materials.damping",
+                            "materials.friction", "materials.stick_slip", "wells"}) {
+    const std::vector<std::string> keys = allowed_keys(table);
+    EXPECT_GE(keys.size(), 3u) << table;
+    for (const std::string& key : keys) {
+      EXPECT_TRUE(documented.contains(key)) << "pseudohapticd.8 does not name " << table << "." << key;
+    }
+  }
 }
 
 }  // namespace
