@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "config/map_pair_scene.hpp"
 #include "core/engine/targets.hpp"
 
 namespace ph {
@@ -21,8 +22,9 @@ struct TargetFilePaths {
 
 TargetFilePaths target_file_paths(const std::filesystem::path& outdir, const TargetSpec& spec);
 
-// The scene file text of one target; its map paths are relative to the scene file's directory.
-// The depth map holds v = (h / relief_px + 1) / 2, so the scene says depth_zero = 0.5, relief_px = 2 * relief_px.
+// The scene of one target, and its file's text (config/map_pair_scene.hpp: its map paths are relative to the scene
+// file's directory; the scene says depth_zero = 0.5, relief_px = 2 * the target's relief_px).
+MapPairScene target_scene(const TargetSpec& spec);
 std::string target_scene_text(const TargetSpec& spec);
 
 // Creates outdir if needed and writes the three files of every target, overwriting old ones. Calls progress

@@ -2,60 +2,25 @@
 #include <fmt/core.h>
 
 #include <filesystem>
-#include <fstream>
 #include <memory>
-#include <stdexcept>
 
 #include "config/image_io.hpp"
+#include "config/map_pair_scene.hpp"
 #include "core/lab/surfaces.hpp"
 #include "tools/commands.hpp"
 
 namespace ph::tools {
 namespace {
 
-void write_text_file(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
-  out.close();
-  if (!out) throw std::runtime_error(path.string() + ": cannot write the file");
-}
-
-// A double as a TOML float: shortest round-trip form, with ".0" added where it would read as an integer.
-std::string toml_float(double value) {
-  std::string text = fmt::format("{}", value);
-  if (text.find_first_of(".eE") == std::string::npos) text += ".0";
-  return text;
-}
-
-// v = (h / relief + 1) / 2, so the scene reads h = (v - 0.5) * 2 relief.
-std::string scene_text(const SurfaceSpec& spec) {
-  return fmt::format(
-      "# pseudohaptic scene: the {name} of the second paper's test surfaces ({cls}), {size} x {size} px\n"
-      "[[region]]\n"
-      "name = \"{name}\"\n"
-      "x = 0\n"
-      "y = 0\n"
-      "width = {size}\n"
-      "height = {size}\n"
-      "method = \"curvature\"\n"
-      "normal_map = \"{name}.normal.png\"\n"
-      "normal_green = \"opengl\"\n"
-      "depth_map = \"{name}.depth.png\"\n"
-      "depth_zero = 0.5\n"
-      "relief_px = {relief}   # heights within +-{half} px\n",
-      fmt::arg("name", spec.name()), fmt::arg("cls", class_name(surface_class(spec.kind))), fmt::arg("size", spec.size),
-      fmt::arg("relief", toml_float(2.0 * spec.relief_px())), fmt::arg("half", spec.relief_px()));
-}
-
 void write_surface(const std::filesystem::path& outdir, const SurfaceSpec& spec) {
   const std::string name = spec.name();
-  write_normal_png16(outdir / (name + ".normal.png"), surface_normal_image(spec));
-  DepthField depth = surface_depth_field(spec);
-  for (float& v : depth.values) v = static_cast<float>((v / spec.relief_px() + 1.0) / 2.0);
-  write_gray_png16(outdir / (name + ".depth.png"), depth);
   write_float_exr(outdir / (name + ".K.exr"), surface_curvature_fields(spec).gaussian);
-  // The scene goes last: an interrupted run leaves no scene file naming a map that was not written.
-  write_text_file(outdir / (name + ".toml"), scene_text(spec));
+  const MapPairScene scene{
+      name, spec.size, spec.relief_px(),
+      fmt::format("# pseudohaptic scene: the {} of the second paper's test surfaces ({}), {} x {} px\n", name,
+                  class_name(surface_class(spec.kind)), spec.size, spec.size),
+      fmt::format("heights within +-{} px", spec.relief_px())};
+  write_map_pair_files(outdir, scene, surface_normal_image(spec), surface_depth_field(spec));
 }
 
 }  // namespace

@@ -1,0 +1,53 @@
+#include "config/map_pair_scene.hpp"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <stdexcept>
+
+#include "config/image_io.hpp"
+
+namespace ph {
+
+std::string toml_float(double value) {
+  std::string text = fmt::format("{}", value);
+  if (text.find_first_of(".eEn") == std::string::npos) text += ".0";  // 'n': inf and nan need no suffix
+  return text;
+}
+
+void write_text_file(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+  out.close();
+  if (!out) throw std::runtime_error(path.string() + ": cannot write the file");
+}
+
+std::string map_pair_scene_text(const MapPairScene& scene) {
+  return fmt::format(
+      "{header}"
+      "[[region]]\n"
+      "name = \"{name}\"\n"
+      "x = 0\n"
+      "y = 0\n"
+      "width = {size}\n"
+      "height = {size}\n"
+      "method = \"curvature\"\n"
+      "normal_map = \"{name}.normal.png\"\n"
+      "normal_green = \"opengl\"\n"
+      "depth_map = \"{name}.depth.png\"\n"
+      "depth_zero = 0.5\n"
+      "relief_px = {scene_relief}   # {comment}\n",
+      fmt::arg("header", scene.header), fmt::arg("name", scene.name), fmt::arg("size", scene.size),
+      fmt::arg("scene_relief", toml_float(2.0 * scene.relief_px)), fmt::arg("comment", scene.relief_comment));
+}
+
+void write_map_pair_files(const std::filesystem::path& outdir, const MapPairScene& scene, const NormalImage& normals,
+                          const Grid<float>& heights) {
+  Grid<float> values = heights;  // h / relief_px in [-1, 1] mapped to v in [0, 1], the range a unorm image holds
+  for (float& v : values.values) v = static_cast<float>((v / scene.relief_px + 1.0) / 2.0);
+  write_normal_png16(outdir / (scene.name + ".normal.png"), normals);
+  write_gray_png16(outdir / (scene.name + ".depth.png"), values);
+  write_text_file(outdir / (scene.name + ".toml"), map_pair_scene_text(scene));
+}
+
+}  // namespace ph
