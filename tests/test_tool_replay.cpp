@@ -23,6 +23,7 @@
 #include <thread>
 #include <vector>
 
+#include "config/daemon_config.hpp"
 #include "config/image_io.hpp"
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
@@ -162,8 +163,9 @@ TEST(ReplayTool, HelpNamesEveryFlag) {
   ScratchDir dir;
   const ToolResult r = run_tool("replay --help", dir);
   ASSERT_EQ(r.rc, 0) << r.err;
-  for (std::string_view flag : {"INPUT", "OUTPUT", "--scene", "--trace", "--start", "--output-mode", "--desktop",
-                                "--gain", "--device", "bump-gaussian-h1-r200", "FIFO", "symbolic link"}) {
+  for (std::string_view flag :
+       {"INPUT", "OUTPUT", "--scene", "--trace", "--start", "--output-mode", "--desktop", "--gain", "--device",
+        "--as-daemon", "bump-gaussian-h1-r200", "FIFO", "symbolic link"}) {
     EXPECT_TRUE(contains(r.out, flag)) << "expected '" << flag << "' in: " << r.out;
   }
 }
@@ -349,6 +351,63 @@ TEST(ReplayTool, RelativeAndAbsoluteOutputModes) {
   EXPECT_NE(bad.rc, 0);
   EXPECT_TRUE(contains(bad.err, "--output-mode")) << bad.err;
   EXPECT_FALSE(fs::exists(dir / "x.evemu"));
+}
+
+// --as-daemon: the pipeline as the daemon runs it with the scene file (daemon/configuration.cpp), compared with the
+// library's pipeline given the same settings by hand.
+TEST(ReplayTool, AsDaemonTakesTheSceneFilesDaemonTable) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir, "in.evemu", 300, 4, -2);
+  const Recording input = testing::scripted_stroke(300, 4, -2);
+  const std::string region = target_scene_text(all_targets()[7]);  // at 0, 0
+  write_target_files(dir.path(), {all_targets()[7]});
+  write_file(dir / "tuned.toml",
+             "[daemon]\noutput = \"relative\"\nacceleration = \"adaptive\"\nspeed = 0.5\n"
+             "mouse_dpi = 800\npointer_speed = 2.0\ndesktop = [0, 0, 640, 480]\n" +
+                 region);
+  write_file(dir / "plain.toml", region);
+  const auto run = [&](const std::string& args, const std::string& out) {
+    const ToolResult r = run_tool("replay --start 100.5,120.5 " + args + " " + quote(in) + " " + quote(dir / out), dir);
+    EXPECT_EQ(r.rc, 0) << args << ": " << r.err;
+    return read_text(dir / out);
+  };
+  const Scene scene = load_scene(parse_scene_file(dir / "plain.toml"));
+  PipelineConfig config = start_at({100.5, 120.5});
+  {
+    SCOPED_TRACE("a [daemon] table: each of its pipeline settings");
+    config.mode = OutputMode::relative;
+    config.acceleration = {AccelProfile::adaptive, 0.5, 800.0};
+    config.pointer_gain = 2.0;
+    config.desktop = {0, 0, 640, 480};
+    // The trace too: the desktop keeps the cursor model in, which relative output's counts do not show.
+    const std::string tuned =
+        run("--as-daemon --trace " + quote(dir / "tuned.csv") + " --scene " + quote(dir / "tuned.toml"), "tuned.evemu");
+    std::vector<FrameReport> reports;
+    EXPECT_EQ(tuned, evemu_text(replay(input, scene, config, &reports)));
+    EXPECT_EQ(read_text(dir / "tuned.csv"), trace_of(reports));
+    EXPECT_NE(tuned, run("--scene " + quote(dir / "tuned.toml"), "flags.evemu"));  // without it: the flags' defaults
+  }
+  {
+    SCOPED_TRACE("a flag beside it wins over the table");
+    config.acceleration.profile = AccelProfile::flat;
+    config.pointer_gain = 1.5;
+    EXPECT_EQ(run("--as-daemon --acceleration flat --gain 1.5 --scene " + quote(dir / "tuned.toml"), "over.evemu"),
+              evemu_text(replay(input, scene, config)));
+  }
+  {
+    SCOPED_TRACE("no [daemon] table: the daemon's defaults, absolute output and adaptive acceleration");
+    config = start_at({100.5, 120.5});
+    config.mode = OutputMode::absolute;
+    config.acceleration = acceleration_of(DaemonSettings{});
+    EXPECT_EQ(config.acceleration.profile, AccelProfile::adaptive);
+    EXPECT_EQ(run("--as-daemon --scene " + quote(dir / "plain.toml"), "plain.evemu"),
+              evemu_text(replay(input, scene, config)));
+    SCOPED_TRACE("relative output asked for: the acceleration follows it, as in the daemon (flat)");
+    config.mode = OutputMode::relative;
+    config.acceleration = {};
+    EXPECT_EQ(run("--as-daemon --output-mode relative --scene " + quote(dir / "plain.toml"), "relative.evemu"),
+              evemu_text(replay(input, scene, config)));
+  }
 }
 
 TEST(ReplayTool, StandardInputAndOutput) {

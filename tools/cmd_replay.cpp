@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "config/daemon_config.hpp"
 #include "config/scene_file.hpp"
 #include "core/engine/default_scene.hpp"
 #include "core/lab/replay.hpp"
@@ -38,6 +39,9 @@ struct ReplayOptions {
   double gain = 1.0;
   std::size_t device = 0;
   bool device_given = false;
+  // --as-daemon: the pipeline's settings from the scene's [daemon] table, but for those given as flags.
+  bool as_daemon = false;
+  bool mode_given = false, acceleration_given = false, speed_given = false, dpi_given = false, gain_given = false;
 };
 
 [[noreturn]] void fail_errno(const std::string& what, int error) {
@@ -197,35 +201,59 @@ void note_device(const std::string& input, const Recording& recording, const Rec
   }
 }
 
+struct ReplayScene {
+  Scene scene;
+  DaemonSettings daemon;  // its [daemon] table, or the defaults (the embedded scene's too)
+};
+
 // The scene file's scene (or the embedded default), with a warning per map with invalid texels (repaired) and per
 // region whose normal map and depth map hold the relief at different scales.
-Scene load_replay_scene(const std::string& scene_file) {
-  if (scene_file.empty()) return default_scene();
+ReplayScene load_replay_scene(const std::string& scene_file) {
+  if (scene_file.empty()) return {default_scene(), DaemonSettings{}};
   const SceneSpec spec = parse_scene_file(scene_file);
   SceneLoadReport report;
   Scene scene = load_scene(spec, &report);
   for (const std::string& w : invalid_texel_warnings(spec, report))
     fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
   for (const std::string& w : relief_scale_warnings(spec, scene)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
-  return scene;
+  return {std::move(scene), spec.daemon};
+}
+
+// The pipeline's settings: the flags'; with --as-daemon, the [daemon] table's as the daemon takes them
+// (daemon/configuration.cpp) wherever no flag is given. A desktop of "auto" is the default rectangle: a replay
+// has no screens to ask.
+PipelineConfig replay_config(const ReplayOptions& o, const DaemonSettings& daemon) {
+  PipelineConfig config;
+  const bool mode_from_flag = o.mode_given || !o.as_daemon;
+  config.mode = mode_from_flag ? (o.mode == "absolute" ? OutputMode::absolute : OutputMode::relative) : daemon.output;
+  if (o.as_daemon) {
+    DaemonSettings settings = daemon;
+    settings.output = config.mode;  // an acceleration the table leaves out follows the output, as in the daemon
+    config.acceleration = acceleration_of(settings);
+    config.pointer_gain = settings.pointer_speed;
+    if (settings.desktop) config.desktop = *settings.desktop;
+  }
+  if (!o.as_daemon || o.acceleration_given)
+    config.acceleration.profile = o.acceleration == "adaptive" ? AccelProfile::adaptive : AccelProfile::flat;
+  if (!o.as_daemon || o.speed_given) config.acceleration.speed = o.speed;
+  if (!o.as_daemon || o.dpi_given) config.acceleration.dpi = o.mouse_dpi;
+  if (!o.as_daemon || o.gain_given) config.pointer_gain = o.gain;
+  if (o.desktop.size() == 4) config.desktop = {o.desktop[0], o.desktop[1], o.desktop[2], o.desktop[3]};
+  if (o.start.size() == 2) config.start = Vec2{o.start[0], o.start[1]};
+  return config;
 }
 
 int run_replay(const ReplayOptions& o) {
   if (o.output == "-" && o.trace == "-") throw std::invalid_argument("OUTPUT and --trace cannot both be - (stdout)");
   // Everything is read and checked before anything is written: no partial output that looks valid.
-  const Scene scene = load_replay_scene(o.scene_file);
+  const ReplayScene loaded = load_replay_scene(o.scene_file);
+  const Scene& scene = loaded.scene;
   RecordingInfo info;
   const Recording input = read_recording_file(o.input, o.device_given ? o.device : kFirstPointerDevice, &info);
-  PipelineConfig config;
-  config.pointer_gain = o.gain;
-  config.mode = o.mode == "absolute" ? OutputMode::absolute : OutputMode::relative;
-  config.acceleration = {o.acceleration == "adaptive" ? AccelProfile::adaptive : AccelProfile::flat, o.speed,
-                         o.mouse_dpi};
-  if (o.desktop.size() == 4) config.desktop = {o.desktop[0], o.desktop[1], o.desktop[2], o.desktop[3]};
+  if (!(o.gain > 0.0) || !std::isfinite(o.gain)) throw std::invalid_argument("--gain must be a finite number > 0");
+  const PipelineConfig config = replay_config(o, loaded.daemon);
   if (config.desktop.w <= 0 || config.desktop.h <= 0)
     throw std::invalid_argument("--desktop: width and height must be > 0");
-  if (!(o.gain > 0.0) || !std::isfinite(o.gain)) throw std::invalid_argument("--gain must be a finite number > 0");
-  if (o.start.size() == 2) config.start = Vec2{o.start[0], o.start[1]};
   note_device(o.input == "-" ? "<stdin>" : o.input, input, info, o.device_given);
 
   std::vector<FrameReport> reports;
@@ -257,7 +285,8 @@ Run add_replay_command(CLI::App& app) {
   app.description(
       "Push a recorded mouse stream (evemu or `libinput record`) through the daemon's pipeline and write\n"
       "the stream the daemon would emit, as an evemu recording. Timestamps, the device description and\n"
-      "every non-motion event are kept, in order; only REL_X/REL_Y change.");
+      "every non-motion event are kept, in order; only REL_X/REL_Y change. Without --as-daemon the pipeline\n"
+      "runs with the flags' defaults (relative output, no acceleration), not the daemon's.");
   app.add_option("INPUT", o->input, "Recording to read (evemu or libinput record YAML); - for standard input")
       ->required();
   app.add_option("OUTPUT", o->output, "evemu recording to write; - for standard output")->required();
@@ -271,26 +300,36 @@ Run add_replay_command(CLI::App& app) {
   app.add_option("--start", o->start, "X,Y start of the cursor model, screen px (default: the desktop's centre)")
       ->delimiter(',')
       ->expected(2);
+  app.add_flag("--as-daemon", o->as_daemon,
+               "Run the pipeline as the daemon would with the scene file: output mode, acceleration, speed, "
+               "mouse_dpi, pointer_speed and desktop from its [daemon] table, or the daemon's defaults (absolute "
+               "output, adaptive acceleration) where it has none; each flag below given beside it wins. A desktop "
+               "of \"auto\" is 0,0,1920,1080");
   app.add_option("--output-mode", o->mode, "relative: REL_X/REL_Y with fractional carry; absolute: ABS_X/ABS_Y")
       ->check(CLI::IsMember({"relative", "absolute"}))
-      ->capture_default_str();
+      ->capture_default_str()
+      ->each([o](const std::string&) { o->mode_given = true; });
   app.add_option("--acceleration", o->acceleration,
                  "Pointer acceleration before the C/D, as the daemon's [daemon] acceleration (flat at speed 0 is "
                  "none)")
       ->check(CLI::IsMember({"flat", "adaptive"}))
-      ->capture_default_str();
+      ->capture_default_str()
+      ->each([o](const std::string&) { o->acceleration_given = true; });
   app.add_option("--speed", o->speed, "Acceleration speed setting, -1 to 1 (as the desktop's slider)")
       ->check(CLI::Range(-1.0, 1.0))
-      ->capture_default_str();
+      ->capture_default_str()
+      ->each([o](const std::string&) { o->speed_given = true; });
   app.add_option("--mouse-dpi", o->mouse_dpi, "The recorded mouse's resolution, for the adaptive profile")
       ->check(CLI::Range(kMinMouseDpi, kMaxMouseDpi))
-      ->capture_default_str();
+      ->capture_default_str()
+      ->each([o](const std::string&) { o->dpi_given = true; });
   app.add_option("--desktop", o->desktop,
                  "X,Y,W,H desktop rectangle the cursor model is kept in (default 0,0,1920,1080)")
       ->delimiter(',')
       ->expected(4);
   app.add_option("--gain", o->gain, "Screen px per device count at C/D 1 (the base pointer speed)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->each([o](const std::string&) { o->gain_given = true; });
   app.footer(
       "The embedded default scene: three targets of the curvature paper in the middle of a 1920x1080 desktop\n"
       "(bump-gaussian-h1-r200 at 135,290; hole-polynomial-h1-r200 at 710,290; bump-linear-h1-r100 at\n"
