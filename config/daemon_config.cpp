@@ -90,6 +90,15 @@ AccelSettings acceleration_of(const DaemonSettings& settings) {
   return {settings.acceleration.value_or(fallback), settings.speed, settings.mouse_dpi};
 }
 
+PipelineConfig pipeline_config_of(const DaemonSettings& settings, Rect desktop) {
+  PipelineConfig config;
+  config.desktop = desktop;
+  config.mode = settings.output;
+  config.pointer_gain = settings.pointer_speed;
+  config.acceleration = acceleration_of(settings);
+  return config;
+}
+
 bool device_matches(const DaemonSettings& settings, std::string_view name, std::uint16_t vendor,
                     std::uint16_t product) {
   if (settings.devices.empty()) return true;

@@ -41,6 +41,10 @@ inline constexpr double kMaxPointerSpeed = 100.0;
 // identity, because the desktop accelerates relative motion itself.
 AccelSettings acceleration_of(const DaemonSettings& settings);
 
+// The pipeline the daemon runs with these settings in `desktop` (the table's rectangle, or the screens' where it says
+// "auto"): their output mode, acceleration and pointer speed; the cursor starts at the desktop's centre.
+PipelineConfig pipeline_config_of(const DaemonSettings& settings, Rect desktop);
+
 // Parses one matcher; on a mistake returns nullopt and sets `error` to what is wrong and what is allowed.
 std::optional<DeviceMatch> parse_device_match(std::string_view text, std::string& error);
 

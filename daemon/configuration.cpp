@@ -55,11 +55,8 @@ Configuration load_configuration(const ConfigChoice& choice) {
     c.embedded = true;
   }
   std::string warning;
-  c.pipeline.desktop = resolve_desktop(c.settings.desktop, choice.drm_dir, warning);
+  c.pipeline = pipeline_config_of(c.settings, resolve_desktop(c.settings.desktop, choice.drm_dir, warning));
   if (!warning.empty()) c.warnings.push_back(warning);
-  c.pipeline.mode = c.settings.output;
-  c.pipeline.pointer_gain = c.settings.pointer_speed;
-  c.pipeline.acceleration = acceleration_of(c.settings);
   return c;
 }
 

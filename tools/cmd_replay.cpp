@@ -223,15 +223,14 @@ ReplayScene load_replay_scene(const std::string& scene_file) {
 // (daemon/configuration.cpp) wherever no flag is given. A desktop of "auto" is the default rectangle: a replay
 // has no screens to ask.
 PipelineConfig replay_config(const ReplayOptions& o, const DaemonSettings& daemon) {
+  const OutputMode flag_mode = o.mode == "absolute" ? OutputMode::absolute : OutputMode::relative;
   PipelineConfig config;
-  const bool mode_from_flag = o.mode_given || !o.as_daemon;
-  config.mode = mode_from_flag ? (o.mode == "absolute" ? OutputMode::absolute : OutputMode::relative) : daemon.output;
+  config.mode = flag_mode;
   if (o.as_daemon) {
     DaemonSettings settings = daemon;
-    settings.output = config.mode;  // an acceleration the table leaves out follows the output, as in the daemon
-    config.acceleration = acceleration_of(settings);
-    config.pointer_gain = settings.pointer_speed;
-    if (settings.desktop) config.desktop = *settings.desktop;
+    // An acceleration the table leaves out follows the output mode, so the mode a flag gives goes in first.
+    if (o.mode_given) settings.output = flag_mode;
+    config = pipeline_config_of(settings, settings.desktop.value_or(config.desktop));
   }
   if (!o.as_daemon || o.acceleration_given)
     config.acceleration.profile = o.acceleration == "adaptive" ? AccelProfile::adaptive : AccelProfile::flat;
