@@ -1,0 +1,77 @@
+// The manual pages against the programs' own --help: every long option a program lists is named in its page, so
+// that neither can gain an option the other does not show.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+namespace {
+
+// What `command` writes to standard output.
+std::string output_of(const std::string& command) {
+  std::string out;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return out;
+  std::array<char, 4096> buffer{};
+  while (const std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
+  EXPECT_EQ(::pclose(pipe), 0) << command;
+  return out;
+}
+
+std::string read_file(const char* path) {
+  std::ifstream in(path, std::ios::binary);
+  EXPECT_TRUE(in) << path;
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// The long options of CLI11's help: each option line starts with spaces, then "-x," or not, then "--name".
+std::vector<std::string> long_options(const std::string& help) {
+  std::vector<std::string> options;
+  std::size_t at = 0;
+  while (at < help.size()) {
+    const std::size_t end = std::min(help.find('\n', at), help.size());
+    const std::string line = help.substr(at, end - at);
+    at = end + 1;
+    const std::size_t start = line.find_first_not_of(' ');
+    if (start == 0 || start == std::string::npos) continue;
+    std::size_t dashes =
+        line.compare(start, 1, "-") == 0 && line.compare(start, 2, "--") != 0 ? line.find(',', start) : start;
+    if (dashes == std::string::npos) continue;
+    if (line[dashes] == ',') ++dashes;
+    if (line.compare(dashes, 2, "--") != 0) continue;
+    const std::size_t name_end = line.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-", dashes + 2);
+    options.push_back(line.substr(dashes, name_end - dashes));
+  }
+  return options;
+}
+
+// As a manual page writes it: roff takes a plain '-' for a hyphen, so options write "\-".
+std::string roff(const std::string& option) {
+  std::string out;
+  for (char c : option) out += c == '-' ? std::string("\\-") : std::string(1, c);
+  return out;
+}
+
+void expect_page_names_every_option(const char* program, const char* page) {
+  const std::vector<std::string> options = long_options(output_of(std::string("'") + program + "' --help"));
+  EXPECT_GE(options.size(), 4u) << program;
+  const std::string manual = read_file(page);
+  for (const std::string& option : options) {
+    EXPECT_NE(manual.find(roff(option)), std::string::npos) << page << " does not name " << option;
+  }
+}
+
+TEST(ManPages, TheDaemonsPageNamesEveryOption) { expect_page_names_every_option(PH_DAEMON_PATH, PH_DAEMON_MAN_PAGE); }
+
+#ifdef PH_SESSION_PATH
+TEST(ManPages, TheSessionHelpersPageNamesEveryOption) {
+  expect_page_names_every_option(PH_SESSION_PATH, PH_SESSION_MAN_PAGE);
+}
+#endif
+
+}  // namespace
