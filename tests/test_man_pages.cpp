@@ -1,5 +1,6 @@
 // The manual pages against the programs' own --help: every long option a program lists is named in its page, so
 // that neither can gain an option the other does not show.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -58,11 +59,46 @@ std::string roff(const std::string& option) {
 }
 
 void expect_page_names_every_option(const char* program, const char* page) {
-  const std::vector<std::string> options = long_options(output_of(std::string("'") + program + "' --help"));
+  const std::vector<std::string> options = long_options(output_of(fmt::format("'{}' --help", program)));
   EXPECT_GE(options.size(), 4u) << program;
   const std::string manual = read_file(page);
   for (const std::string& option : options) {
     EXPECT_NE(manual.find(roff(option)), std::string::npos) << page << " does not name " << option;
+  }
+}
+
+// The commands `pseudohaptic --help` lists under "Subcommands:", one per line, indented by two spaces.
+std::vector<std::string> listed_commands(const std::string& help) {
+  std::vector<std::string> commands;
+  std::size_t at = help.find("Subcommands:");
+  while (at < help.size()) {
+    const std::size_t end = std::min(help.find('\n', at), help.size());
+    const std::string line = help.substr(at, end - at);
+    at = end + 1;
+    if (line.size() > 2 && line.starts_with("  ") && line[2] != ' ')
+      commands.push_back(line.substr(2, line.find(' ', 2) - 2));
+  }
+  return commands;
+}
+
+// Whether a manual names `word` (roff-escaped) between `before` and `after`. The texts are formatted, not added:
+// GCC 12 warns of an out-of-bounds copy in `"literal" + std::string + "literal"` at -O2, wrongly.
+bool names(const std::string& manual, const char* before, const std::string& word, const char* after) {
+  return manual.find(fmt::format("{}{}{}", before, roff(word), after)) != std::string::npos;
+}
+
+// Every command has its line in the synopsis and an entry under COMMANDS, and every option of each is named.
+TEST(ManPages, TheToolsPageNamesEveryCommandAndItsOptions) {
+  const std::string manual = read_file(PH_TOOL_MAN_PAGE);
+  const std::vector<std::string> commands = listed_commands(output_of(fmt::format("'{}' --help", PH_TOOL_PATH)));
+  EXPECT_GE(commands.size(), 10u);
+  for (const std::string& command : commands) {
+    EXPECT_TRUE(names(manual, "\n.B pseudohaptic ", command, "\n")) << command << ": not in pseudohaptic.1's synopsis";
+    EXPECT_TRUE(names(manual, "\n.BI \"", command, " ") || names(manual, "\n.B ", command, "\n"))
+        << command << ": no entry in pseudohaptic.1's COMMANDS";
+    for (const std::string& option : long_options(output_of(fmt::format("'{}' {} --help", PH_TOOL_PATH, command)))) {
+      EXPECT_TRUE(names(manual, "", option, "")) << "pseudohaptic.1 does not name " << command << " " << option;
+    }
   }
 }
 
