@@ -11,7 +11,6 @@
 #include <cerrno>
 #include <cmath>
 #include <fstream>
-#include <iterator>
 #include <string>
 #include <thread>
 
@@ -21,16 +20,12 @@
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
 #include "core/engine/targets.hpp"
+#include "tests/file_bytes.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/thrown_message.hpp"
 
 namespace ph {
 namespace {
-
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 void write_text(const std::filesystem::path& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
@@ -48,7 +43,7 @@ int in_child(Body body) {
 }
 
 bool maps_image_library() {
-  const std::string maps = read_text("/proc/self/maps");
+  const std::string maps = read_file_text("/proc/self/maps");
   return maps.find("ph_image_oiio") != std::string::npos || maps.find("OpenImageIO") != std::string::npos;
 }
 
@@ -68,7 +63,7 @@ std::filesystem::path write_scene(const std::filesystem::path& dir, const Target
             }),
             0);
   const std::filesystem::path scene = target_file_paths(dir, spec).scene;
-  write_text(scene, read_text(scene) + "\n[region.materials]\nsource = \"depth\"\n");
+  write_text(scene, read_file_text(scene) + "\n[region.materials]\nsource = \"depth\"\n");
   return scene;
 }
 
@@ -108,7 +103,7 @@ TEST(ImageChild, FieldsEqualThoseReadInProcessAndTheModuleIsNeverMappedHere) {
 TEST(ImageChild, AHybridRegionIsPreparedAsInProcess) {
   const ScratchDir dir("image-child-hybrid");
   const std::filesystem::path scene_file = write_scene(dir.path(), small_target());
-  std::string text = read_text(scene_file);
+  std::string text = read_file_text(scene_file);
   const std::string curvature = "method = \"curvature\"";
   ASSERT_NE(text.find(curvature), std::string::npos) << text;
   text.replace(text.find(curvature), curvature.size(), "method = \"hybrid\"");
@@ -176,7 +171,7 @@ TEST(ImageChild, CorruptImagesAreErrorsThatNameTheFile) {
   const std::filesystem::path scene_file = write_scene(dir.path(), small_target());
   const SceneSpec spec = parse_scene_file(scene_file);
   const std::filesystem::path depth = *spec.regions[0].sources.depth_map;
-  const std::string png = read_text(depth);
+  const std::string png = read_file_text(depth);
   for (const std::string& bad : {png.substr(0, png.size() / 2), png.substr(0, 40) + std::string(4000, '\x5a'),
                                  std::string("\x89PNG\r\n\x1a\n") + std::string(300, '\xff')}) {
     write_text(depth, bad);

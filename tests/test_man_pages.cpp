@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
-#include <fstream>
-#include <iterator>
 #include <string>
 #include <vector>
+
+#include "tests/file_bytes.hpp"
 
 namespace {
 
@@ -22,12 +22,6 @@ std::string output_of(const std::string& command) {
   while (const std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
   EXPECT_EQ(::pclose(pipe), 0) << command;
   return out;
-}
-
-std::string read_file(const char* path) {
-  std::ifstream in(path, std::ios::binary);
-  EXPECT_TRUE(in) << path;
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 // The long options of CLI11's help: each option line starts with spaces, then "-x," or not, then "--name".
@@ -61,7 +55,7 @@ std::string roff(const std::string& option) {
 void expect_page_names_every_option(const char* program, const char* page) {
   const std::vector<std::string> options = long_options(output_of(fmt::format("'{}' --help", program)));
   EXPECT_GE(options.size(), 4u) << program;
-  const std::string manual = read_file(page);
+  const std::string manual = ph::read_file_text(page);
   for (const std::string& option : options) {
     EXPECT_NE(manual.find(roff(option)), std::string::npos) << page << " does not name " << option;
   }
@@ -89,7 +83,7 @@ bool names(const std::string& manual, const char* before, const std::string& wor
 
 // Every command has its line in the synopsis and an entry under COMMANDS, and every option of each is named.
 TEST(ManPages, TheToolsPageNamesEveryCommandAndItsOptions) {
-  const std::string manual = read_file(PH_TOOL_MAN_PAGE);
+  const std::string manual = ph::read_file_text(PH_TOOL_MAN_PAGE);
   const std::vector<std::string> commands = listed_commands(output_of(fmt::format("'{}' --help", PH_TOOL_PATH)));
   EXPECT_GE(commands.size(), 10u);
   for (const std::string& command : commands) {

@@ -10,7 +10,6 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
-#include <iterator>
 #include <set>
 #include <string>
 #include <string_view>
@@ -25,6 +24,7 @@
 #include "core/engine/method_depth.hpp"
 #include "core/engine/method_hybrid.hpp"
 #include "core/engine/targets.hpp"
+#include "tests/file_bytes.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {
@@ -606,14 +606,8 @@ std::string uncommented(std::string_view text) {
   return out;
 }
 
-std::string read_file(const char* path) {
-  std::ifstream in(path, std::ios::binary);
-  EXPECT_TRUE(in) << path;
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 TEST(SceneFileDocs, TheExamplesDefaultsAreTheParsersDefaults) {
-  const std::string example = read_file(PH_EXAMPLE_SCENE);
+  const std::string example = read_file_text(PH_EXAMPLE_SCENE);
   const SceneSpec as_shipped = parse_scene_text(example, PH_EXAMPLE_SCENE);
   EXPECT_TRUE(as_shipped.regions.empty());
 
@@ -715,7 +709,7 @@ std::set<std::string, std::less<>> bold_words(std::string_view roff) {
 }
 
 TEST(SceneFileDocs, TheManPageNamesEveryKeyTheParserAllows) {
-  const std::set<std::string, std::less<>> documented = bold_words(read_file(PH_DAEMON_MAN_PAGE));
+  const std::set<std::string, std::less<>> documented = bold_words(read_file_text(PH_DAEMON_MAN_PAGE));
   for (const char* table : {"daemon", "region", "curvature", "depth", "hybrid", "materials", "materials.damping",
                             "materials.friction", "materials.stick_slip", "wells"}) {
     const std::vector<std::string> keys = allowed_keys(table);

@@ -4,8 +4,6 @@
 #include <unistd.h>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <set>
 #include <sstream>
 #include <string>
@@ -15,6 +13,7 @@
 #include "config/target_files.hpp"
 #include "core/engine/decode.hpp"
 #include "core/engine/targets.hpp"
+#include "tests/file_bytes.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {
@@ -41,11 +40,6 @@ std::vector<Vec2> sample_points(const TargetSpec& spec) {
 double distance_from_centre(const TargetSpec& spec, Vec2 p) {
   const double c = spec.size / 2.0;
   return length(p - Vec2{c, c});
-}
-
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 TEST(Targets, AllTargetsHaveDistinctNamesInTheStatedOrder) {
@@ -242,7 +236,7 @@ TEST(TargetFiles, RoundTripThroughTheWrittenFiles) {
     EXPECT_EQ(paths.depth_map.filename(), name + ".depth.png");
     EXPECT_EQ(paths.scene.filename(), name + ".toml");
 
-    const std::string scene = read_text(paths.scene);
+    const std::string scene = read_file_text(paths.scene);
     EXPECT_EQ(scene, target_scene_text(spec));
     EXPECT_NE(scene.find("name = \"" + name + "\""), std::string::npos);
     EXPECT_NE(scene.find("normal_map = \"" + name + ".normal.png\""), std::string::npos);

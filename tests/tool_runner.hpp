@@ -6,10 +6,9 @@
 
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <string>
 
+#include "tests/file_bytes.hpp"
 #include "tests/scratch_dir.hpp"
 
 #ifndef PH_TOOL_PATH
@@ -18,10 +17,7 @@
 
 namespace ph {
 
-inline std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+inline std::string read_text(const std::filesystem::path& path) { return read_file_text(path); }
 
 // A word for the shell, single-quoted.
 inline std::string quote(const std::string& word) {
