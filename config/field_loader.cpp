@@ -1,5 +1,8 @@
 #include "config/field_loader.hpp"
 
+#include <fmt/core.h>
+
+#include <cmath>
 #include <optional>
 #include <string>
 #include <utility>
@@ -91,6 +94,49 @@ std::vector<std::string> invalid_texel_notes(const FieldSources& sources, const 
   };
   note("normal map", sources.normal_map, report.normals, "length < 0.5, n_z <= 0 or not finite");
   note("depth map", sources.depth_map, report.depth, "not finite");
+  return notes;
+}
+
+namespace {
+
+// How much wider (sx) and taller (sy) the region shows the map than its own size.
+struct MapScale {
+  double sx = 1.0;
+  double sy = 1.0;
+  // A map within 1 % of the region's proportions is taken as in proportion (a region a pixel off a map's size).
+  bool in_proportion() const { return std::abs(sx / sy - 1.0) <= 0.01; }
+};
+
+MapScale map_scale(const DecodeReport& map, std::int32_t width, std::int32_t height) {
+  return {static_cast<double>(width) / map.width, static_cast<double>(height) / map.height};
+}
+
+bool was_read(const DecodeReport& map) { return map.width > 0 && map.height > 0; }
+
+}  // namespace
+
+std::string map_size_description(const DecodeReport& map, std::int32_t width, std::int32_t height) {
+  if (!was_read(map)) return "";
+  std::string text = fmt::format("{}x{} px", map.width, map.height);
+  if (map.width == width && map.height == height) return text;
+  text += fmt::format(", resampled to the region's {}x{}", width, height);
+  const MapScale scale = map_scale(map, width, height);
+  if (!scale.in_proportion()) {
+    text += fmt::format("; out of proportion: stretched by {:.3g} across and {:.3g} down", scale.sx, scale.sy);
+  }
+  return text;
+}
+
+std::vector<std::string> stretched_map_notes(const FieldSources& sources, const FieldLoadReport& report,
+                                             std::int32_t width, std::int32_t height) {
+  std::vector<std::string> notes;
+  auto note = [&](const char* what, const std::optional<std::filesystem::path>& path, const DecodeReport& r) {
+    if (!was_read(r) || map_scale(r, width, height).in_proportion()) return;
+    notes.push_back(fmt::format("{} {}: {}", what, path ? path->string() : std::string("(none)"),
+                                map_size_description(r, width, height)));
+  };
+  note("normal map", sources.normal_map, report.normals);
+  note("depth map", sources.depth_map, report.depth);
   return notes;
 }
 

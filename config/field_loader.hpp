@@ -2,6 +2,7 @@
 // region's method needs (a method that needs normals and has only a depth map gets them from the depth).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -33,5 +34,15 @@ RegionFields load_region_fields(const FieldSources& sources, std::int32_t width,
 // "normal map PATH: N of M texels invalid (...), each given the nearest valid texel's value". For the log
 // of whatever loaded the fields, after its own prefix (the scene file and region).
 std::vector<std::string> invalid_texel_notes(const FieldSources& sources, const FieldLoadReport& report);
+
+// What became of a map read for a region of width x height px (docs/METHODS.md, "Screen, regions and fields"):
+// "500x500 px", or "1024x1024 px, resampled to the region's 500x500", and where the two sizes are not in
+// proportion "; out of proportion: stretched by 1.6 across and 0.6 down". Empty for a map not read.
+std::string map_size_description(const DecodeReport& map, std::int32_t width, std::int32_t height);
+
+// One line per map whose size is out of proportion with the region's, so that its relief is stretched on the
+// screen: "normal map PATH: " and map_size_description's text. For the log, as invalid_texel_notes.
+std::vector<std::string> stretched_map_notes(const FieldSources& sources, const FieldLoadReport& report,
+                                             std::int32_t width, std::int32_t height);
 
 }  // namespace ph

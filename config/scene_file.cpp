@@ -612,11 +612,14 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
   return scene;
 }
 
-std::vector<std::string> invalid_texel_warnings(const SceneSpec& spec, const SceneLoadReport& report) {
+std::vector<std::string> map_warnings(const SceneSpec& spec, const SceneLoadReport& report) {
   std::vector<std::string> out;
   for (std::size_t i = 0; i < spec.regions.size() && i < report.regions.size(); ++i) {
     const RegionSpec& r = spec.regions[i];
-    for (const std::string& note : invalid_texel_notes(r.sources, report.regions[i]))
+    std::vector<std::string> notes = invalid_texel_notes(r.sources, report.regions[i]);
+    for (std::string& note : stretched_map_notes(r.sources, report.regions[i], r.rect.w, r.rect.h))
+      notes.push_back(std::move(note));
+    for (const std::string& note : notes)
       out.push_back(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, note));
   }
   return out;

@@ -89,8 +89,9 @@ struct SceneLoadReport {
 Scene load_scene(const SceneSpec& spec, SceneLoadReport* report = nullptr, FieldReader* reader = nullptr);
 
 // One line per region and map with invalid texels (counted, repaired and reported at load: docs/METHODS.md,
-// "Screen, regions and fields"), "FILE:LINE: region 'NAME': " and invalid_texel_notes' text; none for a clean scene.
-std::vector<std::string> invalid_texel_warnings(const SceneSpec& spec, const SceneLoadReport& report);
+// "Screen, regions and fields") or stretched out of proportion to the region, "FILE:LINE: region 'NAME': " and
+// invalid_texel_notes' or stretched_map_notes' text; none for a clean scene.
+std::vector<std::string> map_warnings(const SceneSpec& spec, const SceneLoadReport& report);
 
 // What the hybrid method found of a region's two maps' scales (RegionFields::normals_to_depth_slope_ratio): the
 // ratio of the normal map's slopes to the depth map's, and the depth map's relief_px that would make them agree.

@@ -1,5 +1,6 @@
 // The daemon's pieces that need no device: its log lines, its configuration (file, embedded default,
 // reload decisions) and its messages to systemd.
+#include <fmt/core.h>
 #include <gtest/gtest.h>
 #include <stdlib.h>
 #include <sys/socket.h>
@@ -190,6 +191,36 @@ TEST(DaemonConfiguration, InvalidTexelsAreWarnedPerRegionAndMap) {
     EXPECT_EQ(g.x, 0.0f);
     EXPECT_EQ(g.y, 0.0f);
   }
+}
+
+// A map resampled to a region of other proportions shows its relief stretched on the screen: warned of, naming the
+// map's size and the stretch; a map enlarged in proportion, or a pixel off it, is not.
+TEST(DaemonConfiguration, MapsStretchedOutOfProportionAreWarned) {
+  const ScratchDir dir("daemon-config-stretch");
+  write_normal_png16(dir / "square.png", NormalImage(200, 200));
+  Grid<float> heights(40, 20, 0.5f);
+  write_gray_png16(dir / "flat.png", heights);
+  const auto region = [](const char* name, int x, int w, int h, const char* map) {
+    return fmt::format("\n[[region]]\nname = \"{}\"\nx = {}\ny = 0\nwidth = {}\nheight = {}\n{}\n", name, x, w, h, map);
+  };
+  std::ofstream(dir / "scene.toml") << "[daemon]\ndesktop = [0, 0, 800, 600]\n"
+                                    << region("twice", 0, 400, 400, "normal_map = \"square.png\"")
+                                    << region("a-pixel-off", 500, 201, 200, "normal_map = \"square.png\"")
+                                    << region("wide", 0, 400, 100, "normal_map = \"square.png\"")
+                                    << region("tall", 500, 40, 40, "method = \"depth\"\ndepth_map = \"flat.png\"");
+  const Configuration c = load_configuration(choice_in(dir));
+  std::string all;
+  for (const std::string& w : c.warnings) all += w + "\n";
+  ASSERT_EQ(c.warnings.size(), 2u) << all;
+  const std::string scene = (dir / "scene.toml").string();
+  EXPECT_EQ(c.warnings[0],
+            scene + ":20: region 'wide': normal map " + (dir / "square.png").string() +
+                ": 200x200 px, resampled to the region's 400x100; out of proportion: stretched by 2 across and "
+                "0.5 down");
+  EXPECT_EQ(c.warnings[1],
+            scene + ":28: region 'tall': depth map " + (dir / "flat.png").string() +
+                ": 40x20 px, resampled to the region's 40x40; out of proportion: stretched by 1 across and "
+                "2 down");
 }
 
 // A hybrid region whose depth map holds its relief at half the scale of its normal map (relief_px 50 where the normals

@@ -629,7 +629,8 @@ TEST(Tool, CheckConfig) {
     EXPECT_TRUE(r.err.empty()) << r.err;
     for (std::string_view part :
          {"name:Logitech*, id:046d:c077", "absolute", "0,0 2560x1440", "1.5", "'bump-gaussian-h1-r100'", "500x500",
-          "curvature", "2000000 bytes", "0 invalid texels repaired"}) {
+          "curvature", "2000000 bytes", "0 invalid texels repaired", "\n      normal map: 500x500 px\n",
+          "\n      depth map: not read: neither the method nor an effect uses it\n"}) {
       EXPECT_TRUE(contains(r.out, part)) << "expected '" << part << "' in: " << r.out;
     }
   }
@@ -719,6 +720,38 @@ TEST(Tool, CheckConfig) {
     const ToolResult fused = run_tool("check-config " + quote(dir / "generated.toml"), dir);
     ASSERT_EQ(fused.rc, 0) << fused.err;
     EXPECT_TRUE(contains(fused.out, "fusion: the normals are pulled toward the depth map's slopes")) << fused.out;
+  }
+  {
+    SCOPED_TRACE("maps resampled: in proportion, and stretched out of it (a warning)");
+    std::string text = read_text(paths.scene);
+    for (const auto& [from, to] : {std::pair<std::string, std::string>{"width = 500", "width = 800"},
+                                   {"height = 500", "height = 300"},
+                                   {"method = \"curvature\"", "method = \"depth\""}}) {
+      const std::size_t at = text.find(from);
+      ASSERT_NE(at, std::string::npos) << from << " in " << text;
+      text.replace(at, from.size(), to);
+    }
+    std::ofstream(dir / "stretched.toml", std::ios::binary) << text;
+    const ToolResult r = run_tool("check-config " + quote(dir / "stretched.toml"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    const std::string stretched =
+        "500x500 px, resampled to the region's 800x300; out of proportion: stretched by 1.6 across and 0.6 down";
+    EXPECT_TRUE(contains(r.out, "\n      depth map: " + stretched + "\n")) << r.out;
+    EXPECT_TRUE(contains(r.out, "\n      normal map: not read")) << r.out;
+    EXPECT_TRUE(contains(r.err, "pseudohaptic: warning: " + (dir / "stretched.toml").string() +
+                                    ":3: region 'bump-gaussian-h1-r100': depth map " + paths.depth_map.string() + ": " +
+                                    stretched + "\n"))
+        << r.err;
+    EXPECT_TRUE(run_tool("check-config --quiet " + quote(dir / "stretched.toml"), dir).err.empty());
+    // The same region at 250 x 250: resampled in proportion, no warning.
+    text.replace(text.find("width = 800"), 11, "width = 250");
+    text.replace(text.find("height = 300"), 12, "height = 250");
+    std::ofstream(dir / "halved.toml", std::ios::binary) << text;
+    const ToolResult halved = run_tool("check-config " + quote(dir / "halved.toml"), dir);
+    ASSERT_EQ(halved.rc, 0) << halved.err;
+    EXPECT_TRUE(contains(halved.out, "\n      depth map: 500x500 px, resampled to the region's 250x250\n"))
+        << halved.out;
+    EXPECT_TRUE(halved.err.empty()) << halved.err;
   }
   {
     SCOPED_TRACE("bad setting");

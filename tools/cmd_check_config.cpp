@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "config/daemon_config.hpp"
+#include "config/field_loader.hpp"
 #include "config/scene_file.hpp"
 #include "core/engine/decode.hpp"
 #include "tools/commands.hpp"
@@ -73,6 +74,13 @@ std::string scale_line(const RegionSpec& region, const RegionFields& fields) {
   return scale->described();
 }
 
+// A map the region names: its own size and what became of it (resampled, stretched), or that the region's method and
+// effects do not read it.
+std::string map_line(const DecodeReport& map, const RegionSpec& region) {
+  const std::string size = map_size_description(map, region.rect.w, region.rect.h);
+  return size.empty() ? "not read: neither the method nor an effect uses it" : size;
+}
+
 std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadReport& report) {
   fmt::memory_buffer out;
   const auto to = std::back_inserter(out);
@@ -107,6 +115,8 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
     fmt::format_to(to, "  [{}] '{}': {},{} {}x{} px, {}{}, {} bytes, {} invalid texels repaired\n", i, r.name, r.rect.x,
                    r.rect.y, r.rect.w, r.rect.h, r.method, effects, bytes,
                    fr.normals.invalid_texels + fr.depth.invalid_texels);
+    if (r.sources.normal_map) fmt::format_to(to, "      normal map: {}\n", map_line(fr.normals, r));
+    if (r.sources.depth_map) fmt::format_to(to, "      depth map: {}\n", map_line(fr.depth, r));
     if (i < report.variants.size()) fmt::format_to(to, "      traversal: {}\n", report.variants[i]);
     if (region.fields.discontinuity) {
       fmt::format_to(to, "      steps: {}\n", steps_line(region.fields));
@@ -124,6 +134,8 @@ int run_check_config(const CheckConfigOptions& o) {
   SceneLoadReport report;
   const Scene scene = load_scene(spec, &report);
   if (o.quiet) return 0;
+  // What the daemon logs as warnings at load, before the summary that counts them.
+  for (const std::string& w : map_warnings(spec, report)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
   const std::string text = summary(spec, scene, report);
   if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size() || std::fflush(stdout) != 0)
     throw std::runtime_error("<stdout>: write failed");

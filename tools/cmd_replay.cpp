@@ -206,15 +206,14 @@ struct ReplayScene {
   DaemonSettings daemon;  // its [daemon] table, or the defaults (the embedded scene's too)
 };
 
-// The scene file's scene (or the embedded default), with a warning per map with invalid texels (repaired) and per
-// region whose normal map and depth map hold the relief at different scales.
+// The scene file's scene (or the embedded default), with a warning per map with invalid texels (repaired) or stretched
+// out of proportion, and per region whose normal map and depth map hold the relief at different scales.
 ReplayScene load_replay_scene(const std::string& scene_file) {
   if (scene_file.empty()) return {default_scene(), DaemonSettings{}};
   const SceneSpec spec = parse_scene_file(scene_file);
   SceneLoadReport report;
   Scene scene = load_scene(spec, &report);
-  for (const std::string& w : invalid_texel_warnings(spec, report))
-    fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
+  for (const std::string& w : map_warnings(spec, report)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
   for (const std::string& w : relief_scale_warnings(spec, scene)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
   return {std::move(scene), spec.daemon};
 }

@@ -99,7 +99,7 @@ Scene scene_from_target(const TraceOptions& o) {
   throw std::invalid_argument(fmt::format("no target named '{}' (see `pseudohaptic targets`)", o.target));
 }
 
-// The scene to trace; `warnings` gets a line per map with invalid texels (repaired).
+// The scene to trace; `warnings` gets a line per map with invalid texels (repaired) or stretched out of proportion.
 Scene build_scene(const TraceOptions& o, std::vector<std::string>& warnings) {
   const int sources = !o.scene_file.empty() + !o.target.empty() + (!o.normal_map.empty() || !o.depth_map.empty());
   if (sources != 1) throw std::invalid_argument("give exactly one of --scene, --target, or --normal-map/--depth-map");
@@ -110,7 +110,7 @@ Scene build_scene(const TraceOptions& o, std::vector<std::string>& warnings) {
   for (RegionSpec& r : spec.regions) apply_overrides(o, r);
   SceneLoadReport report;
   Scene scene = load_scene(spec, &report);
-  for (std::string& warning : invalid_texel_warnings(spec, report)) warnings.push_back(std::move(warning));
+  for (std::string& warning : map_warnings(spec, report)) warnings.push_back(std::move(warning));
   return scene;
 }
 
@@ -174,7 +174,8 @@ Run add_trace_command(CLI::App& app) {
       "frame,x,y,texel_x,texel_y,cos_alpha,delta_beta_deg,kmax,kmin,dh,cd,region\n"
       "(x, y: where the cursor entered the texel, screen px; cos_alpha, delta_beta_deg, kmax, kmin: curvature\n"
       "method, dh: depth method, empty for the other). The last frame is shortened so that the stroke ends at\n"
-      "--to. A summary, and a warning per map with invalid texels (repaired), go to standard error.");
+      "--to. A summary, and a warning per map with invalid texels (repaired) or stretched out of proportion\n"
+      "to its region, go to standard error.");
   auto* src = app.add_option_group("texture", "What to trace across (exactly one)");
   src->add_option("--scene", o->scene_file, "Scene file (TOML); the stroke defaults to the first region");
   src->add_option("--target", o->target, "One of the 24 targets by name (e.g. bump-gaussian-h1-r200), exact fields");

@@ -259,7 +259,7 @@ NormalImage decode_normals(const RawImage& image, const NormalDecodeOptions& opt
     }
   }
   if (invalid > 0) repair_from_nearest_valid(normals, std::move(valid), Normal{});
-  report = {normals.values.size(), invalid, normal_value_step(image, unorm)};
+  report = {normals.values.size(), invalid, normal_value_step(image, unorm), image.width, image.height};
   return normals;
 }
 
@@ -346,7 +346,7 @@ GradientField decode_normals_to_gradient(const RawImage& image, const NormalDeco
   // A texel's gradient depends on its normal alone, so repairing gradients equals repairing normals first;
   // the fallback is a flat normal's gradient.
   if (invalid > 0) repair_from_nearest_valid(gradient, std::move(valid), clamped_gradient(Normal{}));
-  report = {gradient.values.size(), invalid, normal_value_step(image, unorm)};
+  report = {gradient.values.size(), invalid, normal_value_step(image, unorm), image.width, image.height};
   return gradient;
 }
 
@@ -367,7 +367,8 @@ DepthField decode_depth(const RawImage& image, const DepthDecodeOptions& options
     }
   }
   if (invalid > 0) repair_from_nearest_valid(depth, std::move(valid), 0.0f);
-  report = {depth.values.size(), invalid, image.code_max > 0 ? std::abs(options.relief_px) / image.code_max : 0.0};
+  report = {depth.values.size(), invalid, image.code_max > 0 ? std::abs(options.relief_px) / image.code_max : 0.0,
+            image.width, image.height};
   return depth;
 }
 

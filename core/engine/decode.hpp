@@ -48,6 +48,9 @@ struct DecodeReport {
   // The step between neighbouring stored values in what was decoded: 2 / code_max of a normal component from a
   // unorm map (1 / code_max from a signed one), relief_px / code_max px of height from a depth map; 0 for float.
   double value_step = 0.0;
+  // The image's own size (texels = width x height); a region of another size gets it resampled.
+  std::int32_t width = 0;
+  std::int32_t height = 0;
 };
 
 // The standard deviation of a gradient's rounding error from the storage of its map, given the map's value_step:

@@ -44,14 +44,14 @@ RawImage encode_depth_map(const DepthField& depth, double lo, double hi, std::ui
 }
 
 NormalImage stored_normals(const NormalImage& normals, std::uint32_t code_max, DecodeReport* report) {
-  DecodeReport decoded{normals.values.size(), 0, 0.0};
+  DecodeReport decoded{normals.values.size(), 0, 0.0, normals.width, normals.height};
   NormalImage out = code_max == 0 ? normals : decode_normals(encode_normal_map(normals, code_max), {}, decoded);
   if (report != nullptr) *report = decoded;
   return out;
 }
 
 DepthField stored_depth(const DepthField& depth, std::uint32_t code_max, DecodeReport* report) {
-  DecodeReport decoded{depth.values.size(), 0, 0.0};
+  DecodeReport decoded{depth.values.size(), 0, 0.0, depth.width, depth.height};
   DepthField out = depth;
   if (code_max != 0 && !depth.empty()) {
     const auto [lo, hi] = std::minmax_element(depth.values.begin(), depth.values.end());
