@@ -308,8 +308,17 @@ TEST(Tool, TraceErrors) {
                          {"--method", "bogus", "curvature", "depth"});
   }
   {
-    SCOPED_TRACE("bad --step");
-    expect_clean_failure(run_tool("trace --target " + kBump + " --step -1" + out, dir), {"step"});
+    SCOPED_TRACE("bad --step, --speed, --rate, --from, --to: each named");
+    expect_clean_failure(run_tool("trace --target " + kBump + " --step -1" + out, dir),
+                         {"--step must be a finite number > 0"});
+    expect_clean_failure(run_tool("trace --target " + kBump + " --speed 0" + out, dir),
+                         {"--speed must be a finite number > 0"});
+    expect_clean_failure(run_tool("trace --target " + kBump + " --speed 100 --rate 0" + out, dir),
+                         {"--rate must be a finite number > 0"});
+    expect_clean_failure(run_tool("trace --target " + kBump + " --from nan,3" + out, dir),
+                         {"--from: X and Y must be finite numbers"});
+    expect_clean_failure(run_tool("trace --target " + kBump + " --to 3,inf" + out, dir),
+                         {"--to: X and Y must be finite numbers"});
   }
   {
     SCOPED_TRACE("bad scene file");

@@ -309,6 +309,12 @@ TEST(ReplayTool, StartPlacesTheCursorModel) {
     EXPECT_NE(r.rc, 0);
     EXPECT_FALSE(fs::exists(dir / "x.evemu"));
   }
+  {
+    SCOPED_TRACE("a start that is not a number");
+    const ToolResult r = run_tool("replay --start nan,3 " + quote(in) + " " + quote(dir / "x.evemu"), dir);
+    expect_clean_failure(r, {"--start: X and Y must be finite numbers"});
+    EXPECT_FALSE(fs::exists(dir / "x.evemu"));
+  }
 }
 
 TEST(ReplayTool, RelativeAndAbsoluteOutputModes) {

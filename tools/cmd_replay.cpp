@@ -252,6 +252,8 @@ int run_replay(const ReplayOptions& o) {
   const PipelineConfig config = replay_config(o, loaded.daemon);
   if (config.desktop.w <= 0 || config.desktop.h <= 0)
     throw std::invalid_argument("--desktop: width and height must be > 0");
+  if (config.start && !(std::isfinite(config.start->x) && std::isfinite(config.start->y)))
+    throw std::invalid_argument("--start: X and Y must be finite numbers");
   note_device(o.input == "-" ? "<stdin>" : o.input, input, info, o.device_given);
 
   std::vector<FrameReport> reports;

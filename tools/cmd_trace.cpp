@@ -2,11 +2,14 @@
 #include <fmt/core.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "config/field_loader.hpp"
@@ -116,6 +119,22 @@ Scene build_scene(const TraceOptions& o, std::vector<std::string>& warnings) {
 
 Vec2 point(const std::vector<double>& v, Vec2 fallback) { return v.size() == 2 ? Vec2{v[0], v[1]} : fallback; }
 
+// The stroke's options, each named in its error (the stroke itself would only say that it has no length).
+void check_stroke_options(const TraceOptions& o) {
+  if (o.step && o.speed) throw std::invalid_argument("give --step or --speed, not both");
+  const auto positive = [](const char* name, const std::optional<double>& v) {
+    if (v && !(*v > 0.0 && std::isfinite(*v)))
+      throw std::invalid_argument(fmt::format("{} must be a finite number > 0", name));
+  };
+  positive("--step", o.step);
+  positive("--speed", o.speed);
+  if (o.speed) positive("--rate", o.rate);
+  for (const auto& [name, v] : {std::pair<const char*, const std::vector<double>&>{"--from", o.from}, {"--to", o.to}}) {
+    if (!std::all_of(v.begin(), v.end(), [](double c) { return std::isfinite(c); }))
+      throw std::invalid_argument(fmt::format("{}: X and Y must be finite numbers", name));
+  }
+}
+
 // A finite number, or nothing (an empty cell). Zero is written 0, whatever its sign: a flat texel's cos alpha
 // comes out of the arithmetic as -0 (a = -t / sqrt(1 + t^2) with t = +0).
 void append_number(fmt::memory_buffer& out, double v) {
@@ -131,7 +150,7 @@ int run_trace(const TraceOptions& o) {
   const double mid_y = first.y + first.h / 2.0;
   stroke.from = point(o.from, {static_cast<double>(first.x), mid_y});
   stroke.to = point(o.to, {static_cast<double>(first.x + first.w), mid_y});
-  if (o.step && o.speed) throw std::invalid_argument("give --step or --speed, not both");
+  check_stroke_options(o);
   stroke.motor_step_px = o.step ? *o.step : o.speed ? *o.speed / o.rate : 1.0;
 
   std::FILE* file = o.output == "-" ? stdout : std::fopen(o.output.c_str(), "w");
