@@ -12,6 +12,7 @@
 #include "core/engine/method_depth.hpp"
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
+#include "tests/split_stroke.hpp"
 
 namespace ph {
 namespace {
@@ -210,21 +211,10 @@ TEST(Traversal, SplittingAFrameDoesNotMoveTheEnd) {
   const TargetSpec spec = all_targets()[9];  // bump, gaussian
   const Scene scene = scene_of({target_region(spec, {0, 0}, false)});
   std::mt19937_64 rng(8);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int trial = 0; trial < 200; ++trial) {
-    const Vec2 start{500.0 * u(rng), 500.0 * u(rng)};
-    const double phi = 2.0 * std::numbers::pi * u(rng);
-    const Vec2 m{std::cos(phi), std::sin(phi)};
-    CursorState whole = cursor_at(start), pieces = cursor_at(start);
-    advance(scene, whole, m * 300.0);
-    double left = 300.0;
-    while (left > 0.0) {
-      const double step = std::min(left, 5.0 * u(rng));
-      advance(scene, pieces, m * step);
-      left -= step;
-    }
-    ASSERT_LT(length(whole.position - pieces.position), 1e-9);
-    ASSERT_EQ(whole.texel, pieces.texel);
+    const SplitStroke s = split_stroke(scene, rng);
+    ASSERT_LT(length(s.whole.position - s.pieces.position), 1e-9);
+    ASSERT_EQ(s.whole.texel, s.pieces.texel);
   }
 }
 
