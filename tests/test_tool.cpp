@@ -321,6 +321,16 @@ TEST(Tool, TraceErrors) {
                          {"--to: X and Y must be finite numbers"});
   }
   {
+    SCOPED_TRACE("a map's decoding flag without a map");
+    expect_clean_failure(run_tool("trace --target " + kBump + " --relief-px 50" + out, dir),
+                         {"--relief-px applies to --normal-map/--depth-map only", "a target's fields are exact"});
+    const fs::path scene = dir / "flat.toml";
+    std::ofstream(scene) << "[[region]]\nwidth = 20\nheight = 20\nmethod = \"none\"\n";
+    expect_clean_failure(
+        run_tool("trace --scene " + quote(scene) + " --normal-green directx" + out, dir),
+        {"--normal-green applies to --normal-map/--depth-map only", "a scene file sets it per region"});
+  }
+  {
     SCOPED_TRACE("bad scene file");
     const fs::path scene = dir / "bad.toml";
     std::ofstream(scene) << "[[region]]\nwidth = 20\nheight = 20\nnormal_map = \"n.png\"\nnormal_green = \"up\"\n";

@@ -140,10 +140,22 @@ TEST(ToolInterrogation, InspectOptionsAndErrors) {
                                   dir);
     ASSERT_EQ(r.rc, 0) << r.err;
     EXPECT_NE(r.out.find("depth map (16-bit), filter radius 4"), std::string::npos) << r.out;
+    // 64 x 64 px shown as 80 x 40: warned of, as the daemon warns of a map stretched to its region.
+    EXPECT_NE(r.err.find("pseudohaptic: warning: depth map " + depth_map.string() +
+                         ": 64x64 px, resampled to the region's 80x40; out of proportion: stretched by 1.25 across and "
+                         "0.625 down\n"),
+              std::string::npos)
+        << r.err;
     const RawImage k = read_image(out / "K.png");
     EXPECT_EQ(k.width, 80);
     EXPECT_EQ(k.height, 40);
     EXPECT_TRUE(fs::exists(out / "contours.png"));
+  }
+  {
+    // The same at 128 x 128: in proportion, no warning.
+    const ToolResult r = run_tool("inspect --depth-map " + quote(depth_map) + " --size 128,128 " + quote(out), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(r.err.empty()) << r.err;
   }
   for (const std::string& args : {std::string("inspect ") + quote(dir / "x"),
                                   "inspect --from normal --depth-map " + quote(depth_map) + " " + quote(dir / "x"),

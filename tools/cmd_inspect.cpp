@@ -9,6 +9,9 @@
 #include <memory>
 #include <optional>
 #include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "config/field_loader.hpp"
 #include "config/image_io.hpp"
@@ -16,6 +19,7 @@
 #include "core/effects/curvature_field.hpp"
 #include "core/effects/patterns.hpp"
 #include "tools/commands.hpp"
+#include "tools/map_flags.hpp"
 
 namespace ph::tools {
 namespace {
@@ -24,8 +28,8 @@ using Rgb = std::array<std::uint8_t, 3>;
 
 struct InspectOptions {
   std::string outdir, normal_map, depth_map;
-  std::string normal_green = "opengl", normal_encoding = "auto", from;
-  double depth_zero = 0.0, relief_px = 100.0;
+  std::string from;
+  MapFlags maps;  // how to decode the maps
   std::vector<std::int32_t> size;
   std::optional<std::int32_t> radius;
   std::optional<double> planar_curvedness, parabolic_ratio;
@@ -88,11 +92,7 @@ int run_inspect(const InspectOptions& o) {
   FieldSources sources;
   if (!o.normal_map.empty()) sources.normal_map = o.normal_map;
   if (!o.depth_map.empty()) sources.depth_map = o.depth_map;
-  sources.normal_options.green = o.normal_green == "directx" ? GreenConvention::directx : GreenConvention::opengl;
-  sources.normal_options.encoding = o.normal_encoding == "unorm"    ? NormalEncoding::unorm
-                                    : o.normal_encoding == "signed" ? NormalEncoding::signed_values
-                                                                    : NormalEncoding::automatic;
-  sources.depth_options = {o.depth_zero, o.relief_px};
+  apply_map_flags(o.maps, sources);
   const ImageSize image = read_image_size(from_depth ? o.depth_map : o.normal_map);
   const std::int32_t width = o.size.size() == 2 ? o.size[0] : image.width;
   const std::int32_t height = o.size.size() == 2 ? o.size[1] : image.height;
@@ -138,9 +138,10 @@ int run_inspect(const InspectOptions& o) {
                rgb[2], 100.0 * counts[c] / std::max<std::size_t>(classes.values.size(), 1));
   }
   fmt::print("isophotes.png{}: pattern texels black\n", fields.depth ? ", contours.png" : "");
-  if (report.normals.invalid_texels + report.depth.invalid_texels > 0) {
-    fmt::print(stderr, "repaired {} invalid texels\n", report.normals.invalid_texels + report.depth.invalid_texels);
-  }
+  // As `trace` and the daemon warn: invalid texels (repaired), and a --size out of the maps' proportion.
+  std::vector<std::string> notes = invalid_texel_notes(sources, report);
+  for (std::string& note : stretched_map_notes(sources, report, width, height)) notes.push_back(std::move(note));
+  for (const std::string& note : notes) fmt::print(stderr, "pseudohaptic: warning: {}\n", note);
   return 0;
 }
 
@@ -157,14 +158,7 @@ Run add_inspect_command(CLI::App& app) {
   app.add_option("--depth-map", o->depth_map, "Depth map image (one channel)");
   app.add_option("--from", o->from, "Curvature from the normal or the depth map (default: normal when given)")
       ->check(CLI::IsMember({"normal", "depth"}));
-  app.add_option("--normal-green", o->normal_green, "Green channel convention of the normal map")
-      ->check(CLI::IsMember({"opengl", "directx"}))
-      ->capture_default_str();
-  app.add_option("--normal-encoding", o->normal_encoding, "auto: unorm for integer images, signed for float ones")
-      ->check(CLI::IsMember({"auto", "unorm", "signed"}))
-      ->capture_default_str();
-  app.add_option("--depth-zero", o->depth_zero, "Depth map value of height 0")->capture_default_str();
-  app.add_option("--relief-px", o->relief_px, "Screen px of height per unit of depth map value")->capture_default_str();
+  add_map_flags(app, o->maps);
   app.add_option("--size", o->size, "W,H region size in px the maps are resampled to (default: the image's size)")
       ->delimiter(',')
       ->expected(2)

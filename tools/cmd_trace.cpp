@@ -18,6 +18,7 @@
 #include "core/engine/targets.hpp"
 #include "core/lab/stroke.hpp"
 #include "tools/commands.hpp"
+#include "tools/map_flags.hpp"
 
 namespace ph::tools {
 
@@ -25,8 +26,7 @@ namespace {
 
 struct TraceOptions {
   std::string scene_file, normal_map, depth_map, target;
-  std::string normal_green = "opengl", normal_encoding = "auto";
-  std::optional<double> depth_zero, relief_px;
+  MapFlags maps;  // how to decode --normal-map and --depth-map
   std::string method;
   std::optional<double> kmax_prime, kmin_prime, delta_beta_sign, gain, depth_kmax, depth_kmin;
   std::vector<double> kmax_limits, kmin_limits, from, to;
@@ -63,12 +63,7 @@ Scene scene_from_maps(const TraceOptions& o, std::vector<std::string>& warnings)
   if (!o.depth_map.empty()) r.sources.depth_map = o.depth_map;
   const ImageSize size = read_image_size(!o.normal_map.empty() ? o.normal_map : o.depth_map);
   r.rect = {0, 0, size.width, size.height};
-  r.sources.normal_options.green = o.normal_green == "directx" ? GreenConvention::directx : GreenConvention::opengl;
-  r.sources.normal_options.encoding = o.normal_encoding == "unorm"    ? NormalEncoding::unorm
-                                      : o.normal_encoding == "signed" ? NormalEncoding::signed_values
-                                                                      : NormalEncoding::automatic;
-  r.sources.depth_options.depth_zero = o.depth_zero.value_or(0.0);
-  r.sources.depth_options.relief_px = o.relief_px.value_or(100.0);
+  apply_map_flags(o.maps, r.sources);
   r.method = o.depth_map.empty() || !o.normal_map.empty() ? CurvatureMethod::kName : DepthMethod::kName;
   apply_overrides(o, r);
   Region region;
@@ -106,6 +101,13 @@ Scene scene_from_target(const TraceOptions& o) {
 Scene build_scene(const TraceOptions& o, std::vector<std::string>& warnings) {
   const int sources = !o.scene_file.empty() + !o.target.empty() + (!o.normal_map.empty() || !o.depth_map.empty());
   if (sources != 1) throw std::invalid_argument("give exactly one of --scene, --target, or --normal-map/--depth-map");
+  // A decoding flag beside a scene file or a target would change nothing: said rather than ignored.
+  if (const std::vector<std::string> given = given_map_flags(o.maps);
+      !given.empty() && o.normal_map.empty() && o.depth_map.empty()) {
+    throw std::invalid_argument(fmt::format(
+        "{} applies to --normal-map/--depth-map only ({})", given.front(),
+        o.target.empty() ? "a scene file sets it per region" : "a target's fields are exact, with no map to decode"));
+  }
   if (!o.target.empty()) return scene_from_target(o);
   if (o.scene_file.empty()) return scene_from_maps(o, warnings);
   SceneSpec spec = parse_scene_file(o.scene_file);
@@ -200,14 +202,7 @@ Run add_trace_command(CLI::App& app) {
   src->add_option("--target", o->target, "One of the 24 targets by name (e.g. bump-gaussian-h1-r200), exact fields");
   src->add_option("--normal-map", o->normal_map, "Normal map image (PNG, TIFF, EXR); region at (0,0), image size");
   src->add_option("--depth-map", o->depth_map, "Depth map image (one channel); with --normal-map too, both are used");
-  app.add_option("--normal-green", o->normal_green, "Green channel convention of the normal map")
-      ->check(CLI::IsMember({"opengl", "directx"}))
-      ->capture_default_str();
-  app.add_option("--normal-encoding", o->normal_encoding, "auto: unorm for integer images, signed for float ones")
-      ->check(CLI::IsMember({"auto", "unorm", "signed"}))
-      ->capture_default_str();
-  app.add_option("--depth-zero", o->depth_zero, "Depth map value of height 0 (default 0)");
-  app.add_option("--relief-px", o->relief_px, "Screen px of height per unit of depth map value (default 100)");
+  add_map_flags(app, o->maps);
   std::vector<std::string> methods;
   const MethodRegistry registry = builtin_methods();
   for (const auto& entry : registry.entries()) {
