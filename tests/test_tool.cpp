@@ -207,6 +207,11 @@ TEST(Tool, HelpNamesTheCommandsAndEveryTraceFlag) {
   EXPECT_EQ(unknown.rc, 2);
   EXPECT_TRUE(contains(unknown.err, "unknown command 'trcae'")) << unknown.err;
   EXPECT_TRUE(contains(unknown.err, "trace")) << unknown.err;
+  // An output folder that cannot be made is named first, as a file the tool cannot read is.
+  std::ofstream(dir / "a-file") << "not a folder\n";
+  const ToolResult file = run_tool("targets " + quote(dir / "a-file"), dir);
+  expect_clean_failure(file, {"pseudohaptic: " + (dir / "a-file").string() + ": cannot create directories: "});
+  EXPECT_FALSE(contains(file.err, "filesystem error")) << file.err;
 }
 
 TEST(Tool, TraceTargetCurvature) {

@@ -3,8 +3,10 @@
 
 #include <CLI/CLI.hpp>
 #include <exception>
+#include <filesystem>
 #include <map>
 #include <string>
+#include <string_view>
 
 #include "tools/commands.hpp"
 
@@ -66,6 +68,14 @@ int main(int argc, char** argv) {
     for (const auto& [sub, run] : runs) {
       if (sub->parsed()) return run();
     }
+  } catch (const std::filesystem::filesystem_error& e) {
+    // libstdc++ says "filesystem error: cannot create directories: Not a directory [out]": the path first, as the
+    // tool's other errors name their file.
+    std::string what = e.what();
+    if (const std::string_view prefix = "filesystem error: "; what.starts_with(prefix)) what.erase(0, prefix.size());
+    if (const std::size_t at = what.rfind(" ["); at != std::string::npos && !e.path1().empty()) what.erase(at);
+    fmt::print(stderr, "pseudohaptic: {}{}\n", e.path1().empty() ? "" : e.path1().string() + ": ", what);
+    return 1;
   } catch (const std::exception& e) {
     fmt::print(stderr, "pseudohaptic: {}\n", e.what());
     return 1;
