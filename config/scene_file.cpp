@@ -4,9 +4,11 @@
 
 #include <toml++/toml.h>
 
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <system_error>
 
 #include "core/engine/variant_choice.hpp"
 
@@ -543,8 +545,13 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
 SceneSpec parse_scene_file(const std::filesystem::path& file, MethodRegistry methods) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw ConfigError(fmt::format("{}: cannot open the scene file", file.string()));
+  // A folder opens, and reads as an empty scene: a daemon given /etc/pseudohaptic/ would run flat, silently.
+  std::error_code ignored;
+  if (std::filesystem::is_directory(file, ignored))
+    throw ConfigError(fmt::format("{}: is a folder, not a scene file", file.string()));
   std::ostringstream text;
   text << in.rdbuf();
+  if (in.bad()) throw ConfigError(fmt::format("{}: cannot read the scene file", file.string()));
   return parse_scene_text(text.str(), file, std::move(methods));
 }
 

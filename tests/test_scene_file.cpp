@@ -371,6 +371,17 @@ TEST(SceneFileErrors, MissingSceneFileIsNamed) {
   }
 }
 
+// A folder opens as a stream and reads as nothing: an empty scene, unless it is refused.
+TEST(SceneFileErrors, AFolderIsNotASceneFile) {
+  ScratchDir dir;
+  try {
+    parse_scene_file(dir.path());
+    ADD_FAILURE() << "no ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), dir.path().string() + ": is a folder, not a scene file");
+  }
+}
+
 TEST(SceneFileErrors, ErrorsOfAFileNameTheFile) {
   ScratchDir dir;
   const fs::path file = dir / "bad.toml";
