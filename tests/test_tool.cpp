@@ -21,6 +21,7 @@
 #include "config/target_files.hpp"
 #include "core/engine/targets.hpp"
 #include "core/lab/map_storage.hpp"
+#include "tests/csv_table.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/tool_runner.hpp"
 
@@ -30,17 +31,6 @@ namespace {
 namespace fs = std::filesystem;
 
 bool contains(const std::string& text, std::string_view part) { return text.find(part) != std::string::npos; }
-
-// A failure the tool reports itself: a non-zero status, a message on stderr, no crash and no stack trace.
-void expect_clean_failure(const ToolResult& r, std::initializer_list<std::string_view> names) {
-  EXPECT_NE(r.rc, 0);
-  EXPECT_LT(r.rc, 128) << "killed by a signal";
-  EXPECT_FALSE(r.err.empty());
-  for (std::string_view part : names) EXPECT_TRUE(contains(r.err, part)) << "expected '" << part << "' in: " << r.err;
-  for (std::string_view crash : {"terminate called", "what():", "Aborted", "Segmentation", "Sanitizer", "#0 ", "#1 "}) {
-    EXPECT_FALSE(contains(r.err, crash)) << r.err;
-  }
-}
 
 constexpr std::string_view kHeader = "frame,x,y,texel_x,texel_y,cos_alpha,delta_beta_deg,kmax,kmin,dh,cd,region";
 enum Column { kFrame, kX, kY, kTexelX, kTexelY, kCosAlpha, kDeltaBeta, kKmax, kKmin, kDh, kCd, kRegion, kColumns };
@@ -52,21 +42,9 @@ struct Csv {
   double number(std::size_t row, Column column) const { return std::stod(rows[row][column]); }
 };
 
-Csv parse_csv(const std::string& text) {
-  Csv csv;
-  std::istringstream in(text);
-  std::string line;
-  std::getline(in, csv.header);
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    std::size_t start = 0;
-    for (std::size_t comma; (comma = line.find(',', start)) != std::string::npos; start = comma + 1) {
-      cells.push_back(line.substr(start, comma - start));
-    }
-    cells.push_back(line.substr(start));
-    csv.rows.push_back(std::move(cells));
-  }
-  return csv;
+Csv parse_trace_csv(const std::string& text) {
+  CsvTable table = parse_csv(text);
+  return {table.header, std::move(table.rows)};
 }
 
 const std::string kBump = "bump-gaussian-h1-r200";
@@ -85,7 +63,7 @@ Csv trace(const std::string& args, const ScratchDir& dir) {
   const fs::path csv = dir / "trace.csv";
   const ToolResult r = run_tool("trace " + args + " -o " + quote(csv), dir);
   EXPECT_EQ(r.rc, 0) << args << "\n" << r.err;
-  Csv parsed = parse_csv(read_text(csv));
+  Csv parsed = parse_trace_csv(read_text(csv));
   for (const auto& row : parsed.rows) {
     for (const std::string& cell : row) EXPECT_NE(cell, "-0") << args;  // zero is written 0, whatever its sign
   }
@@ -225,7 +203,7 @@ TEST(Tool, TraceTargetDepthToStandardOutput) {
   ScratchDir dir;
   const ToolResult r = run_tool("trace --target " + kBump + " --method depth", dir);  // -o - by default
   ASSERT_EQ(r.rc, 0) << r.err;
-  const Csv csv = parse_csv(r.out);
+  const Csv csv = parse_trace_csv(r.out);
   expect_trace_shape(csv, Method::depth, kBump);
   expect_cd_profile(csv, true, kDepthStrict);
   EXPECT_TRUE(contains(r.err, "frames")) << r.err;  // the summary goes to stderr, not into the CSV
@@ -399,7 +377,7 @@ TEST(Tool, TraceWarnsOfInvalidTexels) {
     EXPECT_TRUE(contains(r.err, warning + what)) << r.err;
     EXPECT_EQ(occurrences(r.err, "warning"), 1u) << r.err;
     // Repaired from their flat neighbours: the stroke is flat all along.
-    const Csv csv = parse_csv(read_text(dir / "a.csv"));
+    const Csv csv = parse_trace_csv(read_text(dir / "a.csv"));
     ASSERT_EQ(csv.rows.size(), 4u);
     for (std::size_t i = 0; i < csv.rows.size(); ++i) EXPECT_EQ(csv.rows[i][kCd], "1");
   }
@@ -455,7 +433,7 @@ TEST(Tool, TraceSpeedAndRate) {
     ASSERT_EQ(r.rc, 0) << r.err;
     EXPECT_TRUE(contains(r.err, "1 frames, cursor ended at (500.000, 250.000)")) << r.err;
     EXPECT_FALSE(contains(r.err, "stopped before")) << r.err;
-    const Csv csv = parse_csv(read_text(dir / "f.csv"));
+    const Csv csv = parse_trace_csv(read_text(dir / "f.csv"));
     ASSERT_EQ(csv.rows.size(), 500u);  // texels 0 to 499, nothing past --to
     EXPECT_EQ(csv.number(499, kTexelX), 499.0);
     for (std::size_t i = 0; i < csv.rows.size(); ++i) EXPECT_EQ(csv.number(i, kFrame), 0.0);
@@ -466,7 +444,7 @@ TEST(Tool, TraceSpeedAndRate) {
         "trace --target " + kBump + " --from 10.5,20.5 --to 30.25,20.5 --step 7 -o " + quote(dir / "g.csv"), dir);
     ASSERT_EQ(r.rc, 0) << r.err;
     EXPECT_TRUE(contains(r.err, "3 frames, cursor ended at (30.250, 20.500)")) << r.err;
-    const Csv csv = parse_csv(read_text(dir / "g.csv"));
+    const Csv csv = parse_trace_csv(read_text(dir / "g.csv"));
     ASSERT_FALSE(csv.rows.empty());
     EXPECT_EQ(csv.rows.back()[kTexelX], "30");
   }
@@ -481,7 +459,7 @@ TEST(Tool, TraceFromTo) {
         run_tool("trace --target " + kBump + " --from 100,250 --to 400,250 -o " + quote(dir / "a.csv"), dir);
     ASSERT_EQ(r.rc, 0) << r.err;
     EXPECT_TRUE(contains(r.err, "cursor ended at (400.000, 250.000)")) << r.err;
-    const Csv csv = parse_csv(read_text(dir / "a.csv"));
+    const Csv csv = parse_trace_csv(read_text(dir / "a.csv"));
     ASSERT_EQ(csv.rows.size(), 300u);
     for (std::size_t i = 0; i < csv.rows.size(); ++i) {
       EXPECT_EQ(csv.number(i, kTexelX), 100.0 + static_cast<double>(i));
@@ -495,7 +473,7 @@ TEST(Tool, TraceFromTo) {
         run_tool("trace --target " + kBump + " --from 250.5,490.5 --to 250.5,10.5 -o " + quote(dir / "b.csv"), dir);
     ASSERT_EQ(r.rc, 0) << r.err;
     EXPECT_TRUE(contains(r.err, "cursor ended at (250.500, 10.500)")) << r.err;
-    const Csv csv = parse_csv(read_text(dir / "b.csv"));
+    const Csv csv = parse_trace_csv(read_text(dir / "b.csv"));
     ASSERT_EQ(csv.rows.size(), 481u);
     double cd_max = 0.0, cd_min = 10.0;
     for (std::size_t i = 0; i < csv.rows.size(); ++i) {
@@ -514,7 +492,7 @@ TEST(Tool, TraceFromTo) {
         run_tool("trace --target " + kBump + " --from 0,0 --to 300,300 -o " + quote(dir / "c.csv"), dir);
     ASSERT_EQ(r.rc, 0) << r.err;
     EXPECT_TRUE(contains(r.err, "cursor ended at (300.000, 300.000)")) << r.err;
-    const Csv csv = parse_csv(read_text(dir / "c.csv"));
+    const Csv csv = parse_trace_csv(read_text(dir / "c.csv"));
     ASSERT_GE(csv.rows.size(), 599u);  // a diagonal crosses two texel boundaries per px, corners once
     for (std::size_t i = 0; i < csv.rows.size(); ++i) {
       EXPECT_NEAR(csv.number(i, kX), csv.number(i, kY), 1e-5);

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/csv_table.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/tool_runner.hpp"
 
@@ -16,31 +17,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-using Table = std::vector<std::vector<std::string>>;
-
-// Header line and rows of a CSV file without quoting.
-std::pair<std::string, Table> read_csv(const fs::path& path) {
-  std::istringstream in(read_text(path));
-  std::string header, line;
-  std::getline(in, header);
-  Table rows;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    std::istringstream cs(line);
-    for (std::string cell; std::getline(cs, cell, ',');) cells.push_back(cell);
-    rows.push_back(cells);
-  }
-  return {header, rows};
-}
-
-bool finite_number(const std::string& s) {
-  std::size_t used = 0;
-  try {
-    const double v = std::stod(s, &used);
-    return used == s.size() && std::isfinite(v);
-  } catch (...) {
-    return false;
-  }
+// Header line and rows of a CSV file.
+std::pair<std::string, std::vector<std::vector<std::string>>> read_csv_rows(const fs::path& path) {
+  CsvTable table = read_csv(path);
+  return {table.header, std::move(table.rows)};
 }
 
 TEST(ToolAccuracy, SmallRunWritesTheThreeCsvFiles) {
@@ -49,7 +29,7 @@ TEST(ToolAccuracy, SmallRunWritesTheThreeCsvFiles) {
   const ToolResult r = run_tool("accuracy --small " + quote(out), dir);
   ASSERT_EQ(r.rc, 0) << r.err;
 
-  const auto [vh, variants] = read_csv(out / "variants.csv");
+  const auto [vh, variants] = read_csv_rows(out / "variants.csv");
   ASSERT_EQ(vh,
             "variant,method,traversal,storage,sampling,ns_per_frame_median,ns_per_frame_p99,ns_per_step,"
             "bytes_per_texel,precompute_ms,cd_err_rms,cd_err_max,end_err_rms_px,end_err_max_px,drift_px");
@@ -144,7 +124,7 @@ TEST(ToolAccuracy, SmallRunWritesTheThreeCsvFiles) {
   EXPECT_EQ(value("curvature/auto0.25/f32/nearest", kEndRms), value("curvature/exact/f32/nearest", kEndRms));
   EXPECT_NE(value("curvature/auto8/f32/nearest", kEndRms), value("curvature/exact/f32/nearest", kEndRms));
 
-  const auto [th, traces] = read_csv(out / "fig5_traces.csv");
+  const auto [th, traces] = read_csv_rows(out / "fig5_traces.csv");
   ASSERT_EQ(th, "target,method,x,cd,cd_truth");
   std::map<std::string, int> trace_methods;
   for (const auto& row : traces) {
@@ -155,7 +135,7 @@ TEST(ToolAccuracy, SmallRunWritesTheThreeCsvFiles) {
   EXPECT_GE(trace_methods["curvature"], 1);
   EXPECT_GE(trace_methods["depth"], 1);
 
-  const auto [gh, grid] = read_csv(out / "fig2_grid.csv");
+  const auto [gh, grid] = read_csv_rows(out / "fig2_grid.csv");
   ASSERT_EQ(gh, "cos_alpha,delta_beta_deg,cd");
   ASSERT_FALSE(grid.empty());
   for (const auto& row : grid) {

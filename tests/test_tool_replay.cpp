@@ -47,15 +47,6 @@ constexpr std::string_view kTraceHeader = "time_us,in_dx,in_dy,out_dx,out_dy,cur
 
 bool contains(const std::string& text, std::string_view part) { return text.find(part) != std::string::npos; }
 
-// A failure the tool reports itself: a non-zero status, the given parts on stderr, no crash.
-void expect_clean_failure(const ToolResult& r, std::initializer_list<std::string_view> parts) {
-  EXPECT_EQ(r.rc, 1) << r.err;
-  for (std::string_view part : parts) EXPECT_TRUE(contains(r.err, part)) << "expected '" << part << "' in: " << r.err;
-  for (std::string_view crash : {"terminate called", "what():", "Aborted", "Segmentation", "Sanitizer"}) {
-    EXPECT_FALSE(contains(r.err, crash)) << r.err;
-  }
-}
-
 std::string evemu_text(const Recording& recording) {
   std::ostringstream out;
   write_evemu(out, recording);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/csv_table.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/tool_runner.hpp"
 
@@ -18,50 +19,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Rows of a CSV file as header -> cell maps; quoted cells may hold commas.
+// Rows of a CSV file as header -> cell maps, each row as wide as the header.
 std::vector<std::map<std::string, std::string>> read_rows(const fs::path& path, std::string& header) {
-  std::istringstream in(read_text(path));
-  auto split = [](const std::string& line) {
-    std::vector<std::string> cells(1);
-    bool quoted = false;
-    for (std::size_t i = 0; i < line.size(); ++i) {
-      const char c = line[i];
-      if (c == '"') {
-        if (quoted && i + 1 < line.size() && line[i + 1] == '"') {
-          cells.back() += '"';
-          ++i;
-        } else {
-          quoted = !quoted;
-        }
-      } else if (c == ',' && !quoted) {
-        cells.emplace_back();
-      } else {
-        cells.back() += c;
-      }
-    }
-    return cells;
-  };
-  std::getline(in, header);
-  const std::vector<std::string> names = split(header);
-  std::vector<std::map<std::string, std::string>> rows;
-  for (std::string line; std::getline(in, line);) {
-    const std::vector<std::string> cells = split(line);
-    EXPECT_EQ(cells.size(), names.size()) << line;
-    std::map<std::string, std::string> row;
-    for (std::size_t i = 0; i < names.size() && i < cells.size(); ++i) row[names[i]] = cells[i];
-    rows.push_back(row);
-  }
-  return rows;
-}
-
-bool finite_number(const std::string& s) {
-  std::size_t used = 0;
-  try {
-    const double v = std::stod(s, &used);
-    return used == s.size() && std::isfinite(v);
-  } catch (...) {
-    return false;
-  }
+  const CsvTable table = read_csv(path);
+  header = table.header;
+  const std::size_t columns = csv_cells(header).size();
+  for (const std::vector<std::string>& cells : table.rows) EXPECT_EQ(cells.size(), columns) << path;
+  return named_rows(table);
 }
 
 const char* const kMetrics[] = {"cd_err_rms",      "jitter_rms", "jitter_truth_rms", "travel_err_pct",

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/csv_table.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/tool_runner.hpp"
 
@@ -16,24 +17,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Rows of a CSV file without quoting, as maps from the header's names.
-std::vector<std::map<std::string, std::string>> read_rows(const fs::path& path) {
-  std::istringstream in(read_text(path));
-  std::string line;
-  std::getline(in, line);
-  std::vector<std::string> header;
-  std::istringstream hs(line);
-  for (std::string h; std::getline(hs, h, ',');) header.push_back(h);
-  std::vector<std::map<std::string, std::string>> rows;
-  while (std::getline(in, line)) {
-    std::map<std::string, std::string> row;
-    std::istringstream cs(line);
-    std::size_t i = 0;
-    for (std::string cell; std::getline(cs, cell, ',') && i < header.size(); ++i) row[header[i]] = cell;
-    rows.push_back(row);
-  }
-  return rows;
-}
+// Rows of a CSV file as maps from the header's names.
+std::vector<std::map<std::string, std::string>> read_rows(const fs::path& path) { return named_rows(read_csv(path)); }
 
 // summary.csv's value of `column` for one technique and group.
 double summary_value(const std::vector<std::map<std::string, std::string>>& rows, const std::string& technique,

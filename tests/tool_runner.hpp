@@ -2,11 +2,14 @@
 // the binary (tests/CMakeLists.txt).
 #pragma once
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <cstdlib>
 #include <filesystem>
+#include <initializer_list>
 #include <string>
+#include <string_view>
 
 #include "tests/file_bytes.hpp"
 #include "tests/scratch_dir.hpp"
@@ -44,6 +47,21 @@ inline ToolResult run_tool(const std::string& args, const ScratchDir& dir) {
   result.out = read_text(out);
   result.err = read_text(err);
   return result;
+}
+
+// A failure as a user should meet it: each of `parts` on standard error, no sign of a crash, and exit status 1
+// (the tool's own errors), or where CLI11 turned the command line down ("Run with --help ..."), its own status.
+inline void expect_clean_failure(const ToolResult& r, std::initializer_list<std::string_view> parts) {
+  const auto said = [&r](std::string_view part) { return r.err.find(part) != std::string::npos; };
+  if (said("Run with --help")) {
+    EXPECT_TRUE(r.rc > 0 && r.rc < 128) << "exit status " << r.rc << ": " << r.err;
+  } else {
+    EXPECT_EQ(r.rc, 1) << r.err;
+  }
+  for (std::string_view part : parts) EXPECT_TRUE(said(part)) << "expected '" << part << "' in: " << r.err;
+  for (std::string_view crash : {"terminate called", "what():", "Aborted", "Segmentation", "Sanitizer", "#0 ", "#1 "}) {
+    EXPECT_FALSE(said(crash)) << r.err;
+  }
 }
 
 }  // namespace ph
