@@ -4,11 +4,14 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
 #include <system_error>
+#include <utility>
 
 #include "core/engine/variant_choice.hpp"
 
@@ -656,6 +659,38 @@ std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scen
     if (!scale || !scale->mismatched()) continue;
     out.push_back(fmt::format("{}:{}: region '{}': {} (the hybrid method compares them to find steps and noise)",
                               spec.file.string(), r.line, r.name, scale->described()));
+  }
+  return out;
+}
+
+namespace {
+
+// The width and height of the part of `a` that lies inside `b` (0 where they do not meet).
+std::pair<std::int64_t, std::int64_t> overlap(const Rect& a, const Rect& b) {
+  const auto along = [](std::int64_t a0, std::int64_t an, std::int64_t b0, std::int64_t bn) {
+    return std::max<std::int64_t>(0, std::min(a0 + an, b0 + bn) - std::max(a0, b0));
+  };
+  return {along(a.x, a.w, b.x, b.w), along(a.y, a.h, b.y, b.h)};
+}
+
+}  // namespace
+
+std::vector<std::string> desktop_warnings(const SceneSpec& spec) {
+  std::vector<std::string> out;
+  if (!spec.daemon.desktop) return out;
+  const Rect& d = *spec.daemon.desktop;
+  const std::string desktop = fmt::format("the desktop {},{} {}x{} px", d.x, d.y, d.w, d.h);
+  for (const RegionSpec& r : spec.regions) {
+    const auto [w, h] = overlap(r.rect, d);
+    if (w == r.rect.w && h == r.rect.h) continue;
+    const std::string region = fmt::format("{}:{}: region '{}' at {},{} ({}x{} px)", spec.file.string(), r.line, r.name,
+                                           r.rect.x, r.rect.y, r.rect.w, r.rect.h);
+    if (w == 0 || h == 0) {
+      out.push_back(fmt::format(
+          "{} lies outside {}: the cursor never reaches it, and its fields are loaded for nothing", region, desktop));
+    } else {
+      out.push_back(fmt::format("{}: only {}x{} px of it lie on {}", region, w, h, desktop));
+    }
   }
   return out;
 }

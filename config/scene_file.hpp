@@ -111,4 +111,8 @@ std::optional<ReliefScale> relief_scale(const RegionSpec& region, const RegionFi
 // relief_px would make them agree; none where they agree.
 std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scene& scene);
 
+// One line per region that lies wholly or partly off the [daemon] table's desktop, "FILE:LINE: region 'NAME': "
+// and how much of it the cursor can reach; none for desktop = "auto", whose size only the running daemon learns.
+std::vector<std::string> desktop_warnings(const SceneSpec& spec);
+
 }  // namespace ph

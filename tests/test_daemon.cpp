@@ -223,6 +223,21 @@ TEST(DaemonConfiguration, MapsStretchedOutOfProportionAreWarned) {
                 "2 down");
 }
 
+// A region off the configured desktop is logged at load (config/scene_file.hpp, desktop_warnings).
+TEST(DaemonConfiguration, ARegionOffTheDesktopIsWarned) {
+  const ScratchDir dir("daemon-config-off");
+  write_normal_png16(dir / "flat.png", NormalImage(10, 10));
+  std::ofstream(dir / "scene.toml") << "[daemon]\ndesktop = [0, 0, 800, 600]\n[[region]]\nname = \"away\"\nx = 900\n"
+                                       "y = 0\nwidth = 10\nheight = 10\nnormal_map = \"flat.png\"\n";
+  const Configuration c = load_configuration(choice_in(dir));
+  ASSERT_EQ(c.warnings.size(), 1u);
+  EXPECT_EQ(c.warnings[0].rfind((dir / "scene.toml").string() + ":3: region 'away' at 900,0 (10x10 px) lies outside "
+                                                                "the desktop 0,0 800x600 px",
+                                0),
+            0u)
+      << c.warnings[0];
+}
+
 // A hybrid region whose depth map holds its relief at half the scale of its normal map (relief_px 50 where the normals
 // were made for 100) is warned of, with the relief_px that makes them agree; one whose maps agree is not.
 TEST(DaemonConfiguration, MismatchedReliefScalesOfAHybridRegionAreWarned) {

@@ -371,6 +371,25 @@ TEST(SceneFileErrors, MissingSceneFileIsNamed) {
   }
 }
 
+// A region the cursor cannot reach on the configured desktop, wholly or in part, is warned of; with desktop = "auto"
+// nothing can be said before the daemon runs.
+TEST(SceneFileErrors, RegionsOffTheConfiguredDesktopAreWarnedOf) {
+  const std::string regions =
+      "[[region]]\nname = \"inside\"\nx = 0\ny = 0\nwidth = 800\nheight = 600\nnormal_map = \"n.png\"\n"
+      "[[region]]\nname = \"right\"\nx = 800\ny = 0\nwidth = 100\nheight = 100\nnormal_map = \"n.png\"\n"
+      "[[region]]\nname = \"corner\"\nx = -20\ny = 590\nwidth = 100\nheight = 30\nnormal_map = \"n.png\"\n";
+  const SceneSpec spec = parse_scene_text("[daemon]\ndesktop = [0, 0, 800, 600]\n" + regions, "s.toml");
+  const std::vector<std::string> warnings = desktop_warnings(spec);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_EQ(warnings[0],
+            "s.toml:10: region 'right' at 800,0 (100x100 px) lies outside the desktop 0,0 800x600 px: the cursor never "
+            "reaches it, and its fields are loaded for nothing");
+  EXPECT_EQ(warnings[1],
+            "s.toml:17: region 'corner' at -20,590 (100x30 px): only 80x10 px of it lie on the desktop 0,0 "
+            "800x600 px");
+  EXPECT_TRUE(desktop_warnings(parse_scene_text(regions, "auto.toml")).empty());
+}
+
 // A folder opens as a stream and reads as nothing: an empty scene, unless it is refused.
 TEST(SceneFileErrors, AFolderIsNotASceneFile) {
   ScratchDir dir;

@@ -9,6 +9,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "config/daemon_config.hpp"
@@ -134,8 +135,10 @@ int run_check_config(const CheckConfigOptions& o) {
   SceneLoadReport report;
   const Scene scene = load_scene(spec, &report);
   if (o.quiet) return 0;
-  // What the daemon logs as warnings at load, before the summary that counts them.
-  for (const std::string& w : map_warnings(spec, report)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
+  // What the daemon logs as warnings at load, before the summary.
+  std::vector<std::string> warnings = map_warnings(spec, report);
+  for (std::string& w : desktop_warnings(spec)) warnings.push_back(std::move(w));
+  for (const std::string& w : warnings) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
   const std::string text = summary(spec, scene, report);
   if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size() || std::fflush(stdout) != 0)
     throw std::runtime_error("<stdout>: write failed");
