@@ -675,22 +675,24 @@ std::pair<std::int64_t, std::int64_t> overlap(const Rect& a, const Rect& b) {
 
 }  // namespace
 
+std::optional<std::string> off_desktop_note(const Rect& rect, const Rect& desktop) {
+  const auto [w, h] = overlap(rect, desktop);
+  if (w == rect.w && h == rect.h) return std::nullopt;
+  const std::string region = fmt::format("at {},{} ({}x{} px)", rect.x, rect.y, rect.w, rect.h);
+  const std::string on = fmt::format("the desktop {},{} {}x{} px", desktop.x, desktop.y, desktop.w, desktop.h);
+  if (w == 0 || h == 0) {
+    return fmt::format("{} lies outside {}: the cursor never reaches it, and its fields are loaded for nothing", region,
+                       on);
+  }
+  return fmt::format("{}: only {}x{} px of it lie on {}", region, w, h, on);
+}
+
 std::vector<std::string> desktop_warnings(const SceneSpec& spec) {
   std::vector<std::string> out;
   if (!spec.daemon.desktop) return out;
-  const Rect& d = *spec.daemon.desktop;
-  const std::string desktop = fmt::format("the desktop {},{} {}x{} px", d.x, d.y, d.w, d.h);
   for (const RegionSpec& r : spec.regions) {
-    const auto [w, h] = overlap(r.rect, d);
-    if (w == r.rect.w && h == r.rect.h) continue;
-    const std::string region = fmt::format("{}:{}: region '{}' at {},{} ({}x{} px)", spec.file.string(), r.line, r.name,
-                                           r.rect.x, r.rect.y, r.rect.w, r.rect.h);
-    if (w == 0 || h == 0) {
-      out.push_back(fmt::format(
-          "{} lies outside {}: the cursor never reaches it, and its fields are loaded for nothing", region, desktop));
-    } else {
-      out.push_back(fmt::format("{}: only {}x{} px of it lie on {}", region, w, h, desktop));
-    }
+    if (const std::optional<std::string> note = off_desktop_note(r.rect, *spec.daemon.desktop))
+      out.push_back(fmt::format("{}:{}: region '{}' {}", spec.file.string(), r.line, r.name, *note));
   }
   return out;
 }

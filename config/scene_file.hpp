@@ -111,8 +111,13 @@ std::optional<ReliefScale> relief_scale(const RegionSpec& region, const RegionFi
 // relief_px would make them agree; none where they agree.
 std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scene& scene);
 
-// One line per region that lies wholly or partly off the [daemon] table's desktop, "FILE:LINE: region 'NAME': "
-// and how much of it the cursor can reach; none for desktop = "auto", whose size only the running daemon learns.
+// Where a region of `rect` lies wholly or partly off `desktop`: "at X,Y (WxH px) lies outside the desktop X,Y WxH px:
+// the cursor never reaches it, ..." or "at X,Y (WxH px): only WxH px of it lie on the desktop ..."; nullopt where
+// all of it lies on the desktop.
+std::optional<std::string> off_desktop_note(const Rect& rect, const Rect& desktop);
+
+// One line per region that lies wholly or partly off the [daemon] table's desktop, "FILE:LINE: region 'NAME' " and
+// off_desktop_note's text; none for desktop = "auto", whose size only the running daemon learns.
 std::vector<std::string> desktop_warnings(const SceneSpec& spec);
 
 }  // namespace ph

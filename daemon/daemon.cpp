@@ -12,6 +12,8 @@
 #include <cerrno>
 #include <csignal>
 #include <cstring>
+#include <optional>
+#include <string>
 #include <string_view>
 
 #include "config/scene_file.hpp"
@@ -617,6 +619,11 @@ void Daemon::layout(Rect desktop) {
   helper_desktop_ = desktop;
   if (desktop == config_.pipeline.desktop) return;
   log_.info("desktop {}x{}+{}+{} (from the session helper)", desktop.w, desktop.h, desktop.x, desktop.y);
+  // The scene file could not say this: its desktop is "auto" (config/scene_file.hpp, desktop_warnings).
+  for (const Region& region : config_.scene->regions()) {
+    if (const std::optional<std::string> note = off_desktop_note(region.rect, desktop))
+      log_.warning("{}: region '{}' {}", config_.source, region.name, *note);
+  }
   config_.pipeline.desktop = desktop;
   if (config_.pipeline.mode == OutputMode::relative) {
     pipeline_->set_desktop(desktop);

@@ -13,12 +13,11 @@
 // socket ($WAYFIRE_SOCKET), `helper wayland-wayfire` and its position; with one that answers as Wayfire
 // without its ipc-rules plugin does, the layout only. (4) with --daemon (it needs /dev/uinput: the VM), the
 // real daemon on its default scene takes weston's layout from the helper: `status` says
-// desktop=0,0,1600,900 and helper=no. (5) with a stand-in KWin (tests/kwin_stand_in.hpp) on a private
-// session bus and XDG_CURRENT_DESKTOP=KDE, `helper wayland-kwin`, the layout and the position the script
-// sends, the newest one for a `query`, and the script unloaded at SIGTERM; with a KWin that refuses the
-// script, the layout only and KWin's refusal in the helper's log (skipped without dbus-daemon). (6) when
-// weston stops, the helper exits with status 1.
-// tests/vm/README.md, "Wayland: weston", has the figures.
+// desktop=0,0,1600,900 and helper=no, and the daemon logs that its third target is partly off that desktop. (5) with a
+// stand-in KWin (tests/kwin_stand_in.hpp) on a private session bus and XDG_CURRENT_DESKTOP=KDE, `helper wayland-kwin`,
+// the layout and the position the script sends, the newest one for a `query`, and the script unloaded at SIGTERM; with
+// a KWin that refuses the script, the layout only and KWin's refusal in the helper's log (skipped without dbus-daemon).
+// (6) when weston stops, the helper exits with status 1. tests/vm/README.md, "Wayland: weston", has the figures.
 #include <fmt/format.h>
 #include <sys/stat.h>
 
@@ -388,6 +387,13 @@ bool daemon_case(const Options& options, const fs::path& runtime) {
         },
         20s, nullptr, 100ms);
     if (!told) c.problems.push_back("the daemon's status after 20 s: " + status);
+    // The default scene is laid out for 1920 x 1080: on weston's 1600 x 900 its third target is partly off the
+    // desktop, which the daemon logs once the helper has told it the layout.
+    const std::string off =
+        "the embedded default scene: region 'bump-linear-h1-r100' at 1285,290 (500x500 px): only "
+        "315x500 px of it lie on the desktop 0,0 1600x900 px";
+    if (!wait_until([&] { return daemon.log().find(off) != std::string::npos; }, 5s, nullptr, 100ms))
+      c.problems.push_back("expected in the daemon's log: " + off + "; it logged:\n" + daemon.log());
     if (status.find(" helper=no ") == std::string::npos)
       c.problems.push_back("a layout-only helper is not the daemon's helper, but status says: " + status);
     check_sigterm(*helper, c);
