@@ -220,6 +220,23 @@ void check_sigterm(ChildProcess& helper, Case& c) {
     c.problems.push_back("SIGTERM: " + (status ? describe_wait_status(*status) : std::string("still running")));
 }
 
+// A helper started into `helper` against a fresh control stub that tells the daemon the layout and nothing more, and
+// says why in its log (`notice`, e.g. the plugin or the answer it lacked); then exits 0 on SIGTERM. `when` names the
+// setting in the problems.
+void expect_layout_only(const Options& options, std::optional<ChildProcess>& helper, std::vector<std::string> env,
+                        const std::string& log, const std::string& when, const std::string& notice, Case& c) {
+  ControlStub stub((options.scratch / "control").string());
+  helper.reset();
+  helper.emplace(std::vector<std::string>{options.session, "--control", stub.path(), "-v"}, std::move(env),
+                 (options.scratch / log).string());
+  if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
+  c.expect(stub, kLayout, when + ", at start");
+  c.expect_silence(stub, 1s, when + ", after the layout");
+  if (helper->log().find(notice) == std::string::npos)
+    c.problems.push_back(when + ": no notice with '" + notice + "' in the helper's log");
+  check_sigterm(*helper, c);
+}
+
 bool layout_only_case(const Options& options, const fs::path& runtime) {
   Case c{"weston: the layout from xdg-output, no position, reconnection, SIGTERM", {}};
   ControlStub stub((options.scratch / "control").string());
@@ -290,16 +307,8 @@ bool wayfire_case(const Options& options, const fs::path& runtime) {
     }
     // Without the ipc-rules plugin Wayfire answers the method with an error: the layout only.
     FakeWayfire wayfire(socket, R"({"error": "No such method found!"})");
-    ControlStub stub((options.scratch / "control").string());
-    helper.reset();
-    helper.emplace(std::vector<std::string>{options.session, "--control", stub.path(), "-v"},
-                   session_environment(runtime, "", socket), (options.scratch / "session-wayfire-bare.log").string());
-    if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
-    c.expect(stub, kLayout, "without ipc-rules, at start");
-    c.expect_silence(stub, 1s, "without ipc-rules, after the layout");
-    if (helper->log().find("ipc-rules") == std::string::npos)
-      c.problems.push_back("without ipc-rules: no notice naming the plugin in the helper's log");
-    check_sigterm(*helper, c);
+    expect_layout_only(options, helper, session_environment(runtime, "", socket), "session-wayfire-bare.log",
+                       "without ipc-rules", "ipc-rules", c);
   } catch (const Fatal& e) {
     c.problems.push_back(e.what());
   }
@@ -350,16 +359,8 @@ bool kwin_case(const Options& options, const fs::path& runtime) {
     }
     StandInKWin refusing(bus.address(), {KWinVersion::six, true, Sent{1, 2, "ii"}});
     if (!refusing.started()) throw Fatal("the refusing stand-in KWin did not start");
-    ControlStub stub((options.scratch / "control").string());
-    helper.reset();
-    helper.emplace(std::vector<std::string>{options.session, "--control", stub.path(), "-v"}, env,
-                   (options.scratch / "session-kwin-refused.log").string());
-    if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
-    c.expect(stub, kLayout, "with a refusing KWin, at start");
-    c.expect_silence(stub, 1s, "with a refusing KWin, after the layout");
-    if (helper->log().find("scripting is disabled here") == std::string::npos)
-      c.problems.push_back("with a refusing KWin: no notice with KWin's answer in the helper's log");
-    check_sigterm(*helper, c);
+    expect_layout_only(options, helper, env, "session-kwin-refused.log", "with a refusing KWin",
+                       "scripting is disabled here", c);
   } catch (const Fatal& e) {
     c.problems.push_back(e.what());
   }
