@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "config/image_io.hpp"
+#include "config/scene_file.hpp"
 #include "config/target_files.hpp"
 #include "core/engine/targets.hpp"
 #include "core/lab/map_storage.hpp"
@@ -610,6 +611,28 @@ TEST(Tool, TargetsAndDemo) {
   }
   ASSERT_EQ(names.size(), 24u) << r.out;
   for (std::size_t i = 0; i < all.size(); ++i) EXPECT_EQ(names[i], all[i].name());
+}
+
+// Without FILE, check-config reads the daemon's default file; where there is none the daemon runs its embedded
+// default scene, and check-config says so rather than failing.
+TEST(Tool, CheckConfigWithoutAFileDescribesTheEmbeddedDefaultScene) {
+  const fs::path default_file{std::string(kDefaultSceneFile)};
+  if (fs::exists(default_file)) GTEST_SKIP() << default_file << " exists here (an installed service)";
+  ScratchDir dir;
+  const ToolResult r = run_tool("check-config", dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  for (const std::string& part :
+       {default_file.string() + ": no such file, so pseudohapticd runs its embedded default scene",
+        std::string("\n  output: absolute\n"), std::string("\nregions: 3\n"),
+        std::string("\n  [2] 'bump-linear-h1-r100': 1285,290 500x500 px, curvature, ")}) {
+    EXPECT_TRUE(contains(r.out, part)) << "expected '" << part << "' in: " << r.out;
+  }
+  EXPECT_TRUE(r.err.empty()) << r.err;
+  const ToolResult quiet = run_tool("check-config --quiet", dir);
+  EXPECT_EQ(quiet.rc, 0) << quiet.err;
+  EXPECT_TRUE(quiet.out.empty()) << quiet.out;
+  // A file named and missing is still an error.
+  expect_clean_failure(run_tool("check-config " + quote(dir / "nope.toml"), dir), {"nope.toml: cannot open"});
 }
 
 TEST(Tool, CheckConfig) {

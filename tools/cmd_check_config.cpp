@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <iterator>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -16,6 +18,7 @@
 #include "config/field_loader.hpp"
 #include "config/scene_file.hpp"
 #include "core/engine/decode.hpp"
+#include "core/engine/default_scene.hpp"
 #include "tools/commands.hpp"
 
 namespace ph::tools {
@@ -25,6 +28,7 @@ namespace {
 struct CheckConfigOptions {
   std::string file{kDefaultSceneFile};
   bool quiet = false;
+  const CLI::Option* file_option = nullptr;  // to tell FILE given from the default
 };
 
 // What the hybrid method found at load (docs/METHODS.md, "Hybrid"): the texels that take the depth C/D, which
@@ -82,13 +86,11 @@ std::string map_line(const DecodeReport& map, const RegionSpec& region) {
   return size.empty() ? "not read: neither the method nor an effect uses it" : size;
 }
 
-std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadReport& report) {
-  fmt::memory_buffer out;
+// The [daemon] table's settings, as the daemon takes them.
+void append_daemon(fmt::memory_buffer& out, const DaemonSettings& d) {
   const auto to = std::back_inserter(out);
-  const DaemonSettings& d = spec.daemon;
   std::string devices;
   for (const DeviceMatch& m : d.devices) devices += (devices.empty() ? "" : ", ") + format_device_match(m);
-  fmt::format_to(to, "{}: ok\n", spec.file.string());
   fmt::format_to(to, "daemon:\n");
   fmt::format_to(to, "  devices: {}\n", devices.empty() ? std::string("any pointer") : devices);
   fmt::format_to(to, "  output: {}\n", d.output == OutputMode::absolute ? "absolute" : "relative");
@@ -102,6 +104,13 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
                  accel.dpi, d.acceleration ? "" : " by default for this output");
   fmt::format_to(to, "  pointer_speed: {}\n", d.pointer_speed);
   fmt::format_to(to, "  engine: {}\n", label_of(d.engine));
+}
+
+std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadReport& report) {
+  fmt::memory_buffer out;
+  const auto to = std::back_inserter(out);
+  fmt::format_to(to, "{}: ok\n", spec.file.string());
+  append_daemon(out, spec.daemon);
   fmt::format_to(to, "regions: {}\n", spec.regions.size());
   for (std::size_t i = 0; i < spec.regions.size(); ++i) {
     const RegionSpec& r = spec.regions[i];
@@ -130,7 +139,37 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
   return fmt::to_string(out);
 }
 
+// Without a scene file at the default path the daemon runs its embedded default scene (daemon/configuration.cpp):
+// not an error, so said as what the daemon will do.
+std::string default_scene_summary(const std::string& file) {
+  fmt::memory_buffer out;
+  const auto to = std::back_inserter(out);
+  fmt::format_to(to,
+                 "{}: no such file, so pseudohapticd runs its embedded default scene (three targets of the curvature "
+                 "paper, laid out for a 1920x1080 desktop; see pseudohapticd(8)) with the [daemon] table's defaults\n",
+                 file);
+  append_daemon(out, DaemonSettings{});
+  const Scene scene = default_scene();
+  fmt::format_to(to, "regions: {}\n", scene.regions().size());
+  for (std::size_t i = 0; i < scene.regions().size(); ++i) {
+    const Region& r = scene.regions()[i];
+    fmt::format_to(to, "  [{}] '{}': {},{} {}x{} px, {}, {} bytes\n", i, r.name, r.rect.x, r.rect.y, r.rect.w, r.rect.h,
+                   r.method->name(), r.fields.bytes());
+  }
+  return fmt::to_string(out);
+}
+
+void write_stdout(const std::string& text) {
+  if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size() || std::fflush(stdout) != 0)
+    throw std::runtime_error("<stdout>: write failed");
+}
+
 int run_check_config(const CheckConfigOptions& o) {
+  std::error_code ignored;
+  if (o.file_option->count() == 0 && !std::filesystem::exists(o.file, ignored)) {
+    if (!o.quiet) write_stdout(default_scene_summary(o.file));
+    return 0;
+  }
   const SceneSpec spec = parse_scene_file(o.file);
   SceneLoadReport report;
   const Scene scene = load_scene(spec, &report);
@@ -139,9 +178,7 @@ int run_check_config(const CheckConfigOptions& o) {
   std::vector<std::string> warnings = map_warnings(spec, report);
   for (std::string& w : desktop_warnings(spec)) warnings.push_back(std::move(w));
   for (const std::string& w : warnings) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
-  const std::string text = summary(spec, scene, report);
-  if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size() || std::fflush(stdout) != 0)
-    throw std::runtime_error("<stdout>: write failed");
+  write_stdout(summary(spec, scene, report));
   return 0;
 }
 
@@ -152,7 +189,10 @@ Run add_check_config_command(CLI::App& app) {
   app.description(
       "Read a scene file as the daemon would: the [daemon] table, every region and its images. Prints a\n"
       "summary and exits 0, or prints the first error (file, line, key) and exits 1.");
-  app.add_option("FILE", o->file, "Scene file to check")->capture_default_str();
+  o->file_option = app.add_option("FILE", o->file,
+                                  "Scene file to check; without it, the daemon's default, and where that does not "
+                                  "exist, what the daemon runs instead (its embedded default scene)")
+                       ->capture_default_str();
   app.add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   return [o] { return run_check_config(*o); };
 }
