@@ -355,6 +355,11 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   RegionSpec r;
   r.line = static_cast<int>(t.source().begin.line);
   r.name = get_string(rep, t, "name", where).value_or(fmt::format("region {}", index));
+  // A name is written into log lines, status and CSV cells: a line break or a tab there would split or shift them.
+  if (r.name.empty()) rep.fail(t.get("name"), where + "name", "must not be empty (leave it out for 'region N')");
+  if (std::any_of(r.name.begin(), r.name.end(),
+                  [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; }))
+    rep.fail(t.get("name"), where + "name", "must not hold control characters (a line break, a tab)");
   r.rect.x = get_int(rep, t, "x", where, 0, -kMaxCoordinate, kMaxCoordinate);
   r.rect.y = get_int(rep, t, "y", where, 0, -kMaxCoordinate, kMaxCoordinate);
   r.rect.w = get_int(rep, t, "width", where, std::nullopt, 1, kMaxRegionSide);

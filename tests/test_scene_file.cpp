@@ -293,6 +293,17 @@ TEST(SceneFileErrors, BadNormalOptions) {
                {"\"auto\"", "\"unorm\"", "\"signed\""});
 }
 
+// A region's name goes into log lines, status and CSV cells: empty or with control characters it is refused; a comma
+// or a quote is kept (the CSV quotes it).
+TEST(SceneFileErrors, RegionNames) {
+  const std::string tail = "width = 2\nheight = 2\nnormal_map = \"n.png\"\n";
+  expect_error("[[region]]\nname = \"\"\n" + tail, 2, "region[0].name", {"must not be empty"});
+  expect_error("[[region]]\nname = \"two\\nlines\"\n" + tail, 2, "region[0].name", {"control characters"});
+  expect_error("[[region]]\nname = \"a\\tb\"\n" + tail, 2, "region[0].name", {"control characters"});
+  EXPECT_EQ(parse_scene_text("[[region]]\nname = 'bump, \"big\"'\n" + tail, kOrigin).regions.at(0).name,
+            "bump, \"big\"");
+}
+
 TEST(SceneFileErrors, NonFiniteDepthOptions) {
   const std::string head = "[[region]]\nwidth = 2\nheight = 2\ndepth_map = \"d.png\"\n";
   expect_error(head + "depth_zero = inf\n", 5, "region[0].depth_zero", {"finite"});

@@ -247,6 +247,19 @@ TEST(Tool, TraceFilesMatchTarget) {
     expect_same_cd(csv, exact_depth, 1e-2, 0.95);
   }
   {
+    SCOPED_TRACE("--scene whose region's name holds a comma and quotes: one quoted cell");
+    std::string text = read_text(scenes[0]);
+    const std::string name_line = "name = \"" + kBump + "\"";
+    ASSERT_NE(text.find(name_line), std::string::npos) << text;
+    text.replace(text.find(name_line), name_line.size(), "name = 'bump, \"big\"'");
+    std::ofstream(dir / "named.toml", std::ios::binary) << text;
+    const ToolResult r =
+        run_tool("trace --scene " + quote(dir / "named.toml") + " -o " + quote(dir / "named.csv"), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(contains(read_text(dir / "named.csv"), ",\"bump, \"\"big\"\"\"\n"));
+    expect_trace_shape(parse_trace_csv(read_text(dir / "named.csv")), Method::curvature, "bump, \"big\"");
+  }
+  {
     SCOPED_TRACE("--normal-map --depth-map: curvature unless told otherwise");
     const Csv csv = trace(maps + depth_options, dir);
     expect_trace_shape(csv, Method::curvature, "trace");  // a region from maps is named "trace"

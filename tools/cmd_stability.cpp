@@ -22,6 +22,7 @@
 #include "core/lab/failure_modes.hpp"
 #include "core/lab/stability.hpp"
 #include "tools/commands.hpp"
+#include "tools/csv_cell.hpp"
 #include "tools/measured.hpp"
 
 namespace ph::tools {
@@ -67,18 +68,12 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // A number for the CSV; an empty cell for NaN (a metric the mode does not have).
 std::string cell(double v) { return std::isnan(v) ? std::string() : fmt::format("{:.6g}", v); }
 
-std::string quoted(const std::string& s) {
-  std::string out = "\"";
-  for (char ch : s) out += ch == '"' ? std::string("\"\"") : std::string(1, ch);
-  return out + "\"";
-}
-
 void write_modes(const fs::path& path, const std::vector<const FailureMode*>& modes) {
   std::FILE* f = open_csv(path);
   fmt::print(f, "mode,family,severity,has_features,description\n");
   for (const FailureMode* m : modes) {
-    fmt::print(f, "{},{},{},{},{}\n", m->name, quoted(m->family), quoted(m->severity), m->has_features ? 1 : 0,
-               quoted(m->description));
+    fmt::print(f, "{},{},{},{},{}\n", m->name, csv_quoted(m->family), csv_quoted(m->severity), m->has_features ? 1 : 0,
+               csv_quoted(m->description));
   }
   close_csv(f, path);
 }
@@ -120,7 +115,7 @@ int run_stability(const StabilityOptions& o) {
         for (const StabilityCase& c : cases) truths.push_back(case_truth(c, *method, config.settings));
         for (const EngineOptions& engine : config.engines) {
           const StabilityRow r = measure_stability(cases, truths, method, engine, config.settings);
-          fmt::print(f, "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", mode.name, quoted(mode.family),
+          fmt::print(f, "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", mode.name, csv_quoted(mode.family),
                      cell(severity), method->name(), label_of(engine), label_of({engine.traversal}),
                      name_of(engine.sampling), cell(r.cd_err_rms), cell(r.jitter_rms), cell(r.jitter_truth_rms),
                      cell(r.travel_err_pct), cell(r.travel_sens_pct), cell(r.iso_pct), cell(r.rate_px),

@@ -18,6 +18,7 @@
 #include "core/engine/targets.hpp"
 #include "core/lab/stroke.hpp"
 #include "tools/commands.hpp"
+#include "tools/csv_cell.hpp"
 #include "tools/map_flags.hpp"
 
 namespace ph::tools {
@@ -174,7 +175,7 @@ int run_trace(const TraceOptions& o) {
       append_number(out, v);
       out.push_back(',');
     }
-    fmt::format_to(std::back_inserter(out), "{:.6g},{}\n", s.cd, s.region != nullptr ? s.region->name : "");
+    fmt::format_to(std::back_inserter(out), "{:.6g},{}\n", s.cd, s.region != nullptr ? csv_cell(s.region->name) : "");
     if (out.size() > (1 << 16)) flush();
   });
   flush();
