@@ -28,15 +28,6 @@ class Plane final : public AnalyticSurface {
   ExactGradient g_;
 };
 
-TargetSpec target(TargetShape shape, TargetProfile profile, double height, double radius) {
-  TargetSpec spec;
-  spec.shape = shape;
-  spec.profile = profile;
-  spec.height = height;
-  spec.radius = radius;
-  return spec;
-}
-
 // The two methods the truth is checked with, with their default parameters.
 const CurvatureMethod kCurvature{CurvatureParams{}};
 const DepthMethod kDepth{DepthParams{}};
@@ -88,7 +79,7 @@ TEST(GroundTruth, PlaneGivesConstantCdAndDisplayIsMotorOverCd) {
 TEST(GroundTruth, ConeAlongADiameterMatchesTheClosedForm) {
   for (double height : {0.25, 1.0}) {
     for (double radius : {100.0, 200.0}) {
-      const TargetSpec spec = target(TargetShape::bump, TargetProfile::linear, height, radius);
+      const TargetSpec spec{TargetShape::bump, TargetProfile::linear, height, radius};
       const auto surface = make_target_surface(spec);
       const TruthModel model{surface.get(), &kCurvature};
       const CurvatureParams& p = kCurvature.params();
@@ -108,7 +99,7 @@ TEST(GroundTruth, ConeAlongADiameterMatchesTheClosedForm) {
 }
 
 TEST(GroundTruth, FlatOutsideIsTheIdentity) {
-  const auto surface = make_target_surface(target(TargetShape::hole, TargetProfile::gaussian, 1.0, 200.0));
+  const auto surface = make_target_surface(TargetSpec{TargetShape::hole, TargetProfile::gaussian, 1.0, 200.0});
   for (const Method* method : kMethods) {
     const TruthModel model{surface.get(), method};
     // Along the top edge, 50 px from the rim: C/D is exactly 1.

@@ -19,15 +19,6 @@
 namespace ph {
 namespace {
 
-TargetSpec make_spec(TargetShape shape, TargetProfile profile, double height, double radius) {
-  TargetSpec spec;
-  spec.shape = shape;
-  spec.profile = profile;
-  spec.height = height;
-  spec.radius = radius;
-  return spec;
-}
-
 // Points spread over the whole target on an irregular lattice, so none falls on the centre or the rim.
 std::vector<Vec2> sample_points(const TargetSpec& spec) {
   std::vector<Vec2> points;
@@ -66,9 +57,10 @@ TEST(Targets, AllTargetsHaveDistinctNamesInTheStatedOrder) {
 }
 
 TEST(Targets, NamesOfTheBrief) {
-  EXPECT_EQ(make_spec(TargetShape::bump, TargetProfile::gaussian, 1.0, 200.0).name(), "bump-gaussian-h1-r200");
-  EXPECT_EQ(make_spec(TargetShape::hole, TargetProfile::linear, 0.25, 100.0).name(), "hole-linear-h0.25-r100");
-  EXPECT_EQ(make_spec(TargetShape::bump, TargetProfile::polynomial, 0.25, 200.0).name(), "bump-polynomial-h0.25-r200");
+  EXPECT_EQ((TargetSpec{TargetShape::bump, TargetProfile::gaussian, 1.0, 200.0}.name()), "bump-gaussian-h1-r200");
+  EXPECT_EQ((TargetSpec{TargetShape::hole, TargetProfile::linear, 0.25, 100.0}.name()), "hole-linear-h0.25-r100");
+  EXPECT_EQ((TargetSpec{TargetShape::bump, TargetProfile::polynomial, 0.25, 200.0}.name()),
+            "bump-polynomial-h0.25-r200");
 }
 
 TEST(Targets, ExactGradientMatchesCentralDifferencesAwayFromKinks) {
@@ -92,7 +84,7 @@ TEST(Targets, ExactGradientMatchesCentralDifferencesAwayFromKinks) {
 }
 
 TEST(Targets, GradientPointsUphillTowardTheCentreOfABump) {
-  const TargetSpec spec = make_spec(TargetShape::bump, TargetProfile::gaussian, 1.0, 200.0);
+  const TargetSpec spec{TargetShape::bump, TargetProfile::gaussian, 1.0, 200.0};
   // Right of and below the centre (y down): the height falls with x and with y.
   const Gradient g = target_gradient(spec, {300.0, 320.0});
   EXPECT_LT(g.x, 0.0f);
@@ -146,7 +138,7 @@ TEST(Targets, HeightsAtCentreRimAndOutside) {
 }
 
 TEST(Targets, RasterisedFieldsSampleTexelCentres) {
-  const TargetSpec spec = make_spec(TargetShape::hole, TargetProfile::polynomial, 1.0, 100.0);
+  const TargetSpec spec{TargetShape::hole, TargetProfile::polynomial, 1.0, 100.0};
   const DepthField depth = target_depth_field(spec);
   const GradientField gradient = target_gradient_field(spec);
   ASSERT_EQ(depth.width, 500);
@@ -184,7 +176,7 @@ TEST(Targets, NormalsAreUnitFacingTheViewerAndMatchTheExactGradient) {
 }
 
 TEST(TargetFiles, SceneTextHasTheLoaderFormat) {
-  const TargetSpec spec = make_spec(TargetShape::bump, TargetProfile::gaussian, 1.0, 200.0);
+  const TargetSpec spec{TargetShape::bump, TargetProfile::gaussian, 1.0, 200.0};
   EXPECT_EQ(target_scene_text(spec),
             "# pseudohaptic scene: target bump-gaussian-h1-r200 of Argelaguet et al. 2012, Fig. 3\n"
             "# Both maps are given, so the region works with either method (\"curvature\" or \"depth\").\n"
@@ -209,9 +201,9 @@ TEST(TargetFiles, SceneTextHasTheLoaderFormat) {
 TEST(TargetFiles, RoundTripThroughTheWrittenFiles) {
   const ScratchDir dir("roundtrip");
   const std::vector<TargetSpec> targets = {
-      make_spec(TargetShape::bump, TargetProfile::gaussian, 1.0, 200.0),
-      make_spec(TargetShape::hole, TargetProfile::linear, 0.25, 100.0),
-      make_spec(TargetShape::hole, TargetProfile::polynomial, 1.0, 100.0),
+      TargetSpec{TargetShape::bump, TargetProfile::gaussian, 1.0, 200.0},
+      TargetSpec{TargetShape::hole, TargetProfile::linear, 0.25, 100.0},
+      TargetSpec{TargetShape::hole, TargetProfile::polynomial, 1.0, 100.0},
   };
   EXPECT_FALSE(target_files_present(dir.path(), targets));
 
