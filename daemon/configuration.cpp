@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <optional>
 #include <string>
 
 #include "config/desktop_geometry.hpp"
@@ -59,6 +60,16 @@ Configuration load_configuration(const ConfigChoice& choice) {
   std::string warning;
   c.pipeline = pipeline_config_of(c.settings, resolve_desktop(c.settings.desktop, choice.drm_dir, warning));
   if (!warning.empty()) c.warnings.push_back(warning);
+  // With desktop = "auto" read from the connected displays, regions off it are said here (a configured desktop's
+  // are, above, with their lines; the session helper's layout is checked again when it comes: Daemon::layout).
+  if (!c.settings.desktop && warning.empty()) {
+    for (const Region& region : c.scene->regions()) {
+      if (const std::optional<std::string> note = off_desktop_note(region.rect, c.pipeline.desktop)) {
+        c.warnings.push_back(fmt::format("{}: region '{}' {} (desktop = \"auto\": the connected displays side by side)",
+                                         c.source, region.name, *note));
+      }
+    }
+  }
   return c;
 }
 

@@ -238,6 +238,22 @@ TEST(DaemonConfiguration, ARegionOffTheDesktopIsWarned) {
       << c.warnings[0];
 }
 
+// With desktop = "auto" the connected displays give the desktop: on a 1366 x 768 laptop the embedded default scene,
+// laid out for 1920 x 1080, is cut on every target, and the daemon says so at start.
+TEST(DaemonConfiguration, RegionsOffTheDisplaysDesktopAreWarned) {
+  const ScratchDir dir("daemon-config-laptop");
+  ConfigChoice choice = choice_in(dir);
+  std::filesystem::create_directories(choice.drm_dir / "card0-eDP-1");
+  std::ofstream(choice.drm_dir / "card0-eDP-1" / "status") << "connected\n";
+  std::ofstream(choice.drm_dir / "card0-eDP-1" / "modes") << "1366x768\n";
+  const Configuration c = load_configuration(choice);
+  EXPECT_EQ(c.pipeline.desktop, (Rect{0, 0, 1366, 768}));
+  ASSERT_EQ(c.warnings.size(), 3u);
+  EXPECT_EQ(c.warnings[2],
+            "the embedded default scene: region 'bump-linear-h1-r100' at 1285,290 (500x500 px): only 81x478 px of it "
+            "lie on the desktop 0,0 1366x768 px (desktop = \"auto\": the connected displays side by side)");
+}
+
 // A hybrid region whose depth map holds its relief at half the scale of its normal map (relief_px 50 where the normals
 // were made for 100) is warned of, with the relief_px that makes them agree; one whose maps agree is not.
 TEST(DaemonConfiguration, MismatchedReliefScalesOfAHybridRegionAreWarned) {
