@@ -18,6 +18,7 @@
 #include "daemon/log.hpp"
 #include "daemon/service_notifier.hpp"
 #include "daemon/unique_fd.hpp"
+#include "tests/geometry_printers.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {

@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include "config/desktop_geometry.hpp"
+#include "tests/geometry_printers.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {

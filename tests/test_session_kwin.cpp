@@ -15,12 +15,9 @@
 #include <vector>
 
 #include "session/kwin_cursor.hpp"
+#include "tests/geometry_printers.hpp"
 #include "tests/kwin_stand_in.hpp"
 #include "tests/scratch_dir.hpp"
-
-namespace ph {
-inline void PrintTo(const Vec2& v, std::ostream* os) { *os << "(" << v.x << ", " << v.y << ")"; }
-}  // namespace ph
 
 namespace ph::session {
 namespace {

@@ -19,14 +19,9 @@
 #include <vector>
 
 #include "session/wayland_desktop.hpp"
+#include "tests/geometry_printers.hpp"
 #include "tests/scratch_dir.hpp"
 #include "xdg-output-unstable-v1-server-protocol.h"
-
-namespace ph {
-// Readable failures: gtest prints the rectangles and points instead of their bytes.
-inline void PrintTo(const Rect& r, std::ostream* os) { *os << r.w << "x" << r.h << "+" << r.x << "+" << r.y; }
-inline void PrintTo(const Vec2& v, std::ostream* os) { *os << "(" << v.x << ", " << v.y << ")"; }
-}  // namespace ph
 
 namespace ph::session {
 namespace {
