@@ -127,9 +127,9 @@ std::string map_size_description(const DecodeReport& map, std::int32_t width, st
   return text;
 }
 
-std::vector<std::string> stretched_map_notes(const FieldSources& sources, const FieldLoadReport& report,
-                                             std::int32_t width, std::int32_t height) {
-  std::vector<std::string> notes;
+std::vector<std::string> map_notes(const FieldSources& sources, const FieldLoadReport& report, std::int32_t width,
+                                   std::int32_t height) {
+  std::vector<std::string> notes = invalid_texel_notes(sources, report);
   auto note = [&](const char* what, const std::optional<std::filesystem::path>& path, const DecodeReport& r) {
     if (!was_read(r) || map_scale(r, width, height).in_proportion()) return;
     notes.push_back(fmt::format("{} {}: {}", what, path ? path->string() : std::string("(none)"),

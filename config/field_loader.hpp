@@ -40,9 +40,10 @@ std::vector<std::string> invalid_texel_notes(const FieldSources& sources, const 
 // proportion "; out of proportion: stretched by 1.6 across and 0.6 down". Empty for a map not read.
 std::string map_size_description(const DecodeReport& map, std::int32_t width, std::int32_t height);
 
-// One line per map whose size is out of proportion with the region's, so that its relief is stretched on the
-// screen: "normal map PATH: " and map_size_description's text. For the log, as invalid_texel_notes.
-std::vector<std::string> stretched_map_notes(const FieldSources& sources, const FieldLoadReport& report,
-                                             std::int32_t width, std::int32_t height);
+// What a region of width x height px should say at load of its maps: invalid_texel_notes, then one line per map whose
+// size is out of proportion with the region's, so that its relief is stretched on the screen ("normal map PATH: " and
+// map_size_description's text). For the log, as invalid_texel_notes.
+std::vector<std::string> map_notes(const FieldSources& sources, const FieldLoadReport& report, std::int32_t width,
+                                   std::int32_t height);
 
 }  // namespace ph

@@ -631,10 +631,7 @@ std::vector<std::string> map_warnings(const SceneSpec& spec, const SceneLoadRepo
   std::vector<std::string> out;
   for (std::size_t i = 0; i < spec.regions.size() && i < report.regions.size(); ++i) {
     const RegionSpec& r = spec.regions[i];
-    std::vector<std::string> notes = invalid_texel_notes(r.sources, report.regions[i]);
-    for (std::string& note : stretched_map_notes(r.sources, report.regions[i], r.rect.w, r.rect.h))
-      notes.push_back(std::move(note));
-    for (const std::string& note : notes)
+    for (const std::string& note : map_notes(r.sources, report.regions[i], r.rect.w, r.rect.h))
       out.push_back(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, note));
   }
   return out;
@@ -690,6 +687,15 @@ std::optional<std::string> off_desktop_note(const Rect& rect, const Rect& deskto
                        on);
   }
   return fmt::format("{}: only {}x{} px of it lie on {}", region, w, h, on);
+}
+
+std::vector<std::string> off_desktop_notes(const Scene& scene, const Rect& desktop) {
+  std::vector<std::string> out;
+  for (const Region& region : scene.regions()) {
+    if (const std::optional<std::string> note = off_desktop_note(region.rect, desktop))
+      out.push_back(fmt::format("region '{}' {}", region.name, *note));
+  }
+  return out;
 }
 
 std::vector<std::string> desktop_warnings(const SceneSpec& spec) {

@@ -90,7 +90,7 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report = nullptr, Field
 
 // One line per region and map with invalid texels (counted, repaired and reported at load: docs/METHODS.md,
 // "Screen, regions and fields") or stretched out of proportion to the region, "FILE:LINE: region 'NAME': " and
-// invalid_texel_notes' or stretched_map_notes' text; none for a clean scene.
+// map_notes' text; none for a clean scene.
 std::vector<std::string> map_warnings(const SceneSpec& spec, const SceneLoadReport& report);
 
 // What the hybrid method found of a region's two maps' scales (RegionFields::normals_to_depth_slope_ratio): the
@@ -115,6 +115,10 @@ std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scen
 // the cursor never reaches it, ..." or "at X,Y (WxH px): only WxH px of it lie on the desktop ..."; nullopt where
 // all of it lies on the desktop.
 std::optional<std::string> off_desktop_note(const Rect& rect, const Rect& desktop);
+
+// One line per region of `scene` that lies wholly or partly off `desktop`, "region 'NAME' " and off_desktop_note's
+// text: for a desktop learnt while running (the displays, the session helper's layout, a replay's --desktop).
+std::vector<std::string> off_desktop_notes(const Scene& scene, const Rect& desktop);
 
 // One line per region that lies wholly or partly off the [daemon] table's desktop, "FILE:LINE: region 'NAME' " and
 // off_desktop_note's text; none for desktop = "auto", whose size only the running daemon learns.

@@ -63,12 +63,9 @@ Configuration load_configuration(const ConfigChoice& choice) {
   // With desktop = "auto" read from the connected displays, regions off it are said here (a configured desktop's
   // are, above, with their lines; the session helper's layout is checked again when it comes: Daemon::layout).
   if (!c.settings.desktop && warning.empty()) {
-    for (const Region& region : c.scene->regions()) {
-      if (const std::optional<std::string> note = off_desktop_note(region.rect, c.pipeline.desktop)) {
-        c.warnings.push_back(fmt::format("{}: region '{}' {} (desktop = \"auto\": the connected displays side by side)",
-                                         c.source, region.name, *note));
-      }
-    }
+    for (const std::string& note : off_desktop_notes(*c.scene, c.pipeline.desktop))
+      c.warnings.push_back(
+          fmt::format("{}: {} (desktop = \"auto\": the connected displays side by side)", c.source, note));
   }
   return c;
 }

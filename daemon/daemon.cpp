@@ -12,7 +12,6 @@
 #include <cerrno>
 #include <csignal>
 #include <cstring>
-#include <optional>
 #include <string>
 #include <string_view>
 
@@ -620,10 +619,8 @@ void Daemon::layout(Rect desktop) {
   if (desktop == config_.pipeline.desktop) return;
   log_.info("desktop {}x{}+{}+{} (from the session helper)", desktop.w, desktop.h, desktop.x, desktop.y);
   // The scene file could not say this: its desktop is "auto" (config/scene_file.hpp, desktop_warnings).
-  for (const Region& region : config_.scene->regions()) {
-    if (const std::optional<std::string> note = off_desktop_note(region.rect, desktop))
-      log_.warning("{}: region '{}' {}", config_.source, region.name, *note);
-  }
+  for (const std::string& note : off_desktop_notes(*config_.scene, desktop))
+    log_.warning("{}: {}", config_.source, note);
   config_.pipeline.desktop = desktop;
   if (config_.pipeline.mode == OutputMode::relative) {
     pipeline_->set_desktop(desktop);

@@ -139,9 +139,8 @@ int run_inspect(const InspectOptions& o) {
   }
   fmt::print("isophotes.png{}: pattern texels black\n", fields.depth ? ", contours.png" : "");
   // As `trace` and the daemon warn: invalid texels (repaired), and a --size out of the maps' proportion.
-  std::vector<std::string> notes = invalid_texel_notes(sources, report);
-  for (std::string& note : stretched_map_notes(sources, report, width, height)) notes.push_back(std::move(note));
-  for (const std::string& note : notes) fmt::print(stderr, "pseudohaptic: warning: {}\n", note);
+  for (const std::string& note : map_notes(sources, report, width, height))
+    fmt::print(stderr, "pseudohaptic: warning: {}\n", note);
   return 0;
 }
 

@@ -255,10 +255,8 @@ int run_replay(const ReplayOptions& o) {
   if (config.start && !(std::isfinite(config.start->x) && std::isfinite(config.start->y)))
     throw std::invalid_argument("--start: X and Y must be finite numbers");
   // What the replay's cursor cannot reach changes nothing: said, as the daemon says it of its desktop.
-  for (const Region& region : scene.regions()) {
-    if (const std::optional<std::string> note = off_desktop_note(region.rect, config.desktop))
-      fmt::print(stderr, "pseudohaptic: warning: region '{}' {}\n", region.name, *note);
-  }
+  for (const std::string& note : off_desktop_notes(scene, config.desktop))
+    fmt::print(stderr, "pseudohaptic: warning: {}\n", note);
   note_device(o.input == "-" ? "<stdin>" : o.input, input, info, o.device_given);
 
   std::vector<FrameReport> reports;

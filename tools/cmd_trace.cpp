@@ -73,7 +73,7 @@ Scene scene_from_maps(const TraceOptions& o, std::vector<std::string>& warnings)
   region.method = make_method(r);
   FieldLoadReport report;
   region.fields = load_region_fields(r.sources, r.rect.w, r.rect.h, region.method->needs(), report);
-  for (const std::string& note : invalid_texel_notes(r.sources, report)) warnings.push_back(note);
+  for (std::string& note : map_notes(r.sources, report, r.rect.w, r.rect.h)) warnings.push_back(std::move(note));
   std::vector<Region> regions;
   regions.push_back(std::move(region));
   return Scene(std::move(regions));
