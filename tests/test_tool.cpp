@@ -193,6 +193,44 @@ TEST(Tool, HelpNamesTheCommandsAndEveryTraceFlag) {
   EXPECT_FALSE(contains(file.err, "filesystem error")) << file.err;
 }
 
+// Every number flag that no later check covers refuses NaN and infinity with its own name: CLI11's range checks
+// let NaN through, and a NaN acceleration speed, Weber fraction or relief scale gave output that meant nothing.
+// The check runs as the command line is read, so the files named need not exist and no OUTDIR is made.
+TEST(Tool, NumberFlagsRefuseNanAndInfinity) {
+  ScratchDir dir;
+  const std::string out = quote(dir / "out");
+  const std::string map = "--normal-map " + quote(dir / "n.png") + " ";
+  struct Flag {
+    std::string command, flag;
+    bool pair = false;  // takes X,Y or X,Y,Z: the non-finite value comes first
+  };
+  const Flag flags[] = {
+      {"study --small " + out, "--weber"},
+      {"study --small " + out, "--bound"},
+      {"study --small " + out, "--speedup-weight"},
+      {"replay " + quote(dir / "in.evemu") + " " + out, "--speed"},
+      {"replay " + quote(dir / "in.evemu") + " " + out, "--mouse-dpi"},
+      {"inspect " + map + out, "--planar-curvedness"},
+      {"inspect " + map + out, "--parabolic-ratio"},
+      {"inspect " + map + out, "--cos-alpha"},
+      {"inspect " + map + out, "--light", true},
+      {"inspect " + map + out, "--relief-px"},
+      {"trace " + map + "-o " + out, "--depth-zero"},
+      {"trace " + map + "-o " + out, "--relief-px"},
+      {"demo --targets " + out, "--step"},
+      {"cursor --control " + quote(dir / "socket"), "--set", true},
+  };
+  for (const Flag& f : flags) {
+    for (std::string_view value : {"nan", "inf", "-inf"}) {
+      const std::string given = std::string(value) + (f.pair ? ",1" : "") + (f.flag == "--light" ? ",1" : "");
+      const ToolResult r = run_tool(f.command + " " + f.flag + " " + given, dir);
+      SCOPED_TRACE(f.command + " " + f.flag + " " + given);
+      expect_clean_failure(r, {f.flag, "must be a finite number"});
+      EXPECT_FALSE(fs::exists(dir / "out"));
+    }
+  }
+}
+
 TEST(Tool, TraceTargetCurvature) {
   ScratchDir dir;
   const Csv csv = trace("--target " + kBump, dir);

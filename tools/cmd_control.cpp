@@ -10,6 +10,7 @@
 #include "control/client.hpp"
 #include "control/protocol.hpp"
 #include "tools/commands.hpp"
+#include "tools/finite_check.hpp"
 
 namespace ph::tools {
 
@@ -75,7 +76,10 @@ Run add_cursor_command(CLI::App& app) {
       "Print the daemon's cursor model as X,Y (px), or with --set move the model there first (with absolute\n"
       "output the desktop's cursor follows at the next motion of the mouse).");
   add_socket_option(app, *o);
-  app.add_option("--set", o->set, "X,Y: move the cursor model here (px)")->delimiter(',')->expected(2);
+  app.add_option("--set", o->set, "X,Y: move the cursor model here (px)")
+      ->delimiter(',')
+      ->expected(2)
+      ->check(finite_number());
   return [o] { return run_cursor(*o); };
 }
 

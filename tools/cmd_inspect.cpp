@@ -19,6 +19,7 @@
 #include "core/effects/curvature_field.hpp"
 #include "core/effects/patterns.hpp"
 #include "tools/commands.hpp"
+#include "tools/finite_check.hpp"
 #include "tools/map_flags.hpp"
 
 namespace ph::tools {
@@ -168,14 +169,19 @@ Run add_inspect_command(CLI::App& app) {
       ->check(CLI::Range(1, 256));
   app.add_option("--planar-curvedness", o->planar_curvedness,
                  "Planar below this curvedness, 1/px (default 5e-5; 1e-4 for 8-bit maps)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_number())
+      ->check(CLI::Range(0.0, 1.0));
   app.add_option("--parabolic-ratio", o->parabolic_ratio,
                  "Parabolic below this |k_small|/|k_large| (default 0.1; 0.25 for 8-bit maps)")
+      ->check(finite_number())
       ->check(CLI::Range(0.0, 1.0));
   app.add_option("--light", o->light, "X,Y,Z light direction for isophotes (default -1,-1,2: top left)")
       ->delimiter(',')
-      ->expected(3);
-  app.add_option("--cos-alpha", o->cos_alpha, "Isophote value n.l (default 0.95)")->check(CLI::Range(-1.0, 1.0));
+      ->expected(3)
+      ->check(finite_number());
+  app.add_option("--cos-alpha", o->cos_alpha, "Isophote value n.l (default 0.95)")
+      ->check(finite_number())
+      ->check(CLI::Range(-1.0, 1.0));
   app.add_option("--contours", o->contours, "Number of evenly spaced contour levels (default 8)")
       ->check(CLI::Range(0, 4096));
   return [o] { return run_inspect(*o); };

@@ -24,6 +24,7 @@
 #include "recording/evemu.hpp"
 #include "recording/recording_file.hpp"
 #include "tools/commands.hpp"
+#include "tools/finite_check.hpp"
 
 namespace ph::tools {
 
@@ -319,10 +320,12 @@ Run add_replay_command(CLI::App& app) {
       ->capture_default_str()
       ->each([o](const std::string&) { o->acceleration_given = true; });
   app.add_option("--speed", o->speed, "Acceleration speed setting, -1 to 1 (as the desktop's slider)")
+      ->check(finite_number())
       ->check(CLI::Range(-1.0, 1.0))
       ->capture_default_str()
       ->each([o](const std::string&) { o->speed_given = true; });
   app.add_option("--mouse-dpi", o->mouse_dpi, "The recorded mouse's resolution, for the adaptive profile")
+      ->check(finite_number())
       ->check(CLI::Range(kMinMouseDpi, kMaxMouseDpi))
       ->capture_default_str()
       ->each([o](const std::string&) { o->dpi_given = true; });

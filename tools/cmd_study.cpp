@@ -20,6 +20,7 @@
 #include "core/lab/study.hpp"
 #include "core/lab/study_stats.hpp"
 #include "tools/commands.hpp"
+#include "tools/finite_check.hpp"
 #include "tools/study_techniques.hpp"
 
 namespace ph::tools {
@@ -227,9 +228,6 @@ int run_study_command(const StudyOptions& o) {
   if (o.weber) design.observer.weber = *o.weber;
   if (o.bound) design.observer.bound = *o.bound;
   if (o.speedup_weight) design.observer.speedup_weight = *o.speedup_weight;
-  if (!(design.observer.weber > 0.0) || !(design.observer.bound > 0.0)) {
-    throw std::invalid_argument("--weber and --bound must be > 0");
-  }
   const std::vector<StudyTechnique> techniques = chosen_techniques(o);
   if (o.calibrate) return run_calibration(design, techniques);
 
@@ -277,10 +275,15 @@ Run add_study_command(CLI::App& app) {
                  "curvature+materials, curvature+wells")
       ->allow_extra_args(false);
   app.add_option("--weber", o->weber,
-                 "The observer's Weber fraction for speed (default 0.375, calibrated: docs/STUDY.md)");
-  app.add_option("--bound", o->bound, "The observer's decision bound (default 3)");
+                 "The observer's Weber fraction for speed (default 0.375, calibrated: docs/STUDY.md)")
+      ->check(finite_number())
+      ->check(CLI::PositiveNumber);
+  app.add_option("--bound", o->bound, "The observer's decision bound (default 3)")
+      ->check(finite_number())
+      ->check(CLI::PositiveNumber);
   app.add_option("--speedup-weight", o->speedup_weight,
                  "Weight of speed-ups as evidence (default 0: slowdowns only, as the paper's participants reported)")
+      ->check(finite_number())
       ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--calibrate", o->calibrate,
                "Print the Weber fraction that gives the paper's pooled error over its two techniques; writes nothing");

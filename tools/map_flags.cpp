@@ -1,5 +1,7 @@
 #include "tools/map_flags.hpp"
 
+#include "tools/finite_check.hpp"
+
 namespace ph::tools {
 
 void add_map_flags(CLI::App& app, MapFlags& flags) {
@@ -11,8 +13,11 @@ void add_map_flags(CLI::App& app, MapFlags& flags) {
                      "auto: unorm for integer images, signed for float ones")
           ->check(CLI::IsMember({"auto", "unorm", "signed"}))
           ->capture_default_str(),
-      app.add_option("--depth-zero", flags.depth_zero, "Depth map value of height 0")->capture_default_str(),
+      app.add_option("--depth-zero", flags.depth_zero, "Depth map value of height 0")
+          ->check(finite_number())
+          ->capture_default_str(),
       app.add_option("--relief-px", flags.relief_px, "Screen px of height per unit of depth map value")
+          ->check(finite_number())
           ->capture_default_str(),
   };
 }
