@@ -229,6 +229,15 @@ TEST(Tool, NumberFlagsRefuseNanAndInfinity) {
       EXPECT_FALSE(fs::exists(dir / "out"));
     }
   }
+  // Where the number must also be above 0, 0 says so, not CLI11's range up to DBL_MAX written out.
+  const std::vector<std::string> at_zero = {"demo --step 0", "study --small --weber 0 " + out,
+                                            "study --small --bound -2 " + out};
+  for (const std::string& command : at_zero) {
+    const ToolResult r = run_tool(command, dir);
+    SCOPED_TRACE(command);
+    expect_clean_failure(r, {"must be a finite number > 0"});
+    EXPECT_FALSE(contains(r.err, "not in range")) << r.err;
+  }
 }
 
 TEST(Tool, TraceTargetCurvature) {

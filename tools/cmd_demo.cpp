@@ -50,10 +50,7 @@ Run add_demo_command(CLI::App& app) {
   auto dir = std::make_shared<std::string>();
   auto step = std::make_shared<double>(2.0);
   app.add_option("--targets", *dir, "Folder of the target files (default: $XDG_CACHE_HOME/pseudohaptic/targets)");
-  app.add_option("--step", *step, "Motor travel per frame, px")
-      ->check(finite_number())
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
+  app.add_option("--step", *step, "Motor travel per frame, px")->check(positive_number())->capture_default_str();
   return [dir, step] {
     const std::filesystem::path folder = dir->empty() ? default_targets_dir() : std::filesystem::path(*dir);
     const auto targets = all_targets();

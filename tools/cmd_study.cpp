@@ -276,11 +276,8 @@ Run add_study_command(CLI::App& app) {
       ->allow_extra_args(false);
   app.add_option("--weber", o->weber,
                  "The observer's Weber fraction for speed (default 0.375, calibrated: docs/STUDY.md)")
-      ->check(finite_number())
-      ->check(CLI::PositiveNumber);
-  app.add_option("--bound", o->bound, "The observer's decision bound (default 3)")
-      ->check(finite_number())
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
+  app.add_option("--bound", o->bound, "The observer's decision bound (default 3)")->check(positive_number());
   app.add_option("--speedup-weight", o->speedup_weight,
                  "Weight of speed-ups as evidence (default 0: slowdowns only, as the paper's participants reported)")
       ->check(finite_number())
