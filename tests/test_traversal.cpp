@@ -13,41 +13,12 @@
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
 #include "tests/split_stroke.hpp"
+#include "tests/traversal_regions.hpp"
 
 namespace ph {
 namespace {
 
-Region gradient_region(Rect rect, Gradient g, CurvatureParams params = {}) {
-  Region r;
-  r.name = "gradient";
-  r.rect = rect;
-  r.fields.gradient = GradientField(rect.w, rect.h, g);
-  r.method = std::make_shared<CurvatureMethod>(params);
-  return r;
-}
-
-Region depth_region(Rect rect, float (*height)(int x, int y), DepthParams params = {}) {
-  Region r;
-  r.name = "depth";
-  r.rect = rect;
-  r.fields.depth = DepthField(rect.w, rect.h);
-  for (int y = 0; y < rect.h; ++y) {
-    for (int x = 0; x < rect.w; ++x) r.fields.depth->at(x, y) = height(x, y);
-  }
-  r.method = std::make_shared<DepthMethod>(params);
-  return r;
-}
-
 Scene scene_of(std::vector<Region> regions) { return Scene(std::move(regions)); }
-
-// A random stream of motor displacements: mostly 1-10 px, some sub-pixel, a few huge flicks.
-Vec2 random_motion(std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const double kind = u(rng);
-  const double size = kind < 0.2 ? u(rng) * 0.01 : kind < 0.98 ? 1.0 + 9.0 * u(rng) : 1e4 * u(rng);
-  const double phi = 2.0 * std::numbers::pi * u(rng);
-  return {size * std::cos(phi), size * std::sin(phi)};
-}
 
 void expect_identity(const Scene& scene, Vec2 start, std::uint64_t seed, int frames) {
   std::mt19937_64 rng(seed);
@@ -158,20 +129,6 @@ Vec2 reference_end(const Scene& scene, Vec2 p, Vec2 m, double budget) {
     t0 = t1;
     prev = cur;
   }
-}
-
-Region target_region(const TargetSpec& spec, Vec2 offset, bool depth_method) {
-  Region r;
-  r.name = spec.name();
-  r.rect = {static_cast<int>(offset.x), static_cast<int>(offset.y), spec.size, spec.size};
-  if (depth_method) {
-    r.fields.depth = target_depth_field(spec);
-    r.method = std::make_shared<DepthMethod>(DepthParams{});
-  } else {
-    r.fields.gradient = target_gradient_field(spec);
-    r.method = std::make_shared<CurvatureMethod>(CurvatureParams{});
-  }
-  return r;
 }
 
 TEST(Traversal, MatchesReferenceIntegralOnAllTargets) {

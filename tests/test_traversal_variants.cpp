@@ -18,45 +18,17 @@
 #include "core/engine/targets.hpp"
 #include "core/engine/traversal.hpp"
 #include "tests/split_stroke.hpp"
+#include "tests/traversal_regions.hpp"
 
 namespace ph {
 namespace {
 
 std::vector<EngineOptions> all_variants() { return all_engine_variants(); }
 
-Region gradient_region(Rect rect, Gradient g) {
-  Region r;
-  r.name = "gradient";
-  r.rect = rect;
-  r.fields.gradient = GradientField(rect.w, rect.h, g);
-  r.method = std::make_shared<CurvatureMethod>(CurvatureParams{});
-  return r;
-}
-
-Region depth_region(Rect rect, float (*height)(int x, int y)) {
-  Region r;
-  r.name = "depth";
-  r.rect = rect;
-  r.fields.depth = DepthField(rect.w, rect.h);
-  for (int y = 0; y < rect.h; ++y) {
-    for (int x = 0; x < rect.w; ++x) r.fields.depth->at(x, y) = height(x, y);
-  }
-  r.method = std::make_shared<DepthMethod>(DepthParams{});
-  return r;
-}
-
 Scene scene_with(std::vector<Region> regions, const EngineOptions& options) {
   Scene scene(std::move(regions));
   scene.set_options(options);
   return scene;
-}
-
-Vec2 random_motion(std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const double kind = u(rng);
-  const double size = kind < 0.2 ? u(rng) * 0.01 : kind < 0.98 ? 1.0 + 9.0 * u(rng) : 1e4 * u(rng);
-  const double phi = 2.0 * std::numbers::pi * u(rng);
-  return {size * std::cos(phi), size * std::sin(phi)};
 }
 
 TEST(EngineOptions, NamesRoundTrip) {
@@ -161,20 +133,6 @@ TEST(TraversalVariants, ConstantSlopeGivesMotorOverCd) {
                    options),
         {10.5, 10.25}, {s, s}, 1.0 + 3.0 * along, 3e-4, name + " depth diagonal");
   }
-}
-
-Region target_region(const TargetSpec& spec, Vec2 offset, bool depth_method) {
-  Region r;
-  r.name = spec.name();
-  r.rect = {static_cast<int>(offset.x), static_cast<int>(offset.y), spec.size, spec.size};
-  if (depth_method) {
-    r.fields.depth = target_depth_field(spec);
-    r.method = std::make_shared<DepthMethod>(DepthParams{});
-  } else {
-    r.fields.gradient = target_gradient_field(spec);
-    r.method = std::make_shared<CurvatureMethod>(CurvatureParams{});
-  }
-  return r;
 }
 
 // End-position distance to the exact traversal (px) after 500 px strokes in frames of 0.3-12.3 px: the
