@@ -302,18 +302,9 @@ TEST(Traversal, FlatOutsideIsCrossedInOneJump) {
 }
 
 TEST(Traversal, NoNaNOrInfinityForAnyInput) {
-  std::vector<Region> regions;
-  Region wild = gradient_region({0, 0, 64, 64}, {0.0f, 0.0f});
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  for (Gradient& g : wild.fields.gradient->values) g = {u(rng) * 1e6f, u(rng) * 1e-6f};
-  wild.fields.gradient->at(3, 3) = {NAN, 1.0f};
-  wild.fields.gradient->at(4, 4) = {INFINITY, -INFINITY};
-  regions.push_back(std::move(wild));
-  Region deep = depth_region({32, 32, 64, 64}, [](int x, int y) { return (x * 7 + y * 13) % 5 == 0 ? 1e30f : -1e30f; });
-  deep.fields.depth->at(1, 1) = NAN;
-  regions.push_back(std::move(deep));
-  const Scene scene = scene_of(std::move(regions));
+  const Scene scene = scene_of(hostile_regions(rng));
   const Vec2 inputs[] = {{0, 0},         {NAN, 1},    {1, INFINITY}, {-INFINITY, INFINITY}, {1e6, -1e6},
                          {1e300, 1e300}, {1e-300, 0}, {5e-324, 0},   {-3.5, 2.25},          {0.001, -0.0007}};
   CursorState cursor = cursor_at({40.0, 40.0});

@@ -218,19 +218,9 @@ TEST(TraversalVariants, NoNaNOrInfinityForAnyInput) {
                          {1e300, 1e300}, {1e-300, 0}, {5e-324, 0},     {-3.5, 2.25},          {0.001, -0.0007},
                          {1e6, 0.0},     {0.0, -1e6}, {5e-324, 5e-324}};
   for (const EngineOptions& options : all_variants()) {
-    std::vector<Region> regions;
-    Region wild = gradient_region({0, 0, 64, 64}, {0.0f, 0.0f});
     std::mt19937_64 rng(9);
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-    for (Gradient& g : wild.fields.gradient->values) g = {u(rng) * 1e6f, u(rng) * 1e-6f};
-    wild.fields.gradient->at(3, 3) = {NAN, 1.0f};
-    wild.fields.gradient->at(4, 4) = {INFINITY, -INFINITY};
-    regions.push_back(std::move(wild));
-    Region deep =
-        depth_region({32, 32, 64, 64}, [](int x, int y) { return (x * 7 + y * 13) % 5 == 0 ? 1e30f : -1e30f; });
-    deep.fields.depth->at(1, 1) = NAN;
-    regions.push_back(std::move(deep));
-    const Scene scene = scene_with(std::move(regions), options);
+    const Scene scene = scene_with(hostile_regions(rng), options);
     CursorState cursor = cursor_at({40.0, 40.0});
     std::uniform_int_distribution<int> pick(0, std::size(inputs) - 1);
     for (int i = 0; i < 30000; ++i) {

@@ -6,6 +6,8 @@
 #include <memory>
 #include <numbers>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "core/engine/method_curvature.hpp"
 #include "core/engine/method_depth.hpp"
@@ -49,6 +51,22 @@ inline Region target_region(const TargetSpec& spec, Vec2 offset, bool depth_meth
     r.method = std::make_shared<CurvatureMethod>(CurvatureParams{});
   }
   return r;
+}
+
+// Two overlapping regions of values no map should hold: gradients of 1e6 across and 1e-6 down with a NaN and an
+// infinite texel, heights alternating between +-1e30 with a NaN. Draws the gradients from `rng`.
+inline std::vector<Region> hostile_regions(std::mt19937_64& rng) {
+  Region wild = gradient_region({0, 0, 64, 64}, {0.0f, 0.0f});
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (Gradient& g : wild.fields.gradient->values) g = {u(rng) * 1e6f, u(rng) * 1e-6f};
+  wild.fields.gradient->at(3, 3) = {NAN, 1.0f};
+  wild.fields.gradient->at(4, 4) = {INFINITY, -INFINITY};
+  Region deep = depth_region({32, 32, 64, 64}, [](int x, int y) { return (x * 7 + y * 13) % 5 == 0 ? 1e30f : -1e30f; });
+  deep.fields.depth->at(1, 1) = NAN;
+  std::vector<Region> regions;
+  regions.push_back(std::move(wild));
+  regions.push_back(std::move(deep));
+  return regions;
 }
 
 // A random stream of motor displacements: mostly 1-10 px, some sub-pixel, a few huge flicks.
