@@ -20,6 +20,16 @@ namespace {
   throw std::runtime_error(fmt::format("control socket {}: {}: {}", path, what, std::strerror(errno)));
 }
 
+// Whether a process accepts connections on the socket at `address`: a socket file whose listener is gone
+// refuses them (ECONNREFUSED). Anything else (a connection, a full backlog, a refusal by permissions) is taken
+// for a live one, to be left alone.
+bool socket_answers(const sockaddr_un& address) {
+  const UniqueFd probe(::socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
+  if (!probe) return false;
+  if (::connect(probe.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0) return true;
+  return errno != ECONNREFUSED && errno != ENOENT;
+}
+
 }  // namespace
 
 std::string default_control_path() {
@@ -43,7 +53,15 @@ ControlServer::ControlServer(std::string path, int epoll, const SessionDirectory
   listener_ = UniqueFd(::socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
   if (!listener_) fail("cannot create the socket", path_);
   struct stat st {};
-  if (::lstat(path_.c_str(), &st) == 0 && S_ISSOCK(st.st_mode)) ::unlink(path_.c_str());  // a stale one
+  if (::lstat(path_.c_str(), &st) == 0 && S_ISSOCK(st.st_mode)) {
+    if (socket_answers(address)) {
+      throw ControlSocketInUse(fmt::format(
+          "control socket {}: another pseudohapticd answers there; stop it first (`systemctl stop pseudohapticd`) "
+          "or give this one another --control",
+          path_));
+    }
+    ::unlink(path_.c_str());  // left by a daemon that is gone
+  }
   if (::bind(listener_.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0)
     fail("cannot bind", path_);
   // Everyone may connect; who may talk is decided per connection from its credentials.

@@ -6,6 +6,7 @@
 
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 #include "control/protocol.hpp"
@@ -30,10 +31,18 @@ class ControlHandler {
   virtual void passthrough(bool on) = 0;
 };
 
+// Another process (another pseudohapticd) accepts connections on the control socket's path.
+class ControlSocketInUse : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 class ControlServer {
  public:
-  // Binds and listens at `path` (the directory must exist; a stale socket there is replaced) and adds
-  // the socket to `epoll`. Throws std::runtime_error saying what failed.
+  // Binds and listens at `path` (the directory must exist) and adds the socket to `epoll`. A socket left
+  // there by a daemon that is gone is replaced; one that a running process still accepts on is left alone
+  // (ControlSocketInUse): replacing it would cut that daemon off from its helper and from the tool, and
+  // this one would remove it again when it ends. Throws std::runtime_error saying what else failed.
   ControlServer(std::string path, int epoll, const SessionDirectory& sessions, const Logger& log);
   ~ControlServer();
   ControlServer(const ControlServer&) = delete;

@@ -138,6 +138,9 @@ void Daemon::start_control(const std::string& path) {
   try {
     control_ = std::make_unique<ControlServer>(path, epoll_.get(), sessions_, log_);
     log_.info("control socket: {}", path);
+  } catch (const ControlSocketInUse& e) {
+    // Another daemon runs: it holds the mice already, and this one would only fight it for new ones.
+    throw StartupError(e.what());
   } catch (const std::exception& e) {
     log_.warning("{}; running without a control socket (no session helper, no `pseudohaptic status`)", e.what());
   }

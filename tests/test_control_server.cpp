@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 #include <sys/epoll.h>
 #include <sys/socket.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cstring>
 #include <filesystem>
 #include <mutex>
 #include <thread>
@@ -157,6 +159,42 @@ TEST(ControlServer, AnswersEveryRequestAndQueriesTheHelper) {
   }
   for (int i = 0; i < 100 && server.handler.helper_present_; ++i) std::this_thread::sleep_for(10ms);
   EXPECT_FALSE(server.handler.helper_present_);  // the helper's connection closed
+}
+
+// A second daemon started beside a running one (`sudo pseudohapticd` while the service runs) must not take the
+// running one's socket: it used to unlink it as stale, bind its own, and remove that when it ended, leaving the
+// running daemon unreachable. A socket file whose daemon is gone is still replaced.
+TEST(ControlServer, LeavesALiveSocketAloneAndReplacesAStaleOne) {
+  const ScratchDir dir("control");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  {
+    ServerLoop running(path, sessions);
+    const UniqueFd epoll(::epoll_create1(EPOLL_CLOEXEC));
+    const Logger log(false, false, std::fopen("/dev/null", "w"));
+    try {
+      ControlServer second(path, epoll.get(), sessions, log);
+      ADD_FAILURE() << "a second server took the running one's socket";
+    } catch (const ControlSocketInUse& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("another pseudohapticd"), std::string::npos) << e.what();
+    }
+    control::Client tool(path);  // the running one still answers on its own socket
+    EXPECT_TRUE(tool.request("status").ok);
+  }
+  // A socket file left behind: bound, never unlinked, its listener closed.
+  {
+    const UniqueFd gone(::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0));
+    sockaddr_un address{};
+    address.sun_family = AF_UNIX;
+    std::memcpy(address.sun_path, path.c_str(), path.size() + 1);
+    ASSERT_EQ(::bind(gone.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address), 0);
+    ASSERT_EQ(::listen(gone.get(), 1), 0);
+  }
+  ASSERT_TRUE(std::filesystem::is_socket(path));
+  ServerLoop next(path, sessions);
+  control::Client tool(path);
+  EXPECT_TRUE(tool.request("status").ok);
 }
 
 TEST(ControlServer, DropsAClientWhoseLineNeverEnds) {

@@ -732,6 +732,32 @@ void flat_part(Report& report, const Options& options, Latency& latency, Latency
     check.note("uid 65534 got \"" + line + "\"; the daemon logged \"" + said + "\"");
   });
 
+  session.run("[11] control socket: a second pseudohapticd on it exits 1 and leaves it to the running one",
+              [&](Check& check) {
+                const std::filesystem::path flat = options.scratch / "second.toml";
+                write_file_atomically(flat, "");
+                ChildProcess second({options.daemon, "-c", flat.string(), "--control", control_path},
+                                    {"PATH=/usr/sbin:/usr/bin:/sbin:/bin", "LANG=C.UTF-8"},
+                                    (options.scratch / "daemon-second.log").string());
+                const std::optional<int> exit = second.wait_exit(30s);
+                const std::string said = second.log();
+                check.expect(exit && WIFEXITED(*exit) && WEXITSTATUS(*exit) == 1,
+                             "the second daemon: expected exit 1, got " +
+                                 (exit ? describe_wait_status(*exit) : std::string("still running after 30 s")) +
+                                 "; it said: " + said);
+                check.expect(said.find("another pseudohapticd answers there") != std::string::npos,
+                             "expected the second daemon to say another one answers on the socket; it said: " + said);
+                check.expect(std::filesystem::is_socket(control_path), "the control socket is gone");
+                ph::control::Client fresh(control_path);
+                const ph::control::Reply reply = fresh.request("status", 10s);
+                check.expect(reply.ok && daemon_cursor(*control) == model.cursor().position,
+                             "the running daemon stopped answering on its socket: " + reply.text);
+                const std::size_t at = said.rfind('\n', said.find("another pseudohapticd"));
+                const std::string line = said.substr(at == std::string::npos ? 0 : at + 1);
+                check.note("the second daemon exited 1 saying \"" + line.substr(0, line.find('\n')) +
+                           "\"; the running one answers a new connection");
+              });
+
   session.run(
       "[12] resync: an untaken touchpad's motion queries the helper within 200 ms; the model goes to "
       "its point",
