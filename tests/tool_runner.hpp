@@ -36,17 +36,22 @@ struct ToolResult {
   std::string err;
 };
 
-// Runs the tool with `args` (already quoted where needed), standard output and error into files of `dir`.
-inline ToolResult run_tool(const std::string& args, const ScratchDir& dir) {
+// Runs `program` with `args` (already quoted where needed), standard output and error into files of `dir`.
+inline ToolResult run_program(const std::filesystem::path& program, const std::string& args, const ScratchDir& dir) {
   const std::filesystem::path out = dir / "stdout.txt";
   const std::filesystem::path err = dir / "stderr.txt";
-  const std::string command = quote(std::string(PH_TOOL_PATH)) + " " + args + " >" + quote(out) + " 2>" + quote(err);
+  const std::string command = quote(program) + " " + args + " >" + quote(out) + " 2>" + quote(err);
   const int status = std::system(command.c_str());
   ToolResult result;
   if (status != -1) result.rc = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   result.out = read_text(out);
   result.err = read_text(err);
   return result;
+}
+
+// Runs the tool with `args`, as run_program.
+inline ToolResult run_tool(const std::string& args, const ScratchDir& dir) {
+  return run_program(std::string(PH_TOOL_PATH), args, dir);
 }
 
 // A failure as a user should meet it: each of `parts` on standard error, no sign of a crash, and exit status 1
