@@ -218,7 +218,7 @@ TEST(Tool, NumberFlagsRefuseNanAndInfinity) {
       {"trace " + map + "-o " + out, "--depth-zero"},
       {"trace " + map + "-o " + out, "--relief-px"},
       {"demo --targets " + out, "--step"},
-      {"cursor --control " + quote(dir / "socket"), "--set", true},
+      {"cursor --socket " + quote(dir / "socket"), "--set", true},
   };
   for (const Flag& f : flags) {
     for (std::string_view value : {"nan", "inf", "-inf"}) {
