@@ -240,6 +240,18 @@ TEST(Tool, NumberFlagsRefuseNanAndInfinity) {
   }
 }
 
+// status and cursor take the socket as --socket or, as pseudohapticd and pseudohaptic-session name it, --control;
+// without a daemon there the error names the path and says what to check.
+TEST(Tool, StatusAndCursorNameTheSocketTheyCouldNotReach) {
+  ScratchDir dir;
+  const std::string socket = (dir / "no-daemon").string();
+  for (std::string_view command : {"status --socket ", "status --control ", "cursor --control "}) {
+    SCOPED_TRACE(command);
+    expect_clean_failure(run_tool(std::string(command) + quote(socket), dir),
+                         {"cannot connect to " + socket, "is pseudohapticd running?"});
+  }
+}
+
 TEST(Tool, TraceTargetCurvature) {
   ScratchDir dir;
   const Csv csv = trace("--target " + kBump, dir);

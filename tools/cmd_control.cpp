@@ -22,7 +22,9 @@ struct ControlOptions {
 };
 
 void add_socket_option(CLI::App& app, ControlOptions& o) {
-  app.add_option("--socket", o.socket, "The daemon's control socket")->capture_default_str();
+  // --control as well: the daemon and the session helper call the same path by that name.
+  app.add_option("--socket,--control", o.socket, "The daemon's control socket (pseudohapticd's --control)")
+      ->capture_default_str();
 }
 
 // The reply's words, or a runtime_error with the daemon's reason.
