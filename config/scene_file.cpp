@@ -275,8 +275,7 @@ std::filesystem::path resolve(const std::filesystem::path& base_dir, const std::
   return p.is_absolute() ? p : base_dir / p;
 }
 
-constexpr std::int64_t kMaxCoordinate = 1 << 20;
-constexpr std::int64_t kMaxRegionSide = 1 << 14;
+constexpr std::int64_t kMaxCoordinate = kMaxDesktopCoordinate;
 
 // Every method's parameters: its [region.NAME] table, else its defaults.
 void parse_method_tables(const Reporter& rep, const toml::table& t, const std::string& where,

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <any>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -25,6 +26,9 @@ namespace ph {
 
 // Where the daemon reads its scene file when it is given none.
 inline constexpr std::string_view kDefaultSceneFile = "/etc/pseudohaptic/scene.toml";
+
+// A region's width and height in px are at most this (a 16384 x 16384 curvature region holds 2 GiB of fields).
+inline constexpr std::int32_t kMaxRegionSide = 1 << 14;
 
 class ConfigError : public std::runtime_error {
  public:

@@ -37,8 +37,8 @@ std::optional<std::int32_t> integer(std::string_view text) {
   return v;
 }
 
-// Coordinates past this are not a desktop (the scene file's limit too).
-constexpr double kMaxCoordinate = 1 << 20;
+// Coordinates past this are not a desktop (core/engine/geometry.hpp).
+constexpr double kMaxCoordinate = kMaxDesktopCoordinate;
 
 bool printable_word(std::string_view w) {
   if (w.empty() || w.size() > 32) return false;
@@ -61,10 +61,11 @@ std::variant<Request, std::string> parse_layout(const std::vector<std::string_vi
   if (w.size() != 5) return std::string("layout needs X Y W H (whole px)");
   const auto x = integer(w[1]), y = integer(w[2]), width = integer(w[3]), height = integer(w[4]);
   if (!x || !y || !width || !height) return std::string("layout: X Y W H must be whole numbers");
-  const auto limit = static_cast<std::int32_t>(kMaxCoordinate);
-  if (*width < 1 || *height < 1 || *width > limit || *height > limit || std::abs(*x) > limit || std::abs(*y) > limit)
-    return fmt::format("layout: W and H must be from 1 to {}, X and Y within ±{}", limit, limit);
-  return Request{LayoutRequest{{*x, *y, *width, *height}}};
+  const Rect desktop{*x, *y, *width, *height};
+  if (!is_valid_desktop(desktop))
+    return fmt::format("layout: W and H must be from 1 to {}, X and Y within ±{}", kMaxDesktopCoordinate,
+                       kMaxDesktopCoordinate);
+  return Request{LayoutRequest{desktop}};
 }
 
 }  // namespace

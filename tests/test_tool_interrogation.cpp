@@ -165,6 +165,13 @@ TEST(ToolInterrogation, InspectOptionsAndErrors) {
     EXPECT_EQ(r.rc, 1);
     EXPECT_NE(r.err.find("pseudohaptic: "), std::string::npos) << r.err;
   }
+  {
+    // No region is wider or taller than 16384 px, so neither is what inspect resamples to.
+    const ToolResult r =
+        run_tool("inspect --depth-map " + quote(depth_map) + " --size 16385,8 " + quote(dir / "x"), dir);
+    expect_clean_failure(r, {"--size", "16384"});
+    EXPECT_FALSE(fs::exists(dir / "x"));
+  }
 }
 
 }  // namespace

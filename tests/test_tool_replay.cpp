@@ -308,6 +308,26 @@ TEST(ReplayTool, StartPlacesTheCursorModel) {
   }
 }
 
+// --desktop takes what a scene file's desktop takes: one of 2e9 px gave absolute output an axis range that
+// overflowed ("A: 00 0 -294967297") without a word.
+TEST(ReplayTool, DesktopIsRefusedWhereASceneFileRefusesIt) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir, "in.evemu", 10, 3, 0);
+  for (std::string_view desktop : {"0,0,0,100", "0,0,2000000000,100", "2000000000,0,100,100", "0,-1048577,10,10"}) {
+    SCOPED_TRACE(desktop);
+    const ToolResult r = run_tool("replay --output-mode absolute --desktop " + std::string(desktop) + " " + quote(in) +
+                                      " " + quote(dir / "x.evemu"),
+                                  dir);
+    expect_clean_failure(r, {"--desktop: W and H must be from 1 to 1048576, X and Y within ±1048576"});
+    EXPECT_FALSE(fs::exists(dir / "x.evemu"));
+  }
+  const ToolResult widest = run_tool(
+      "replay --output-mode absolute --desktop -1048576,0,1048576,100 " + quote(in) + " " + quote(dir / "x.evemu"),
+      dir);
+  EXPECT_EQ(widest.rc, 0) << widest.err;
+  EXPECT_TRUE(contains(read_text(dir / "x.evemu"), "A: 00 -2097152 -1 0 0 0")) << read_text(dir / "x.evemu");
+}
+
 TEST(ReplayTool, RelativeAndAbsoluteOutputModes) {
   ScratchDir dir;
   const fs::path in = stroke_file(dir, "in.evemu", 400, -3, 2);

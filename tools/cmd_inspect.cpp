@@ -15,6 +15,7 @@
 
 #include "config/field_loader.hpp"
 #include "config/image_io.hpp"
+#include "config/scene_file.hpp"
 #include "core/effects/curvature_class.hpp"
 #include "core/effects/curvature_field.hpp"
 #include "core/effects/patterns.hpp"
@@ -162,7 +163,7 @@ Run add_inspect_command(CLI::App& app) {
   app.add_option("--size", o->size, "W,H region size in px the maps are resampled to (default: the image's size)")
       ->delimiter(',')
       ->expected(2)
-      ->check(CLI::Range(1, 32768));
+      ->check(CLI::Range(1, kMaxRegionSide));  // a region's largest
   app.add_option("--radius", o->radius,
                  "Derivative filter radius r, a (2r+1)^2 least-squares window (default: 3 for 16-bit normal maps, "
                  "8 for 16-bit depth maps, 16 for 8-bit maps)")

@@ -251,8 +251,10 @@ int run_replay(const ReplayOptions& o) {
   const Recording input = read_recording_file(o.input, o.device_given ? o.device : kFirstPointerDevice, &info);
   if (!(o.gain > 0.0) || !std::isfinite(o.gain)) throw std::invalid_argument("--gain must be a finite number > 0");
   const PipelineConfig config = replay_config(o, loaded.daemon);
-  if (config.desktop.w <= 0 || config.desktop.h <= 0)
-    throw std::invalid_argument("--desktop: width and height must be > 0");
+  // As a scene file's desktop: larger ones overflowed absolute output's axis ranges.
+  if (!is_valid_desktop(config.desktop))
+    throw std::invalid_argument(fmt::format("--desktop: W and H must be from 1 to {}, X and Y within ±{}",
+                                            kMaxDesktopCoordinate, kMaxDesktopCoordinate));
   if (config.start && !(std::isfinite(config.start->x) && std::isfinite(config.start->y)))
     throw std::invalid_argument("--start: X and Y must be finite numbers");
   // What the replay's cursor cannot reach changes nothing: said, as the daemon says it of its desktop.

@@ -47,6 +47,17 @@ struct Rect {
   constexpr bool operator==(const Rect&) const = default;
 };
 
+// Coordinates and sizes past this are not a desktop: the scene file, the control socket's layout and a replay's
+// --desktop refuse them (absolute output counts half pixels of the desktop in 32-bit axis ranges).
+inline constexpr std::int32_t kMaxDesktopCoordinate = 1 << 20;
+
+// Sides from 1 to kMaxDesktopCoordinate px, the corner within +-kMaxDesktopCoordinate.
+constexpr bool is_valid_desktop(const Rect& d) {
+  return d.w >= 1 && d.h >= 1 && d.w <= kMaxDesktopCoordinate && d.h <= kMaxDesktopCoordinate &&
+         d.x >= -kMaxDesktopCoordinate && d.x <= kMaxDesktopCoordinate && d.y >= -kMaxDesktopCoordinate &&
+         d.y <= kMaxDesktopCoordinate;
+}
+
 // The cursor model never leaves [-kWorldLimitPx, kWorldLimitPx]^2, so texel indices always fit.
 inline constexpr double kWorldLimitPx = 1.0e9;
 
