@@ -642,6 +642,10 @@ TEST(Tool, TargetsAndDemo) {
     const ToolResult r = run_tool("targets " + quote(folder), dir);
     ASSERT_EQ(r.rc, 0) << r.err;
     EXPECT_TRUE(contains(r.out, "24")) << r.out;
+    // Standard error is a file here: one progress line per target, no carriage returns.
+    EXPECT_TRUE(contains(r.err, "[ 1/24] " + all.front().name() + "\n[ 2/24] ")) << r.err;
+    EXPECT_TRUE(contains(r.err, "[24/24] " + all.back().name() + "\n")) << r.err;
+    EXPECT_FALSE(contains(r.err, "\r")) << r.err;
     std::size_t files = 0;
     for (const auto& entry : fs::directory_iterator(folder)) {
       EXPECT_TRUE(entry.is_regular_file()) << entry.path();
@@ -661,6 +665,7 @@ TEST(Tool, TargetsAndDemo) {
   const ToolResult r = run_tool("demo --targets " + quote(folder), dir);
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_FALSE(contains(r.err, "writing the 24 targets")) << "the files were there: " << r.err;
+  EXPECT_EQ(r.err, "");  // no progress where standard error is not a terminal: the table's rows say as much
   std::vector<std::string> names;
   std::istringstream in(r.out);
   for (std::string line; std::getline(in, line);) {

@@ -12,6 +12,7 @@
 #include "core/lab/stroke.hpp"
 #include "tools/commands.hpp"
 #include "tools/finite_check.hpp"
+#include "tools/progress_line.hpp"
 
 namespace ph::tools {
 
@@ -56,21 +57,24 @@ Run add_demo_command(CLI::App& app) {
     const auto targets = all_targets();
     if (!target_files_present(folder, targets)) {
       fmt::print(stderr, "writing the 24 targets to {}\n", folder.string());
-      write_target_files(folder, targets, [](std::size_t done, std::size_t total, const TargetSpec& t) {
-        fmt::print(stderr, "\r[{:2}/{}] {:<28}", done, total, t.name());
+      ProgressLine writing;
+      write_target_files(folder, targets, [&writing](std::size_t done, std::size_t total, const TargetSpec& t) {
+        writing.show(fmt::format("[{:2}/{}] {}", done, total, t.name()));
       });
-      fmt::print(stderr, "\n");
+      writing.finish();
     }
     fmt::print("C/D ratio met on a horizontal stroke through the centre of each target\n");
     fmt::print("(below 1: the cursor speeds up, downhill; above 1: it slows down, uphill)\n\n");
     fmt::print("{:<28} {:>19} {:>19}\n", "target", "curvature", "depth");
     std::size_t done = 0;
+    ProgressLine measuring;  // on a terminal only: elsewhere the table's rows say as much
     for (const TargetSpec& t : targets) {
-      fmt::print(stderr, "\r[{:2}/{}] {:<28}", ++done, targets.size(), t.name());
+      ++done;
+      if (measuring.in_place()) measuring.show(fmt::format("[{:2}/{}] {}", done, targets.size(), t.name()));
       const SceneSpec spec = parse_scene_file(target_file_paths(folder, t).scene);
       const Range c = stroke_range(spec, CurvatureMethod::kName, *step);
       const Range d = stroke_range(spec, DepthMethod::kName, *step);
-      fmt::print(stderr, "\r{:40}\r", "");
+      measuring.finish(true);
       fmt::print("{:<28} {:>8.3f} .. {:>6.3f} {:>8.3f} .. {:>6.3f}\n", t.name(), c.lo, c.hi, d.lo, d.hi);
       std::fflush(stdout);
     }

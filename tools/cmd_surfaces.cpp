@@ -8,6 +8,7 @@
 #include "config/map_pair_scene.hpp"
 #include "core/lab/surfaces.hpp"
 #include "tools/commands.hpp"
+#include "tools/progress_line.hpp"
 
 namespace ph::tools {
 namespace {
@@ -41,11 +42,12 @@ Run add_surfaces_command(CLI::App& app) {
     std::filesystem::create_directories(*outdir);
     const auto surfaces = all_surfaces(*size);
     std::size_t done = 0;
+    ProgressLine progress;
     for (const SurfaceSpec& spec : surfaces) {
       write_surface(*outdir, spec);
-      fmt::print(stderr, "\r[{}/{}] {:<16}", ++done, surfaces.size(), spec.name());
+      progress.show(fmt::format("[{}/{}] {}", ++done, surfaces.size(), spec.name()));
     }
-    fmt::print(stderr, "\n");
+    progress.finish();
     fmt::print("wrote {} surfaces to {}\n", surfaces.size(), *outdir);
     return 0;
   };

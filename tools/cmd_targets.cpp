@@ -3,6 +3,7 @@
 #include "config/target_files.hpp"
 #include "core/engine/targets.hpp"
 #include "tools/commands.hpp"
+#include "tools/progress_line.hpp"
 
 namespace ph::tools {
 
@@ -17,10 +18,11 @@ Run add_targets_command(CLI::App& app) {
       "or polynomial (1 - u^4) profile; height 0.25 or 1 (1 = 100 px of relief); radius 100 or 200 px.");
   return [outdir] {
     const auto targets = all_targets();
-    write_target_files(*outdir, targets, [](std::size_t done, std::size_t total, const TargetSpec& spec) {
-      fmt::print(stderr, "\r[{:2}/{}] {:<28}", done, total, spec.name());
+    ProgressLine progress;
+    write_target_files(*outdir, targets, [&progress](std::size_t done, std::size_t total, const TargetSpec& spec) {
+      progress.show(fmt::format("[{:2}/{}] {}", done, total, spec.name()));
     });
-    fmt::print(stderr, "\n");
+    progress.finish();
     fmt::print("wrote {} targets to {}\n", targets.size(), *outdir);
     return 0;
   };
