@@ -81,6 +81,19 @@ TEST(ToolStudy, SmallRunIsSeededOrderedAndDependsOnTheTechnique) {
   EXPECT_LT(chance, 70.0);
 }
 
+// A technique named twice runs once: the files are those of naming it once, not every row twice.
+TEST(ToolStudy, ATechniqueNamedTwiceRunsOnce) {
+  ScratchDir dir;
+  const ToolResult once = run_tool("study --small --participants 2 --technique depth " + quote(dir / "a"), dir);
+  ASSERT_EQ(once.rc, 0) << once.err;
+  const ToolResult twice =
+      run_tool("study --small --participants 2 --technique depth --technique depth " + quote(dir / "b"), dir);
+  ASSERT_EQ(twice.rc, 0) << twice.err;
+  for (const char* file : {"summary.csv", "trials.csv", "summary.md"}) {
+    EXPECT_EQ(read_text(dir / "b" / file), read_text(dir / "a" / file)) << file;
+  }
+}
+
 TEST(ToolStudy, UnknownTechniqueIsNamedWithTheKnownOnes) {
   ScratchDir dir;
   const ToolResult r = run_tool("study --small --technique bogus " + quote(dir / "a"), dir);

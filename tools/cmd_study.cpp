@@ -85,6 +85,8 @@ std::vector<StudyTechnique> chosen_techniques(const StudyOptions& o) {
   if (names.empty()) return all;
   std::vector<StudyTechnique> out;
   for (const std::string& name : names) {
+    // Named twice, run once (as stability's --mode): a second run would add the same rows again.
+    if (std::any_of(out.begin(), out.end(), [&](const StudyTechnique& t) { return t.name == name; })) continue;
     auto it = std::find_if(all.begin(), all.end(), [&](const StudyTechnique& t) { return t.name == name; });
     if (it == all.end()) {
       std::string known;
