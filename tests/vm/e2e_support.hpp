@@ -76,6 +76,42 @@ inline std::filesystem::path own_scratch(const std::string& prefix) {
   return pattern;
 }
 
+// The command line of the session checks: SESSION [--daemon PSEUDOHAPTICD] [--COMPOSITOR PATH] [--scratch DIR].
+struct SessionCheckOptions {
+  std::string session;     // pseudohaptic-session
+  std::string daemon;      // pseudohapticd, for the cases that drive the helper through the daemon
+  std::string compositor;  // the compositor's binary; its default is set before parsing
+  std::filesystem::path scratch;
+};
+
+// Parses `argv` into `options`; `compositor_flag` names the compositor's option ("--weston"). False on anything
+// else, for the usage line.
+inline bool parse_session_check_options(int argc, char** argv, const std::string& compositor_flag,
+                                        SessionCheckOptions& options) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == compositor_flag && i + 1 < argc) {
+      options.compositor = argv[++i];
+    } else if (arg == "--daemon" && i + 1 < argc) {
+      options.daemon = argv[++i];
+    } else if (arg == "--scratch" && i + 1 < argc) {
+      options.scratch = argv[++i];
+    } else if (options.session.empty() && arg.rfind("-", 0) != 0) {
+      options.session = arg;
+    } else {
+      return false;
+    }
+  }
+  return !options.session.empty();
+}
+
+// The scratch folder given, emptied, or a new one of this run's own (own_scratch).
+inline std::filesystem::path fresh_scratch(const std::filesystem::path& given, const std::string& prefix) {
+  if (given.empty()) return own_scratch(prefix);
+  std::filesystem::remove_all(given);
+  return given;
+}
+
 // Milliseconds from now until `deadline`, rounded up, at least 0 and at most `cap`: a poll(2) timeout.
 inline int ms_until(Clock::time_point deadline, std::chrono::milliseconds cap = std::chrono::hours(1)) {
   const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now());

@@ -55,12 +55,8 @@ constexpr const char* kSocketName = "ph-kwin-1";
 constexpr const char* kLayout = "layout 0 0 1600 900";
 constexpr const char* kPlugin = "pseudohaptic-session";  // session/kwin_cursor.hpp's kKWinScriptPlugin
 
-struct Options {
-  std::string session;
-  std::string kwin = "/usr/bin/kwin_wayland";
-  std::string daemon;  // pseudohapticd: then also KWin on DRM, driven by the daemon
-  fs::path scratch;
-};
+// compositor: kwin_wayland; daemon: pseudohapticd, for KWin on DRM driven by the daemon as well.
+using Options = SessionCheckOptions;
 
 // A client of KWin's fake-input protocol: moves KWin's pointer as an input device would.
 class FakePointer {
@@ -432,7 +428,7 @@ int run_kwin(const Options& options, const std::string& dbus_daemon, bool drm, i
   // Debian gives kwin_wayland the file capability cap_sys_resource; where the bounding set lacks it (a
   // container) exec fails with EPERM. A copy has no capability and runs anywhere.
   const fs::path kwin = options.scratch / "kwin_wayland";
-  fs::copy_file(options.kwin, kwin);
+  fs::copy_file(options.compositor, kwin);
   const ph::kwin_stand_in::PrivateBus bus(dbus_daemon, options.scratch);
   if (bus.address().empty()) throw Fatal("dbus-daemon printed no address");
   std::vector<std::string> env = kde_environment(options, bus.address());
@@ -493,24 +489,11 @@ int usage() {
 
 int main(int argc, char** argv) {
   Options options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--kwin" && i + 1 < argc) {
-      options.kwin = argv[++i];
-    } else if (arg == "--daemon" && i + 1 < argc) {
-      options.daemon = argv[++i];
-    } else if (arg == "--scratch" && i + 1 < argc) {
-      options.scratch = argv[++i];
-    } else if (options.session.empty() && arg.rfind("-", 0) != 0) {
-      options.session = arg;
-    } else {
-      return usage();
-    }
-  }
-  if (options.session.empty()) return usage();
+  options.compositor = "/usr/bin/kwin_wayland";
+  if (!parse_session_check_options(argc, argv, "--kwin", options)) return usage();
 
-  if (::access(options.kwin.c_str(), X_OK) != 0) {
-    std::printf("SKIP kwin_session_check: no %s (Debian: kwin-wayland)\n", options.kwin.c_str());
+  if (::access(options.compositor.c_str(), X_OK) != 0) {
+    std::printf("SKIP kwin_session_check: no %s (Debian: kwin-wayland)\n", options.compositor.c_str());
     return 0;
   }
   const std::optional<std::string> dbus_daemon = ph::kwin_stand_in::find_dbus_daemon();
@@ -519,11 +502,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
-    if (options.scratch.empty()) {
-      options.scratch = own_scratch("ph-kwin");
-    } else {
-      fs::remove_all(options.scratch);
-    }
+    options.scratch = fresh_scratch(options.scratch, "ph-kwin");
     std::printf("kwin_session_check: scratch folder %s\n", options.scratch.c_str());
     int failed = 0, cases = 0;
     Options virtual_options = options;

@@ -40,12 +40,7 @@ namespace fs = std::filesystem;
 constexpr const char* kSocketName = "ph-wayland-1";
 constexpr const char* kLayout = "layout 0 0 1600 900";  // weston's logical size, not its 3200x1800 mode
 
-struct Options {
-  std::string session;
-  std::string daemon;
-  std::string weston = "/usr/bin/weston";
-  fs::path scratch;
-};
+using Options = SessionCheckOptions;  // compositor: weston
 
 // A listening, non-blocking Unix socket at `path` for a stand-in compositor.
 Fd listen_on(const std::string& what, const std::string& path) {
@@ -434,40 +429,21 @@ bool compositor_gone_case(const Options& options, const fs::path& runtime, Child
 
 int main(int argc, char** argv) {
   Options options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--daemon" && i + 1 < argc) {
-      options.daemon = argv[++i];
-    } else if (arg == "--weston" && i + 1 < argc) {
-      options.weston = argv[++i];
-    } else if (arg == "--scratch" && i + 1 < argc) {
-      options.scratch = argv[++i];
-    } else if (options.session.empty() && arg.rfind("-", 0) != 0) {
-      options.session = arg;
-    } else {
-      std::fprintf(stderr,
-                   "usage: wayland_session_check SESSION [--daemon PSEUDOHAPTICD] [--weston PATH] [--scratch DIR]\n");
-      return 2;
-    }
-  }
-  if (options.session.empty()) {
+  options.compositor = "/usr/bin/weston";
+  if (!parse_session_check_options(argc, argv, "--weston", options)) {
     std::fprintf(stderr,
                  "usage: wayland_session_check SESSION [--daemon PSEUDOHAPTICD] [--weston PATH] [--scratch DIR]\n");
     return 2;
   }
   try {
-    if (options.scratch.empty()) {
-      options.scratch = own_scratch("ph-wayland");
-    } else {
-      fs::remove_all(options.scratch);
-    }
+    options.scratch = fresh_scratch(options.scratch, "ph-wayland");
     std::printf("wayland_session_check: scratch folder %s\n", options.scratch.c_str());
     const fs::path runtime = options.scratch / "runtime";
     fs::create_directories(runtime);
     fs::permissions(runtime, fs::perms::owner_all);  // as XDG_RUNTIME_DIR must be
     const auto start = Clock::now();
     ChildProcess weston(
-        {options.weston, "--backend=headless-backend.so", std::string("--socket=") + kSocketName, "--width=1600",
+        {options.compositor, "--backend=headless-backend.so", std::string("--socket=") + kSocketName, "--width=1600",
          "--height=900", "--scale=2", "--shell=kiosk-shell.so", "--no-config", "--idle-time=0"},
         {"XDG_RUNTIME_DIR=" + runtime.string(), "PATH=/usr/bin:/bin"}, (options.scratch / "weston.log").string());
     if (!wait_until([&] { return fs::exists(runtime / kSocketName) || !weston.running(); }, 60s) || !weston.running()) {
