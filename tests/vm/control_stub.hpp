@@ -5,8 +5,12 @@
 #include <sys/socket.h>
 #include <sys/un.h>
 
+#include <fmt/format.h>
+
+#include <cstdio>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "control/protocol.hpp"
 #include "tests/vm/e2e_support.hpp"
@@ -77,6 +81,44 @@ class ControlStub {
   std::string path_;
   Fd listener_, client_;
   control::LineBuffer lines_;
+};
+
+// One case of a session check against the stub: the problems it found, and PASS or FAIL with them.
+struct HelperCase {
+  std::string label;
+  std::vector<std::string> problems;
+  Clock::time_point start = Clock::now();
+  // Reads lines until `want` (answering each with ok); what came before it is a problem when `exact`.
+  void expect(ControlStub& stub, const std::string& want, const std::string& when, bool exact = true) {
+    std::vector<std::string> before;
+    while (const std::optional<std::string> line = stub.next_line(20s)) {
+      stub.send("ok");
+      if (*line == want) {
+        if (exact && !before.empty())
+          problems.push_back(fmt::format("{}: '{}' came after [{}]", when, want, fmt::join(before, " | ")));
+        return;
+      }
+      before.push_back(*line);
+    }
+    problems.push_back(
+        fmt::format("{}: expected '{}', got [{}] and then nothing for 20 s", when, want, fmt::join(before, " | ")));
+  }
+  void expect_silence(ControlStub& stub, Clock::duration how_long, const std::string& when) {
+    if (const std::optional<std::string> line = stub.next_line(how_long))
+      problems.push_back(fmt::format("{}: expected nothing, got '{}'", when, *line));
+  }
+  bool verdict(const ChildProcess* helper) const {
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    if (problems.empty()) {
+      std::printf("PASS %s (%.1f s)\n", label.c_str(), seconds);
+    } else {
+      std::printf("FAIL %s (%.1f s):\n", label.c_str(), seconds);
+      for (const std::string& p : problems) std::printf("    %s\n", p.c_str());
+      if (helper != nullptr) std::printf("    the helper's log:\n%s", helper->log().c_str());
+    }
+    std::fflush(stdout);
+    return problems.empty();
+  }
 };
 
 }  // namespace ph::e2e

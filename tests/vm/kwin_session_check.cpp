@@ -123,38 +123,7 @@ std::optional<bool> kwin_script_loaded(const std::string& bus_address, const cha
   return loaded != 0;
 }
 
-struct Case {
-  std::string label;
-  std::vector<std::string> problems;
-  Clock::time_point start = Clock::now();
-  // Reads lines until `want` (answering each with ok); what came before it is a problem.
-  void expect(ControlStub& stub, const std::string& want, const std::string& when) {
-    std::vector<std::string> before;
-    while (const std::optional<std::string> line = stub.next_line(20s)) {
-      stub.send("ok");
-      if (*line == want) {
-        if (!before.empty())
-          problems.push_back(fmt::format("{}: '{}' came after [{}]", when, want, fmt::join(before, " | ")));
-        return;
-      }
-      before.push_back(*line);
-    }
-    problems.push_back(
-        fmt::format("{}: expected '{}', got [{}] and then nothing for 20 s", when, want, fmt::join(before, " | ")));
-  }
-  bool verdict(const ChildProcess* helper) const {
-    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    if (problems.empty()) {
-      std::printf("PASS %s (%.1f s)\n", label.c_str(), seconds);
-    } else {
-      std::printf("FAIL %s (%.1f s):\n", label.c_str(), seconds);
-      for (const std::string& p : problems) std::printf("    %s\n", p.c_str());
-      if (helper != nullptr) std::printf("    the helper's log:\n%s", helper->log().c_str());
-    }
-    std::fflush(stdout);
-    return problems.empty();
-  }
-};
+using Case = HelperCase;
 
 // What KWin and the helper share: the runtime folder, a home of their own (the guest's is read-only), the bus.
 std::vector<std::string> kde_environment(const Options& options, const std::string& bus_address) {
