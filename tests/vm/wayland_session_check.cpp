@@ -24,6 +24,7 @@
 #include <atomic>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -55,24 +56,20 @@ Fd listen_on(const std::string& what, const std::string& path) {
   return listener;
 }
 
-// A stand-in for Hyprland's request socket: each connection reads a request and gets "X, Y" for
-// `cursorpos` (then the end of the connection, as Hyprland does); counts the questions.
-class FakeHyprland {
+// A stand-in compositor's socket at `path`: hands each connection to `answer` on a thread of its own until it is
+// destroyed, then removes the socket file. Declared last in its owner, so that the thread ends before the state
+// `answer` uses.
+class StandInSocket {
  public:
-  explicit FakeHyprland(const std::string& path) : path_(path) {
-    listener_ = listen_on("fake Hyprland socket", path);
-    thread_ = std::thread([this] { serve(); });
-  }
-  ~FakeHyprland() {
+  StandInSocket(const std::string& what, const std::string& path, std::function<void(int client)> answer)
+      : path_(path), answer_(std::move(answer)), listener_(listen_on(what, path)), thread_([this] { serve(); }) {}
+  ~StandInSocket() {
     stop_ = true;
     thread_.join();
     ::unlink(path_.c_str());
   }
-  FakeHyprland(const FakeHyprland&) = delete;
-  FakeHyprland& operator=(const FakeHyprland&) = delete;
-
-  void move_to(int x, int y) { at_ = (static_cast<long long>(x) << 32) | static_cast<unsigned>(y); }
-  int questions() const { return questions_; }
+  StandInSocket(const StandInSocket&) = delete;
+  StandInSocket& operator=(const StandInSocket&) = delete;
 
  private:
   void serve() {
@@ -80,42 +77,51 @@ class FakeHyprland {
       pollfd p{listener_.get(), POLLIN, 0};
       if (::poll(&p, 1, 100) <= 0) continue;
       const Fd client(::accept4(listener_.get(), nullptr, nullptr, SOCK_CLOEXEC));
-      if (!client) continue;
-      char request[64] = {};
-      pollfd c{client.get(), POLLIN, 0};
-      if (::poll(&c, 1, 2000) <= 0) continue;
-      const ssize_t n = ::recv(client.get(), request, sizeof request - 1, 0);
-      if (n <= 0 || std::string_view(request, static_cast<std::size_t>(n)) != "cursorpos") continue;
-      ++questions_;
-      const long long at = at_;
-      const std::string answer = fmt::format("{}, {}", static_cast<int>(at >> 32), static_cast<int>(at & 0xffffffff));
-      (void)::send(client.get(), answer.data(), answer.size(), MSG_NOSIGNAL);
+      if (client) answer_(client.get());
     }
   }
 
   std::string path_;
+  std::function<void(int client)> answer_;
   Fd listener_;
-  std::atomic<long long> at_{0};
-  std::atomic<int> questions_{0};
   std::atomic<bool> stop_{false};
   std::thread thread_;
+};
+
+// A stand-in for Hyprland's request socket: each connection reads a request and gets "X, Y" for
+// `cursorpos` (then the end of the connection, as Hyprland does); counts the questions.
+class FakeHyprland {
+ public:
+  explicit FakeHyprland(const std::string& path)
+      : socket_("fake Hyprland socket", path, [this](int client) { answer(client); }) {}
+
+  void move_to(int x, int y) { at_ = (static_cast<long long>(x) << 32) | static_cast<unsigned>(y); }
+  int questions() const { return questions_; }
+
+ private:
+  void answer(int client) {
+    char request[64] = {};
+    pollfd c{client, POLLIN, 0};
+    if (::poll(&c, 1, 2000) <= 0) return;
+    const ssize_t n = ::recv(client, request, sizeof request - 1, 0);
+    if (n <= 0 || std::string_view(request, static_cast<std::size_t>(n)) != "cursorpos") return;
+    ++questions_;
+    const long long at = at_;
+    const std::string reply = fmt::format("{}, {}", static_cast<int>(at >> 32), static_cast<int>(at & 0xffffffff));
+    (void)::send(client, reply.data(), reply.size(), MSG_NOSIGNAL);
+  }
+
+  std::atomic<long long> at_{0};
+  std::atomic<int> questions_{0};
+  StandInSocket socket_;
 };
 
 // A stand-in for Wayfire's IPC socket: each message (a 32-bit length in the machine's byte order, then
 // JSON) that asks for window-rules/get_cursor_position gets `reply`, framed the same way.
 class FakeWayfire {
  public:
-  FakeWayfire(const std::string& path, std::string reply) : path_(path), reply_(std::move(reply)) {
-    listener_ = listen_on("fake Wayfire socket", path);
-    thread_ = std::thread([this] { serve(); });
-  }
-  ~FakeWayfire() {
-    stop_ = true;
-    thread_.join();
-    ::unlink(path_.c_str());
-  }
-  FakeWayfire(const FakeWayfire&) = delete;
-  FakeWayfire& operator=(const FakeWayfire&) = delete;
+  FakeWayfire(const std::string& path, std::string reply)
+      : reply_(std::move(reply)), socket_("fake Wayfire socket", path, [this](int client) { answer(client); }) {}
 
   int questions() const { return questions_; }
 
@@ -132,33 +138,25 @@ class FakeWayfire {
     }
     return data;
   }
-  void serve() {
-    while (!stop_) {
-      pollfd p{listener_.get(), POLLIN, 0};
-      if (::poll(&p, 1, 100) <= 0) continue;
-      const Fd client(::accept4(listener_.get(), nullptr, nullptr, SOCK_CLOEXEC));
-      if (!client) continue;
-      const std::string header = read_exactly(client.get(), 4);
-      if (header.size() != 4) continue;
-      std::uint32_t length = 0;
-      std::memcpy(&length, header.data(), 4);
-      if (length > 4096) continue;
-      const std::string request = read_exactly(client.get(), length);
-      if (request.find("\"window-rules/get_cursor_position\"") == std::string::npos) continue;
-      ++questions_;
-      const auto reply_length = static_cast<std::uint32_t>(reply_.size());
-      std::string framed(4, '\0');
-      std::memcpy(framed.data(), &reply_length, 4);
-      framed += reply_;
-      (void)::send(client.get(), framed.data(), framed.size(), MSG_NOSIGNAL);
-    }
+  void answer(int client) {
+    const std::string header = read_exactly(client, 4);
+    if (header.size() != 4) return;
+    std::uint32_t length = 0;
+    std::memcpy(&length, header.data(), 4);
+    if (length > 4096) return;
+    const std::string request = read_exactly(client, length);
+    if (request.find("\"window-rules/get_cursor_position\"") == std::string::npos) return;
+    ++questions_;
+    const auto reply_length = static_cast<std::uint32_t>(reply_.size());
+    std::string framed(4, '\0');
+    std::memcpy(framed.data(), &reply_length, 4);
+    framed += reply_;
+    (void)::send(client, framed.data(), framed.size(), MSG_NOSIGNAL);
   }
 
-  std::string path_, reply_;
-  Fd listener_;
+  std::string reply_;
   std::atomic<int> questions_{0};
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
+  StandInSocket socket_;
 };
 
 using Case = HelperCase;
