@@ -772,32 +772,19 @@ bool acceleration_case(const Options& options, XServer& x, TestMouse& mouse, con
 // pseudohaptic-session on this X server, talking to a stand-in for the daemon's control socket: what it
 // says at start, its answer to a query, its layout after RandR changes, its reconnection, its exit.
 bool session_case(const Options& options, XServer& x) {
-  const std::string label = "pseudohaptic-session (x11 backend) against a stand-in control socket";
-  const auto start = Clock::now();
-  std::vector<std::string> problems;
+  HelperCase c;
+  c.label = "pseudohaptic-session (x11 backend) against a stand-in control socket";
   ControlStub stub((options.scratch / "control").string());
   x.warp(700, 300);
   const char* display = std::getenv("DISPLAY");
   ChildProcess helper({options.session, "--control", stub.path(), "--passthrough", "PH-GAME", "-v"},
                       {std::string("DISPLAY=") + (display != nullptr ? display : ""), "PATH=/usr/bin:/bin"},
                       (options.scratch / "session.log").string());
-  // Reads lines until `want` (answering each with ok); a line before it is noted, none at all a problem.
-  auto expect = [&](const std::string& want, const std::string& when) {
-    std::vector<std::string> before;
-    while (const std::optional<std::string> line = stub.next_line(15s)) {
-      stub.send("ok");
-      if (*line == want) {
-        if (!before.empty()) trace(options, fmt::format("{}: before '{}': {}", when, want, fmt::join(before, " | ")));
-        return;
-      }
-      before.push_back(*line);
-    }
-    problems.push_back(
-        fmt::format("{}: expected '{}', got [{}] and then nothing for 15 s", when, want, fmt::join(before, " | ")));
-  };
+  // Lines before the one wanted are not a problem here: the pointer's reports may come between.
+  auto expect = [&](const std::string& want, const std::string& when) { c.expect(stub, want, when, false); };
   auto xrandr = [&](const std::string& args) {
     const int status = std::system(("xrandr " + args).c_str());
-    if (status != 0) problems.push_back(fmt::format("xrandr {}: status {}", args, status));
+    if (status != 0) c.problems.push_back(fmt::format("xrandr {}: status {}", args, status));
   };
   try {
     if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
@@ -837,21 +824,12 @@ bool session_case(const Options& options, XServer& x) {
     helper.signal(SIGTERM);
     const std::optional<int> status = helper.wait_exit(10s);
     if (!status || !WIFEXITED(*status) || WEXITSTATUS(*status) != 0) {
-      problems.push_back("SIGTERM: " + (status ? describe_wait_status(*status) : std::string("still running")));
+      c.problems.push_back("SIGTERM: " + (status ? describe_wait_status(*status) : std::string("still running")));
     }
   } catch (const Fatal& e) {
-    problems.push_back(e.what());
+    c.problems.push_back(e.what());
   }
-  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  if (problems.empty()) {
-    std::printf("PASS %s (%.1f s)\n", label.c_str(), seconds);
-  } else {
-    std::printf("FAIL %s (%.1f s):\n", label.c_str(), seconds);
-    for (const std::string& p : problems) std::printf("    %s\n", p.c_str());
-    std::printf("    the helper's log:\n%s", helper.log().c_str());
-  }
-  std::fflush(stdout);
-  return problems.empty();
+  return c.verdict(&helper);
 }
 
 int usage(const char* why) {
