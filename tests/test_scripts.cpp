@@ -1,6 +1,6 @@
-// The scripts under scripts/ as a user first meets them: `--help` prints the script's header comment and does
-// nothing else (no package install, no build), and an argument a script does not know is refused before it
-// installs or builds anything.
+// The scripts under scripts/, and the Python tools under tools/, as a user first meets them: `--help` says what
+// each does and does nothing else (no package install, no build), and an argument one does not know is refused
+// before it installs, builds or reads anything.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -15,6 +15,9 @@
 
 #ifndef PH_SCRIPTS_DIR
 #error "PH_SCRIPTS_DIR must name the project's scripts folder (tests/CMakeLists.txt)"
+#endif
+#ifndef PH_PYTHON_TOOLS_DIR
+#error "PH_PYTHON_TOOLS_DIR must name the folder of the Python tools (tests/CMakeLists.txt)"
 #endif
 
 namespace ph {
@@ -74,6 +77,28 @@ TEST(Scripts, UnknownArgumentIsRefusedBeforeAnything) {
     EXPECT_EQ(r.rc, 2) << r.err;
     EXPECT_EQ(r.err.rfind(script.filename().string() + ": unknown argument '--no-such-argument'", 0), 0u) << r.err;
     EXPECT_EQ(r.out, "");
+  }
+}
+
+// The Python tools (charts, tables, the recording generator) answer --help with a usage line and their purpose,
+// and refuse an argument they do not take, rather than reading it as a folder or ignoring it.
+TEST(Scripts, PythonToolsAnswerHelpAndRefuseUnknownArguments) {
+  std::vector<fs::path> tools;
+  for (const fs::directory_entry& entry : fs::directory_iterator(PH_PYTHON_TOOLS_DIR)) {
+    if (entry.path().extension() == ".py") tools.push_back(entry.path());
+  }
+  ASSERT_GE(tools.size(), 5u) << PH_PYTHON_TOOLS_DIR;
+  for (const fs::path& tool : tools) {
+    SCOPED_TRACE(tool.filename().string());
+    const ScratchDir dir("python-tools");
+    // Debian's python3-matplotlib is /usr/bin/python3's (scripts/test says why).
+    const ToolResult help = run_program("timeout", "60 /usr/bin/python3 " + quote(tool) + " --help", dir);
+    EXPECT_EQ(help.rc, 0) << help.err;
+    EXPECT_EQ(help.out.rfind("usage: " + tool.filename().string(), 0), 0u) << help.out;
+    const ToolResult unknown =
+        run_program("timeout", "60 /usr/bin/python3 " + quote(tool) + " --no-such-option a b c", dir);
+    EXPECT_EQ(unknown.rc, 2) << unknown.err;
+    EXPECT_NE(unknown.err.find("unrecognized arguments"), std::string::npos) << unknown.err;
   }
 }
 

@@ -8,6 +8,7 @@ the worst case plus a quarter, rounded up to a whole px.
 
 usage: error_bounds.py FULL/variants.csv SMALL/variants.csv   (prints Markdown)
 """
+import argparse
 import csv
 import math
 import sys
@@ -31,10 +32,15 @@ def bound(px):
 
 
 def main(argv):
-    if len(argv) != 2:
-        print(__doc__.strip().splitlines()[-1], file=sys.stderr)
-        return 2
-    full, small = (worst_by_group(p) for p in argv)
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("full", help="FULL/variants.csv: the full accuracy run's")
+    parser.add_argument("small", help="SMALL/variants.csv: the --small run's")
+    args = parser.parse_args(argv)
+    try:
+        full, small = (worst_by_group(p) for p in (args.full, args.small))
+    except OSError as e:
+        print(f"error_bounds.py: {e.filename}: {e.strerror}", file=sys.stderr)
+        return 1
     print("| method | traversal | sampling | full set, other storage | full set, 8-bit depth "
           "| `--small`, other storage (tested) | `--small`, 8-bit depth (tested) |")
     print("|---|---|---|---:|---:|---:|---:|")

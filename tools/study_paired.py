@@ -9,6 +9,7 @@ the scored trials, then the mean over participants with a 95 % interval (Student
 table of the comparisons docs/STUDY.md discusses; a comparison whose techniques the run lacks is left out.
 """
 
+import argparse
 import csv
 import math
 import sys
@@ -77,10 +78,14 @@ def signed(value, digits):
 
 
 def main():
-    if len(sys.argv) != 2:
-        sys.exit(__doc__)
-    with open(f"{sys.argv[1]}/trials.csv", newline="") as f:
-        rows = list(csv.DictReader(f))
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("outdir", help="what `pseudohaptic study OUTDIR` wrote")
+    args = parser.parse_args()
+    try:
+        with open(f"{args.outdir}/trials.csv", newline="") as f:
+            rows = list(csv.DictReader(f))
+    except OSError as e:
+        sys.exit(f"study_paired.py: {e.filename}: {e.strerror}")
     techniques = {row["technique"] for row in rows}
     print("| paired difference | error, percentage points | decision time, s |")
     print("|---|---|---|")

@@ -9,6 +9,7 @@ Where a target slows the cursor it travels fewer pixels, so it does not come bac
 
     tools/sweep_recording.py > data/recordings/sweep-default-scene.evemu
 """
+import argparse
 import math
 
 FRAME_US = 8000
@@ -50,6 +51,7 @@ def min_jerk(s):
 
 
 def main():
+    argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter).parse_args()
     print(HEADER)
     t = 1  # microseconds
     x = y = 0.0  # exact position, counts
