@@ -155,8 +155,8 @@ TEST(ReplayTool, HelpNamesEveryFlag) {
   const ToolResult r = run_tool("replay --help", dir);
   ASSERT_EQ(r.rc, 0) << r.err;
   for (std::string_view flag :
-       {"INPUT", "OUTPUT", "--scene", "--trace", "--start", "--output-mode", "--desktop", "--gain", "--device",
-        "--as-daemon", "bump-gaussian-h1-r200", "FIFO", "symbolic link"}) {
+       {"INPUT", "OUTPUT", "--scene", "--method", "--trace", "--start", "--output-mode", "--desktop", "--gain",
+        "--device", "--as-daemon", "bump-gaussian-h1-r200", "FIFO", "symbolic link"}) {
     EXPECT_TRUE(contains(r.out, flag)) << "expected '" << flag << "' in: " << r.out;
   }
 }
@@ -175,6 +175,40 @@ TEST(ReplayTool, DefaultSceneRescalesMotionAndKeepsTheRest) {
   EXPECT_NE(output, read_text(in));  // the texture changed the motion
   EXPECT_EQ(evemu_of(output).device, input.device);
   EXPECT_EQ(listing(dir), (std::set<std::string>{"in.evemu", "out.evemu"}));  // no temporary file left
+}
+
+// --method replays one recording under another method: every region's, the embedded scene's or a scene file's.
+TEST(ReplayTool, MethodReplacesEveryRegionsMethod) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir);
+  const Recording input = testing::scripted_stroke(300, 3, 1);
+  auto run = [&](const std::string& flags, const std::string& out) {
+    const ToolResult r = run_tool("replay " + flags + " " + quote(in) + " " + quote(dir / out), dir);
+    EXPECT_EQ(r.rc, 0) << r.err;
+    return read_text(dir / out);
+  };
+  const std::string curvature = run("", "default.evemu");
+  EXPECT_EQ(run("--method curvature", "curvature.evemu"), curvature);  // the embedded scene's own
+  EXPECT_EQ(run("--method none", "none.evemu"), read_text(in));        // C/D 1: the input, byte for byte
+  const std::string depth = run("--method depth", "depth.evemu");
+  RegionSpec depth_method;
+  depth_method.method = "depth";
+  EXPECT_EQ(depth, evemu_text(replay(input, default_scene(make_method(depth_method)), PipelineConfig{})));
+  EXPECT_NE(depth, curvature);
+  {
+    SCOPED_TRACE("a scene file's regions");
+    const TargetSpec bump = all_targets().front();
+    write_target_files(dir.path(), {bump});
+    const fs::path scene = target_file_paths(dir.path(), bump).scene;
+    SceneSpec spec = parse_scene_file(scene);
+    ASSERT_NE(spec.regions.front().method, "depth");
+    spec.regions.front().method = "depth";
+    EXPECT_EQ(run("--method depth --start 20.5,250.5 --scene " + quote(scene), "scene-depth.evemu"),
+              evemu_text(replay(input, load_scene(spec), start_at({20.5, 250.5}))));
+  }
+  expect_clean_failure(run_tool("replay --method bogus " + quote(in) + " " + quote(dir / "x.evemu"), dir),
+                       {"--method", "bogus"});
+  EXPECT_FALSE(fs::exists(dir / "x.evemu"));
 }
 
 TEST(ReplayTool, SceneFileIsUsed) {

@@ -32,6 +32,7 @@ namespace {
 
 struct ReplayOptions {
   std::string input, output, scene_file, trace;
+  std::string method;  // --method: every region's, in place of the scene's
   std::vector<double> start;
   std::vector<std::int32_t> desktop;
   std::string mode = "relative";
@@ -208,10 +209,19 @@ struct ReplayScene {
 };
 
 // The scene file's scene (or the embedded default), with a warning per map with invalid texels (repaired) or stretched
-// out of proportion, and per region whose normal map and depth map hold the relief at different scales.
-ReplayScene load_replay_scene(const std::string& scene_file) {
-  if (scene_file.empty()) return {default_scene(), DaemonSettings{}};
-  const SceneSpec spec = parse_scene_file(scene_file);
+// out of proportion, and per region whose normal map and depth map hold the relief at different scales. `method`, where
+// given, replaces every region's (with the region's own parameters for it where its file has them).
+ReplayScene load_replay_scene(const std::string& scene_file, const std::string& method) {
+  if (scene_file.empty()) {
+    if (method.empty()) return {default_scene(), DaemonSettings{}};
+    RegionSpec defaults;
+    defaults.method = method;
+    return {default_scene(make_method(defaults)), DaemonSettings{}};
+  }
+  SceneSpec spec = parse_scene_file(scene_file);
+  if (!method.empty()) {
+    for (RegionSpec& region : spec.regions) region.method = method;
+  }
   SceneLoadReport report;
   Scene scene = load_scene(spec, &report);
   for (const std::string& w : map_warnings(spec, report)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
@@ -245,7 +255,7 @@ PipelineConfig replay_config(const ReplayOptions& o, const DaemonSettings& daemo
 int run_replay(const ReplayOptions& o) {
   if (o.output == "-" && o.trace == "-") throw std::invalid_argument("OUTPUT and --trace cannot both be - (stdout)");
   // Everything is read and checked before anything is written: no partial output that looks valid.
-  const ReplayScene loaded = load_replay_scene(o.scene_file);
+  const ReplayScene loaded = load_replay_scene(o.scene_file, o.method);
   const Scene& scene = loaded.scene;
   RecordingInfo info;
   const Recording input = read_recording_file(o.input, o.device_given ? o.device : kFirstPointerDevice, &info);
@@ -301,6 +311,13 @@ Run add_replay_command(CLI::App& app) {
                  "REL_X/REL_Y when device 0 has none; an evemu file holds one)")
       ->each([o](const std::string&) { o->device_given = true; });
   app.add_option("--scene", o->scene_file, "Scene file (default: the embedded default scene, described below)");
+  std::vector<std::string> methods;
+  const MethodRegistry registry = builtin_methods();
+  for (const auto& entry : registry.entries()) methods.push_back(entry->name);
+  app.add_option("--method", o->method,
+                 "C/D method for every region of the scene, in place of its own (none: C/D 1, the baseline); to "
+                 "replay one recording under each method")
+      ->check(CLI::IsMember(methods));
   app.add_option("--trace", o->trace,
                  "CSV, one row per frame: time_us,in_dx,in_dy,out_dx,out_dy,cursor_x,cursor_y,cd_min,cd_max,dropped");
   app.add_option("--start", o->start, "X,Y start of the cursor model, screen px (default: the desktop's centre)")

@@ -15,7 +15,9 @@ Region target_region(const char* name, std::int32_t x, std::int32_t y, const Met
     Region region;
     region.name = name;
     region.rect = {x, y, spec.size, spec.size};
-    region.fields.gradient = target_gradient_field(spec);
+    const FieldNeeds needs = method->needs();
+    if (needs.gradient) region.fields.gradient = target_gradient_field(spec);
+    if (needs.reads_depth(true)) region.fields.depth = target_depth_field(spec);
     region.method = method;
     return region;
   }
@@ -24,12 +26,13 @@ Region target_region(const char* name, std::int32_t x, std::int32_t y, const Met
 
 }  // namespace
 
-Scene default_scene() {
-  const MethodPtr curvature = std::make_shared<CurvatureMethod>(CurvatureParams{});
+Scene default_scene() { return default_scene(std::make_shared<CurvatureMethod>(CurvatureParams{})); }
+
+Scene default_scene(const MethodPtr& method) {
   std::vector<Region> regions;
-  regions.push_back(target_region("bump-gaussian-h1-r200", 135, 290, curvature));
-  regions.push_back(target_region("hole-polynomial-h1-r200", 710, 290, curvature));
-  regions.push_back(target_region("bump-linear-h1-r100", 1285, 290, curvature));
+  regions.push_back(target_region("bump-gaussian-h1-r200", 135, 290, method));
+  regions.push_back(target_region("hole-polynomial-h1-r200", 710, 290, method));
+  regions.push_back(target_region("bump-linear-h1-r100", 1285, 290, method));
   return Scene(std::move(regions));
 }
 

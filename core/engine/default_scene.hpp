@@ -5,10 +5,15 @@
 // About 6 MB of fields (8 bytes per texel).
 #pragma once
 
+#include "core/engine/method.hpp"
 #include "core/engine/scene.hpp"
 
 namespace ph {
 
 Scene default_scene();
+
+// The same three targets with `method` in every region instead, and the exact fields it needs (heights where it
+// reads them): for replaying one recording under each method.
+Scene default_scene(const MethodPtr& method);
 
 }  // namespace ph
