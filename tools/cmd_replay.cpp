@@ -214,9 +214,7 @@ struct ReplayScene {
 ReplayScene load_replay_scene(const std::string& scene_file, const std::string& method) {
   if (scene_file.empty()) {
     if (method.empty()) return {default_scene(), DaemonSettings{}};
-    RegionSpec defaults;
-    defaults.method = method;
-    return {default_scene(make_method(defaults)), DaemonSettings{}};
+    return {default_scene(make_default_method(builtin_methods(), method)), DaemonSettings{}};
   }
   SceneSpec spec = parse_scene_file(scene_file);
   if (!method.empty()) {

@@ -89,8 +89,7 @@ Scene scene_from_target(const TraceOptions& o) {
     region.name = t.name();
     region.rect = {0, 0, t.size, t.size};
     region.method = make_method(r);
-    if (region.method->needs().gradient) region.fields.gradient = target_gradient_field(t);
-    if (region.method->needs().reads_depth(true)) region.fields.depth = target_depth_field(t);
+    region.fields = target_fields(t, region.method->needs());
     std::vector<Region> regions;
     regions.push_back(std::move(region));
     return Scene(std::move(regions));

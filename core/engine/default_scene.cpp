@@ -15,9 +15,7 @@ Region target_region(const char* name, std::int32_t x, std::int32_t y, const Met
     Region region;
     region.name = name;
     region.rect = {x, y, spec.size, spec.size};
-    const FieldNeeds needs = method->needs();
-    if (needs.gradient) region.fields.gradient = target_gradient_field(spec);
-    if (needs.reads_depth(true)) region.fields.depth = target_depth_field(spec);
+    region.fields = target_fields(spec, method->needs());
     region.method = method;
     return region;
   }

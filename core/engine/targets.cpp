@@ -143,4 +143,11 @@ NormalImage target_normal_image(const TargetSpec& spec) {
   return rasterise<Normal>(spec, [&](Vec2 p) { return normal_from_gradient(target_gradient(spec, p)); });
 }
 
+RegionFields target_fields(const TargetSpec& spec, const FieldNeeds& needs) {
+  RegionFields fields;
+  if (needs.gradient) fields.gradient = target_gradient_field(spec);
+  if (needs.reads_depth(true)) fields.depth = target_depth_field(spec);
+  return fields;
+}
+
 }  // namespace ph

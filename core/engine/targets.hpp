@@ -40,4 +40,8 @@ DepthField target_depth_field(const TargetSpec& spec);
 GradientField target_gradient_field(const TargetSpec& spec);
 NormalImage target_normal_image(const TargetSpec& spec);
 
+// What a method with `needs` reads of a target, rasterised: the gradient, and the heights where it reads them in a
+// region given both maps.
+RegionFields target_fields(const TargetSpec& spec, const FieldNeeds& needs);
+
 }  // namespace ph
