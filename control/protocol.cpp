@@ -124,10 +124,11 @@ std::string format_error(std::string_view reason) {
 
 std::string format_status(const Status& s) {
   return format_ok(
-      fmt::format("mode={} mice={} regions={} desktop={},{},{},{} cursor={},{} helper={} passthrough={} scene={}",
-                  s.absolute ? "absolute" : "relative", s.mice, s.regions, s.desktop.x, s.desktop.y, s.desktop.w,
-                  s.desktop.h, s.cursor.x, s.cursor.y, s.helper ? "yes" : "no", s.passthrough ? "on" : "off",
-                  s.scene.empty() ? "default" : s.scene));
+      fmt::format("mode={} mice={} held_elsewhere={} regions={} desktop={},{},{},{} cursor={},{} helper={} "
+                  "passthrough={} scene={}",
+                  s.absolute ? "absolute" : "relative", s.mice, s.held_elsewhere, s.regions, s.desktop.x, s.desktop.y,
+                  s.desktop.w, s.desktop.h, s.cursor.x, s.cursor.y, s.helper ? "yes" : "no",
+                  s.passthrough ? "on" : "off", s.scene.empty() ? "default" : s.scene));
 }
 
 std::string format_cursor(Vec2 cursor) { return format_ok(fmt::format("{} {}", cursor.x, cursor.y)); }
@@ -175,6 +176,11 @@ std::optional<Status> parse_status(std::string_view words) {
       const auto n = integer(value);
       good = n.has_value();
       (key == "mice" ? s.mice : s.regions) = n.value_or(0);
+    } else if (key == "held_elsewhere") {
+      const auto n = integer(value);
+      if (!n) return std::nullopt;
+      s.held_elsewhere = *n;
+      continue;  // optional: older daemons do not say
     } else if (key == "desktop") {
       std::int32_t v[4] = {};
       good = parts.size() == 4;

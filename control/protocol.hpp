@@ -40,7 +40,8 @@ std::string format_request(const Request& request);  // without the newline
 // What `status` answers.
 struct Status {
   bool absolute = true;
-  int mice = 0;
+  int mice = 0;            // taken
+  int held_elsewhere = 0;  // found, but another program holds its grab (taken once it lets go)
   int regions = 0;
   Rect desktop;
   Vec2 cursor;

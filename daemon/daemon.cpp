@@ -197,7 +197,7 @@ void Daemon::take_present_mice() {
         on_resync_tick();
       } else if (control_ && control_->owns(fd)) {
         control_->on_readable(fd, *this);
-      } else {
+      } else if (!on_released_elsewhere(fd)) {
         on_untaken_readable(fd);
       }
     }
@@ -270,6 +270,12 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
     device.grab();
     device.set_blocking(true);  // its reader waits in read()
   } catch (const DeviceError& e) {
+    if (e.error() == EBUSY) {
+      mouse.sink.reset();
+      log_.warning("{}; taking it once that program lets go", e.what());
+      wait_for_release_elsewhere(node, mouse);
+      return;
+    }
     log_.warning("{}; leaving it to the desktop", e.what());
     passed_over_.insert(node);
     let_go(node, "");
@@ -299,6 +305,33 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
   update_retry_timer();
 }
 
+// While another program holds the grab, the kernel gives the mouse's events to that program alone: the
+// first event this open file reads again says that the grab has ended (or, with an error, that the mouse
+// has gone). Events queued before the other grab are let go first, so they do not count.
+void Daemon::wait_for_release_elsewhere(const std::string& node, Mouse& mouse) {
+  if (mouse.device->read_available([](const InputEvent&) {}) == ReadStatus::gone) {
+    let_go(node, "unplugged");
+    return;
+  }
+  mouse.held_elsewhere = true;
+  watch(epoll_.get(), mouse.device->fd());
+  update_retry_timer();
+}
+
+bool Daemon::on_released_elsewhere(int fd) {
+  const auto it = std::find_if(mice_.begin(), mice_.end(), [fd](const auto& entry) {
+    return entry.second->held_elsewhere && entry.second->device->fd() == fd;
+  });
+  if (it == mice_.end()) return false;
+  const std::string node = it->first;  // try_take may let go of the mouse, and its entry with it
+  Mouse& mouse = *it->second;
+  ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, fd, nullptr);
+  mouse.held_elsewhere = false;
+  log_.info("{} {}: the other program let go of it", node, quoted_name(*mouse.device));
+  try_take(node, mouse);
+  return true;
+}
+
 void Daemon::let_go(const std::string& node, std::string_view why) {
   if (const auto u = untaken_.find(node); u != untaken_.end()) {
     ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, u->second->fd(), nullptr);
@@ -310,6 +343,7 @@ void Daemon::let_go(const std::string& node, std::string_view why) {
     return;
   }
   Mouse& mouse = *it->second;
+  if (mouse.held_elsewhere) ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, mouse.device->fd(), nullptr);
   const bool taken = mouse.frames != nullptr;
   if (taken && !why.empty()) log_.info("let go of {} {} ({})", node, quoted_name(*mouse.device), why);
   // Stops its reader, releases held buttons on the virtual device, destroys it, ungrabs.
@@ -420,7 +454,7 @@ void Daemon::on_retry_tick() {
   }
   std::vector<std::string> waiting;
   for (const auto& [node, mouse] : mice_) {
-    if (mouse->frames == nullptr) waiting.push_back(node);
+    if (mouse->frames == nullptr && !mouse->held_elsewhere) waiting.push_back(node);
   }
   for (const std::string& node : waiting) try_take(node, *mice_.at(node));
   update_retry_timer();
@@ -428,7 +462,7 @@ void Daemon::on_retry_tick() {
 
 void Daemon::update_retry_timer() {
   bool needed = !unopened_.empty();
-  for (const auto& [node, mouse] : mice_) needed = needed || mouse->frames == nullptr;
+  for (const auto& [node, mouse] : mice_) needed = needed || (mouse->frames == nullptr && !mouse->held_elsewhere);
   if (needed == retry_armed_) return;
   set_timer(retry_timer_.get(), needed ? kRetryIntervalNs : 0);
   retry_armed_ = needed;
@@ -583,7 +617,10 @@ bool Daemon::emitted_recently(Texel pixel) const {
 control::Status Daemon::status() const {
   control::Status s;
   s.absolute = config_.pipeline.mode == OutputMode::absolute;
-  for (const auto& [node, mouse] : mice_) s.mice += mouse->frames != nullptr;
+  for (const auto& [node, mouse] : mice_) {
+    s.mice += mouse->frames != nullptr;
+    s.held_elsewhere += mouse->held_elsewhere;
+  }
   s.regions = static_cast<int>(config_.scene->regions().size());
   s.desktop = pipeline_->config().desktop;
   s.cursor = pipeline_->cursor().position;

@@ -50,9 +50,10 @@ class Daemon final : private ControlHandler {
   int run();
 
  private:
-  // A mouse the daemon has opened: waiting for its buttons to be released, or taken (grabbed, with its
-  // virtual device and frame assembler). Members are destroyed in reverse: the reader thread, the
-  // assembler, then the virtual device (which releases held buttons), then the grab and the node.
+  // A mouse the daemon has opened: waiting for its buttons to be released or for another program's grab to
+  // end, or taken (grabbed, with its virtual device and frame assembler). Members are destroyed in reverse:
+  // the reader thread, the assembler, then the virtual device (which releases held buttons), then the grab
+  // and the node.
   struct Mouse {
     std::unique_ptr<EvdevDevice> device;
     std::unique_ptr<UinputSink> sink;
@@ -64,6 +65,8 @@ class Daemon final : private ControlHandler {
     bool passing = false;
     bool mid_frame = false;  // events of a frame have been routed, its SYN_REPORT not yet
     bool told_waiting = false;
+    // Another program holds its grab: watched (not retried on the timer), taken once it reads events again.
+    bool held_elsewhere = false;
     std::string ending;                   // not empty: its reader asked the loop to let go of it, for this reason
     std::unique_ptr<MouseReader> reader;  // once taken
   };
@@ -94,6 +97,8 @@ class Daemon final : private ControlHandler {
   void take_present_mice();
   void consider(const std::string& node);
   void try_take(const std::string& node, Mouse& mouse);
+  void wait_for_release_elsewhere(const std::string& node, Mouse& mouse);
+  bool on_released_elsewhere(int fd);
   void let_go(const std::string& node, std::string_view why);
   void let_go_of_all(std::string_view why);
   void on_mouse_batch(const std::string& node, Mouse& mouse, const std::vector<InputEvent>& events, ReadStatus status,
@@ -140,7 +145,7 @@ class Daemon final : private ControlHandler {
   std::vector<std::pair<std::string, InputEvent>> held_events_;
   std::map<std::string, std::unique_ptr<Mouse>> mice_;  // by node
   std::map<std::string, int> unopened_;                 // node -> tries left (not yet accessible)
-  std::set<std::string> passed_over_;                   // not a pointer, not matched, ours, busy
+  std::set<std::string> passed_over_;                   // not a pointer, not matched, ours, ungrabbable
   bool retry_armed_ = false;
   bool stop_ = false;
 };

@@ -117,7 +117,8 @@ void EvdevDevice::grab() {
   const int rc = libevdev_grab(dev_.get(), LIBEVDEV_GRAB);
   if (rc < 0) {
     throw DeviceError(rc == -EBUSY ? fmt::format("{}: another program has grabbed it", node_)
-                                   : fmt::format("{}: cannot grab: {}", node_, std::strerror(-rc)));
+                                   : fmt::format("{}: cannot grab: {}", node_, std::strerror(-rc)),
+                      -rc);
   }
   grabbed_ = true;
 }

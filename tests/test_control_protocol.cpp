@@ -65,6 +65,7 @@ TEST(ControlProtocol, StatusAndCursorRepliesRoundTrip) {
   Status s;
   s.absolute = false;
   s.mice = 2;
+  s.held_elsewhere = 1;
   s.regions = 3;
   s.desktop = {-1280, 0, 3200, 1080};
   s.cursor = {12.5, 1079.75};
@@ -77,6 +78,7 @@ TEST(ControlProtocol, StatusAndCursorRepliesRoundTrip) {
   ASSERT_TRUE(back.has_value()) << reply->text;
   EXPECT_EQ(back->absolute, false);
   EXPECT_EQ(back->mice, 2);
+  EXPECT_EQ(back->held_elsewhere, 1);
   EXPECT_EQ(back->regions, 3);
   EXPECT_EQ(back->desktop, s.desktop);
   EXPECT_EQ(back->cursor, s.cursor);
@@ -85,6 +87,14 @@ TEST(ControlProtocol, StatusAndCursorRepliesRoundTrip) {
   EXPECT_EQ(back->scene, s.scene);
   EXPECT_FALSE(parse_status("mode=absolute mice=1").has_value());  // incomplete
   EXPECT_FALSE(parse_status("mode=sideways mice=1 regions=0 desktop=0,0,1,1 cursor=0,0 helper=no scene=x"));
+  // A daemon of before held_elsewhere: none held.
+  const std::optional<Status> older =
+      parse_status("mode=absolute mice=1 regions=0 desktop=0,0,1,1 cursor=0,0 helper=no scene=x");
+  ASSERT_TRUE(older.has_value());
+  EXPECT_EQ(older->held_elsewhere, 0);
+  EXPECT_FALSE(
+      parse_status("mode=absolute mice=1 held_elsewhere=x regions=0 desktop=0,0,1,1 cursor=0,0 helper=no "
+                   "scene=x"));
 
   const std::optional<Reply> cursor = parse_reply(format_cursor({0.25, 3}));
   ASSERT_TRUE(cursor && cursor->ok);

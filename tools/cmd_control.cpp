@@ -40,7 +40,10 @@ int run_status(const ControlOptions& o) {
   const std::optional<control::Status> s = control::parse_status(words);
   if (!s) throw std::runtime_error("pseudohapticd answered something this tool does not understand: " + words);
   fmt::print("output:  {}\n", s->absolute ? "absolute" : "relative");
-  fmt::print("mice:    {} taken\n", s->mice);
+  fmt::print("mice:    {} taken{}\n", s->mice,
+             s->held_elsewhere == 0
+                 ? std::string()
+                 : fmt::format("; {} held by another program (taken once it lets go)", s->held_elsewhere));
   fmt::print("scene:   {} ({} regions)\n", s->scene == "default" ? "the embedded default scene" : s->scene, s->regions);
   fmt::print("desktop: {}x{} at {},{}\n", s->desktop.w, s->desktop.h, s->desktop.x, s->desktop.y);
   fmt::print("cursor:  {:.2f},{:.2f} (the daemon's model)\n", s->cursor.x, s->cursor.y);

@@ -1377,6 +1377,89 @@ void default_scene_part(Report& report, const Options& options, Latency& latency
                  "the second mouse's virtual device stayed after the mouse went away");
   });
 
+  session.run("[6] a mouse another program holds: left to it, taken once it lets go", [&](Check& check) {
+    const std::string name = "ph-e2e held elsewhere", virtual_name = "pseudohaptic " + name;
+    const std::size_t log_before = daemon->log().size();
+    // Grab the new mouse before the daemon does: the daemon waits for udev's event, the test only for the
+    // node. Should the daemon be first all the same, a fresh mouse is tried.
+    std::optional<TestMouse> held;
+    Fd holder;
+    for (int attempt = 1; attempt <= 3 && !holder; ++attempt) {
+      held.reset();
+      if (attempt > 1 && !wait_for_device_gone(virtual_name, kDeviceTimeout, uevents)) break;
+      held.emplace(name);
+      Fd fd(::open(held->node().c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC));
+      if (fd && ::ioctl(fd.get(), EVIOCGRAB, 1) == 0) holder = std::move(fd);
+    }
+    if (!holder) throw Fatal("the daemon grabbed a new test mouse before the test could, three times");
+    std::string said;
+    const std::string expected = held->node() + ": another program has grabbed it; taking it once that program lets go";
+    const bool logged = wait_until(
+        [&] {
+          said = daemon->log().substr(std::min(log_before, daemon->log().size()));
+          return said.find(expected) != std::string::npos;
+        },
+        kDeviceTimeout);
+    check.expect(logged, "expected '" + expected + "' in the daemon's log, got: " + said);
+    check.expect(find_input_node(virtual_name).empty(), "a virtual device stayed for the mouse held elsewhere");
+    const auto status_now = [&] {
+      const ph::control::Reply reply = control->request("status", 10s);
+      return reply.ok ? ph::control::parse_status(reply.text) : std::optional<ph::control::Status>{};
+    };
+    const std::optional<ph::control::Status> while_held = status_now();
+    check.expect(while_held && while_held->mice == 1 && while_held->held_elsewhere == 1,
+                 "while held elsewhere, expected 'status' to say 1 mouse taken and 1 held elsewhere");
+    std::string tool_said = "(no pseudohaptic tool found: --tool)";
+    if (!options.tool.empty()) {
+      ChildProcess tool({options.tool, "status", "--socket", control_path}, {"PATH=/usr/bin:/bin", "LANG=C.UTF-8"},
+                        (options.scratch / "tool-status-held.log").string());
+      tool.wait_exit(30s);
+      const std::string line = "mice:    1 taken; 1 held by another program (taken once it lets go)";
+      tool_said = tool.log();
+      check.expect(tool_said.find(line) != std::string::npos,
+                   "expected '" + line + "' in what pseudohaptic status printed:\n" + tool_said);
+      tool_said = tool_said.substr(0, tool_said.find('\n', tool_said.find("mice:")));
+      tool_said = tool_said.substr(tool_said.find("mice:"));
+    }
+    // The holder gets the mouse's frames, the daemon nothing.
+    held->send(make_frame({rel(ev::kRelX, 4)}));
+    std::vector<input_event> to_holder;
+    wait_until(
+        [&] {
+          input_event e{};
+          while (::read(holder.get(), &e, sizeof e) == static_cast<ssize_t>(sizeof e)) to_holder.push_back(e);
+          return !to_holder.empty();
+        },
+        2s);
+    check.expect(!to_holder.empty(), "the program holding the mouse got none of its events");
+    check.expect(find_input_node(virtual_name).empty() && out->read_now().empty(),
+                 "the daemon emitted while another program held the mouse");
+    // Let go; the mouse's next frames reach every reader again, the daemon's too.
+    ::ioctl(holder.get(), EVIOCGRAB, 0);
+    const auto released = Clock::now();
+    held->send(make_frame({rel(ev::kRelWheel, 1)}));  // to the desktop; the daemon reads it and takes the mouse
+    const std::string node = wait_for_device(virtual_name, kDeviceTimeout, uevents);
+    if (node.empty()) throw Fatal("no virtual device for the mouse within 10 s of the other program letting go");
+    EventReader held_out(node);
+    if (!wait_taken(*held, held_out, kDeviceTimeout)) throw Fatal("nothing came out of " + node);
+    const double taken_s = std::chrono::duration<double>(Clock::now() - released).count();
+    follower->through(check, *held, held_out, make_frame({rel(ev::kRelX, 3), rel(ev::kRelY, -2)}),
+                      "frame after the other program let go");
+    const int grab = try_grab(held->node());
+    check.expect(grab == EBUSY, "EVIOCGRAB on the mouse once taken: expected EBUSY, got " + grab_text(grab));
+    const std::optional<ph::control::Status> after = status_now();
+    check.expect(after && after->mice == 2 && after->held_elsewhere == 0,
+                 "once taken, expected 'status' to say 2 mice taken and none held elsewhere");
+    check.note(
+        fmt::format("the holder got {} events and the daemon emitted none; pseudohaptic status said \"{}\"; "
+                    "taken {:.2f} s after the release",
+                    to_holder.size(), tool_said, taken_s));
+    holder = Fd();
+    held.reset();
+    check.expect(wait_for_device_gone(virtual_name, kDeviceTimeout, uevents),
+                 "the virtual device stayed after the mouse went away");
+  });
+
   session.run("[9] SYN_DROPPED: the daemon survives an overflow, no button stays stuck", [&](Check& check) {
     follower->through(check, *mouse, *out, make_frame({key(ev::kBtnLeft, 1)}), "press before the flood");
     daemon->signal(SIGSTOP);
