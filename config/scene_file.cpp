@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <system_error>
@@ -544,8 +545,19 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
   const toml::array* arr = regions->as_array();
   if (arr == nullptr || !arr->is_array_of_tables()) rep.fail(regions, "region", "must be written as [[region]] tables");
   const std::filesystem::path base_dir = origin.parent_path();
-  for (std::size_t i = 0; i < arr->size(); ++i)
-    spec.regions.push_back(parse_region(rep, *(*arr)[i].as_table(), i, base_dir, spec.methods, spec.daemon.engine));
+  std::map<std::string, std::size_t> named;  // name -> the region that has it
+  for (std::size_t i = 0; i < arr->size(); ++i) {
+    const toml::table& table = *(*arr)[i].as_table();
+    spec.regions.push_back(parse_region(rep, table, i, base_dir, spec.methods, spec.daemon.engine));
+    // The logs, check-config, status and trace's CSV tell regions apart by name alone.
+    const auto [first, fresh] = named.emplace(spec.regions.back().name, i);
+    if (!fresh) {
+      const toml::node* at = table.get("name");
+      rep.fail(at != nullptr ? at : &table, fmt::format("region[{}].name", i),
+               fmt::format("'{}' is already the name of region[{}] (line {}); each region needs a name of its own",
+                           spec.regions.back().name, first->second, spec.regions[first->second].line));
+    }
+  }
   return spec;
 }
 

@@ -302,6 +302,13 @@ TEST(SceneFileErrors, RegionNames) {
   expect_error("[[region]]\nname = \"a\\tb\"\n" + tail, 2, "region[0].name", {"control characters"});
   EXPECT_EQ(parse_scene_text("[[region]]\nname = 'bump, \"big\"'\n" + tail, kOrigin).regions.at(0).name,
             "bump, \"big\"");
+  // Two regions of one name could not be told apart in the logs or in trace's CSV; nor a name that is another
+  // region's default.
+  expect_error("[[region]]\nname = \"b\"\n" + tail + "[[region]]\nname = \"b\"\n" + tail, 7, "region[1].name",
+               {"'b' is already the name of region[0] (line 1)"});
+  expect_error("[[region]]\nname = \"region 1\"\n" + tail + "[[region]]\n" + tail, 6, "region[1].name",
+               {"'region 1' is already the name of region[0] (line 1)"});
+  EXPECT_EQ(parse_scene_text("[[region]]\n" + tail + "[[region]]\n" + tail, kOrigin).regions.at(1).name, "region 1");
 }
 
 TEST(SceneFileErrors, NonFiniteDepthOptions) {
