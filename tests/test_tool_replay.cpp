@@ -739,6 +739,26 @@ TEST(ReplayTool, ReplacesARegularFileKeepingItsMode) {
   EXPECT_EQ(listing(dir), (std::set<std::string>{"in.evemu", "out.evemu"}));
 }
 
+// A replay written over its own recording (or a trace over either) replaced the user's recording without a word.
+TEST(ReplayTool, RefusesToWriteOverItsInputOrOneOutputOverTheOther) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir);
+  const std::string recorded = read_text(in);
+  fs::create_symlink(in, dir / "link.evemu");
+  for (const std::string& args :
+       {quote(in) + " " + quote(in), quote(in) + " " + quote(dir / "." / "in.evemu"),
+        quote(in) + " " + quote(dir / "link.evemu"), "--trace " + quote(in) + " " + quote(in) + " out.evemu"}) {
+    const ToolResult r = run_tool("replay " + args, dir);
+    EXPECT_EQ(r.rc, 1) << args;
+    EXPECT_NE(r.err.find("is the recording INPUT"), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(read_text(in), recorded) << args;
+  }
+  const ToolResult both = run_tool("replay --trace out.evemu " + quote(in) + " out.evemu", dir);
+  EXPECT_EQ(both.rc, 1);
+  EXPECT_NE(both.err.find("--trace out.evemu is OUTPUT too"), std::string::npos) << both.err;
+  EXPECT_EQ(listing(dir), (std::set<std::string>{"in.evemu", "link.evemu"}));
+}
+
 TEST(ReplayTool, IsDeterministicAcrossProcesses) {
   ScratchDir dir;
   const fs::path in = testing::recorded_mice().front();

@@ -67,6 +67,18 @@ bool write_all(int fd, const std::string& text) {
 
 bool same_file(const struct stat& a, const struct stat& b) { return a.st_dev == b.st_dev && a.st_ino == b.st_ino; }
 
+// Whether two paths of the command name one file: an existing one by its inode (through links and other
+// spellings), a new one by its path made absolute. "-" is a stream, never a file here.
+bool same_path(const std::string& a, const std::string& b) {
+  if (a == "-" || b == "-") return false;
+  struct stat sa {};
+  struct stat sb {};
+  const bool a_exists = ::stat(a.c_str(), &sa) == 0, b_exists = ::stat(b.c_str(), &sb) == 0;
+  if (a_exists || b_exists) return a_exists && b_exists && same_file(sa, sb);
+  std::error_code ignored;
+  return std::filesystem::weakly_canonical(a, ignored) == std::filesystem::weakly_canonical(b, ignored);
+}
+
 // One file the command writes: its text is complete in memory before anything is written, and it goes out
 // in one of three ways, chosen by what the path is now:
 //
@@ -252,6 +264,15 @@ PipelineConfig replay_config(const ReplayOptions& o, const DaemonSettings& daemo
 
 int run_replay(const ReplayOptions& o) {
   if (o.output == "-" && o.trace == "-") throw std::invalid_argument("OUTPUT and --trace cannot both be - (stdout)");
+  // The replay would be renamed over the recording it was made from, or one file over the other.
+  if (same_path(o.input, o.output))
+    throw std::invalid_argument(
+        fmt::format("OUTPUT {} is the recording INPUT: write the replay to another file", o.output));
+  if (!o.trace.empty() && same_path(o.input, o.trace))
+    throw std::invalid_argument(
+        fmt::format("--trace {} is the recording INPUT: write the trace to another file", o.trace));
+  if (!o.trace.empty() && same_path(o.output, o.trace))
+    throw std::invalid_argument(fmt::format("--trace {} is OUTPUT too: give each its own file", o.trace));
   // Everything is read and checked before anything is written: no partial output that looks valid.
   const ReplayScene loaded = load_replay_scene(o.scene_file, o.method);
   const Scene& scene = loaded.scene;
