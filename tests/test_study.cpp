@@ -111,6 +111,16 @@ TEST(StudyStats, StudentQuantileAndInterval) {
   EXPECT_DOUBLE_EQ(m.mean, 2.5);
   EXPECT_NEAR(m.hi - m.mean, 3.1824 * std::sqrt(5.0 / 3.0 / 4.0), 1e-4);
   EXPECT_EQ(mean_ci({5.0}).lo, 5.0);
+  // An error rate of 0 % for eleven participants and 25 % for one: the t-interval reaches below 0 %, which no
+  // error rate can; it is cut there, and its upper end stays.
+  std::vector<double> rates(11, 0.0);
+  rates.push_back(25.0);
+  const MeanCi open = mean_ci(rates), cut = mean_ci(rates, 0.0, 100.0);
+  EXPECT_LT(open.lo, 0.0);
+  EXPECT_EQ(cut.lo, 0.0);
+  EXPECT_EQ(cut.hi, open.hi);
+  EXPECT_EQ(cut.mean, open.mean);
+  EXPECT_EQ(mean_ci({99.0, 100.0, 100.0}, 0.0, 100.0).hi, 100.0);
 }
 
 TEST(StudyDesignTest, BlockOrdersArePermutationsThatDifferBetweenBlocks) {
@@ -212,6 +222,11 @@ TEST(StudyStats, SummariesAreMeansOverParticipantsOfScoredTrials) {
       EXPECT_DOUBLE_EQ(s.error_pct.mean, 25.0);  // (50 % + 0 %) / 2
       EXPECT_DOUBLE_EQ(s.time_s.mean, 4.5);      // (3 s + 6 s) / 2
       EXPECT_EQ(s.error_pct.n, 2);
+      // Two participants give t(1) = 12.7: each interval is cut to what a rate and a time can be.
+      EXPECT_EQ(s.error_pct.lo, 0.0);
+      EXPECT_EQ(s.error_pct.hi, 100.0);
+      EXPECT_EQ(s.time_s.lo, 0.0);
+      EXPECT_GT(s.time_s.hi, 6.0);
     } else if (s.group == "h1-r100") {
       EXPECT_EQ(s.trials, 1);
       EXPECT_EQ(s.error_pct.n, 1);

@@ -155,7 +155,7 @@ std::string summary_md(const std::vector<GroupSummary>& summaries, const std::ve
   auto out = std::back_inserter(b);
   fmt::format_to(out,
                  "{} simulated participants, seed {}, Weber fraction {:.3f}, bound {:.2f}, speed-up weight {:.2f}; "
-                 "95 % CIs over participants.\n\n",
+                 "95 % CIs over participants (cut at 0 and 100 %).\n\n",
                  design.participants, design.seed, design.observer.weber, design.observer.bound,
                  design.observer.speedup_weight);
   fmt::format_to(out, "| technique | error % | paper | time s | paper | decided % |\n|---|---|---|---|---|---|\n");

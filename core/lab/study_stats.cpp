@@ -18,7 +18,7 @@ double t_quantile_975(int df) {
          (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / (384.0 * n * n * n);
 }
 
-MeanCi mean_ci(const std::vector<double>& values) {
+MeanCi mean_ci(const std::vector<double>& values, double least, double most) {
   MeanCi r;
   r.n = static_cast<int>(values.size());
   if (values.empty()) return r;
@@ -30,8 +30,8 @@ MeanCi mean_ci(const std::vector<double>& values) {
   double ss = 0.0;
   for (double v : values) ss += (v - r.mean) * (v - r.mean);
   const double half = t_quantile_975(r.n - 1) * std::sqrt(ss / (r.n - 1) / r.n);
-  r.lo = r.mean - half;
-  r.hi = r.mean + half;
+  r.lo = std::max(r.mean - half, least);
+  r.hi = std::min(r.mean + half, most);
   return r;
 }
 
@@ -103,8 +103,8 @@ std::vector<GroupSummary> summarise(const std::vector<TrialRecord>& trials, std:
         errors.push_back(100.0 * t.errors / t.trials);
         times.push_back(t.time / t.trials);
       }
-      s.error_pct = mean_ci(errors);
-      s.time_s = mean_ci(times);
+      s.error_pct = mean_ci(errors, 0.0, 100.0);
+      s.time_s = mean_ci(times, 0.0);
       s.decided_pct = s.trials > 0 ? 100.0 * decided / s.trials : 0.0;
       out.push_back(std::move(s));
     }

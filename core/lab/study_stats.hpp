@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,10 @@ struct MeanCi {
 
 // The 97.5 % quantile of Student's t with df degrees of freedom (df >= 1), within 0.2 % of the exact value.
 double t_quantile_975(int df);
-MeanCi mean_ci(const std::vector<double>& values);
+// The interval is cut to [least, most], the values' possible range: a t-interval is symmetric, and around a small
+// error rate it would reach below 0 %. Cutting it keeps its coverage at 95 % or more.
+MeanCi mean_ci(const std::vector<double>& values, double least = -std::numeric_limits<double>::infinity(),
+               double most = std::numeric_limits<double>::infinity());
 
 struct GroupSummary {
   std::size_t technique = 0;
