@@ -5,7 +5,9 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -561,11 +563,58 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
   return spec;
 }
 
+namespace {
+
+// Said after a file the service could not open where its sandbox hides the folder: to the service the file is
+// simply not there.
+std::string service_hint(const std::filesystem::path& path) {
+  const std::optional<std::string_view> hidden = hidden_from_the_service(path);
+  if (!hidden) return "";
+  return fmt::format(
+      " ({} is hidden from pseudohapticd.service, ProtectHome=yes: keep scene files and images under "
+      "/etc/pseudohaptic or /usr/local/share)",
+      *hidden);
+}
+
+}  // namespace
+
+std::optional<std::string_view> hidden_from_the_service(const std::filesystem::path& path) {
+  const std::filesystem::path normal = path.lexically_normal();
+  for (const std::string_view folder : {"/home", "/root", "/run/user"}) {
+    const std::filesystem::path inside = normal.lexically_relative(std::filesystem::path(folder));
+    if (!inside.empty() && *inside.begin() != "..") return folder;
+  }
+  return std::nullopt;
+}
+
+std::vector<std::string> service_path_warnings(const SceneSpec& spec) {
+  std::vector<std::string> out;
+  for (const RegionSpec& r : spec.regions) {
+    for (const auto& [key, map] :
+         {std::pair{"normal_map", r.sources.normal_map}, std::pair{"depth_map", r.sources.depth_map}}) {
+      if (!map) continue;
+      std::error_code ignored;
+      const std::optional<std::string_view> hidden = hidden_from_the_service(std::filesystem::absolute(*map, ignored));
+      if (!hidden) continue;
+      out.push_back(
+          fmt::format("{}:{}: region '{}': {} {} lies under {}, which pseudohapticd.service cannot read "
+                      "(ProtectHome=yes; the daemon run by hand can): keep the images under "
+                      "/etc/pseudohaptic or /usr/local/share",
+                      spec.file.string(), r.line, r.name, key, map->string(), *hidden));
+    }
+  }
+  return out;
+}
+
 SceneSpec parse_scene_file(const std::filesystem::path& file, MethodRegistry methods) {
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw ConfigError(fmt::format("{}: cannot open the scene file", file.string()));
-  // A folder opens, and reads as an empty scene: a daemon given /etc/pseudohaptic/ would run flat, silently.
   std::error_code ignored;
+  if (!in) {
+    const int error = errno;
+    throw ConfigError(fmt::format("{}: cannot open the scene file: {}{}", file.string(), std::strerror(error),
+                                  error == ENOENT ? service_hint(std::filesystem::absolute(file, ignored)) : ""));
+  }
+  // A folder opens, and reads as an empty scene: a daemon given /etc/pseudohaptic/ would run flat, silently.
   if (std::filesystem::is_directory(file, ignored))
     throw ConfigError(fmt::format("{}: is a folder, not a scene file", file.string()));
   std::ostringstream text;
@@ -610,7 +659,13 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
       }
       if (r.wells) region.effects.push_back(make_wells_effect(region.fields, r.rect.w, r.rect.h, *r.wells));
     } catch (const FieldError& e) {
-      throw ConfigError(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, e.what()));
+      std::string hint;
+      for (const auto& map : {r.sources.normal_map, r.sources.depth_map}) {
+        std::error_code ignored;
+        if (map && hint.empty() && !std::filesystem::exists(*map, ignored))
+          hint = service_hint(std::filesystem::absolute(*map, ignored));
+      }
+      throw ConfigError(fmt::format("{}:{}: region '{}': {}{}", spec.file.string(), r.line, r.name, e.what(), hint));
     } catch (const std::invalid_argument& e) {
       throw ConfigError(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, e.what()));
     }

@@ -124,6 +124,15 @@ std::optional<std::string> off_desktop_note(const Rect& rect, const Rect& deskto
 // text: for a desktop learnt while running (the displays, the session helper's layout, a replay's --desktop).
 std::vector<std::string> off_desktop_notes(const Scene& scene, const Rect& desktop);
 
+// The folder of those the service's sandbox hides (ProtectHome=yes in pseudohapticd.service: /home, /root and
+// /run/user) that `path` lies in, or nullopt. Lexical: `path` as the scene file resolved it.
+std::optional<std::string_view> hidden_from_the_service(const std::filesystem::path& path);
+
+// One line per region and map that lies where the service cannot read it (hidden_from_the_service), "FILE:LINE:
+// region 'NAME': " and the map, the folder and where to keep images instead; none where every map can be read.
+// pseudohapticd run by hand reads them; under systemd its load fails.
+std::vector<std::string> service_path_warnings(const SceneSpec& spec);
+
 // One line per region that lies wholly or partly off the [daemon] table's desktop, "FILE:LINE: region 'NAME' " and
 // off_desktop_note's text; none for desktop = "auto", whose size only the running daemon learns.
 std::vector<std::string> desktop_warnings(const SceneSpec& spec);

@@ -386,6 +386,48 @@ TEST(SceneFileErrors, MissingSceneFileIsNamed) {
     ADD_FAILURE() << "no ConfigError";
   } catch (const ConfigError& e) {
     EXPECT_TRUE(contains(e.what(), missing.string())) << e.what();
+    EXPECT_TRUE(contains(e.what(), "cannot open the scene file: No such file or directory")) << e.what();
+    EXPECT_FALSE(contains(e.what(), "pseudohapticd.service")) << e.what();
+  }
+}
+
+// pseudohapticd.service hides /home, /root and /run/user (ProtectHome=yes): a scene that works by hand and in
+// check-config fails under the service, where its files are simply not there. Both are said.
+TEST(SceneFileErrors, FilesTheServiceCannotReadAreWarnedOfAndNamedWhenMissing) {
+  EXPECT_EQ(hidden_from_the_service("/home/ann/maps/n.png"), "/home");
+  EXPECT_EQ(hidden_from_the_service("/root/n.png"), "/root");
+  EXPECT_EQ(hidden_from_the_service("/run/user/1000/n.png"), "/run/user");
+  EXPECT_EQ(hidden_from_the_service("/home/../etc/pseudohaptic/n.png"), std::nullopt);
+  for (const char* readable :
+       {"/homework/n.png", "/run/udev/n.png", "/etc/pseudohaptic/n.png", "/usr/local/share/n.png"})
+    EXPECT_EQ(hidden_from_the_service(readable), std::nullopt) << readable;
+
+  const std::string missing_home = "/home/ph-test-no-such-user/maps";
+  const SceneSpec spec = parse_scene_text(
+      "[[region]]\nname = \"mine\"\nwidth = 2\nheight = 2\nmethod = \"hybrid\"\n"
+      "normal_map = \"" +
+          missing_home + "/n.png\"\ndepth_map = \"/etc/d.png\"\n",
+      "/etc/pseudohaptic/scene.toml");
+  const std::vector<std::string> warnings = service_path_warnings(spec);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_TRUE(contains(warnings[0], "/etc/pseudohaptic/scene.toml:1: region 'mine': normal_map " + missing_home +
+                                        "/n.png lies under /home, which pseudohapticd.service cannot read"))
+      << warnings[0];
+  EXPECT_TRUE(service_path_warnings(parse_scene_text("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"/etc/n.png\"\n",
+                                                     "/etc/pseudohaptic/scene.toml"))
+                  .empty());
+  try {
+    load_scene(spec);
+    ADD_FAILURE() << "no ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_TRUE(contains(e.what(), "(/home is hidden from pseudohapticd.service, ProtectHome=yes")) << e.what();
+  }
+  try {
+    parse_scene_file("/root/ph-test-no-such-scene.toml");
+    ADD_FAILURE() << "no ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_TRUE(contains(e.what(), "No such file or directory (/root is hidden from pseudohapticd.service"))
+        << e.what();
   }
 }
 

@@ -177,6 +177,7 @@ int run_check_config(const CheckConfigOptions& o) {
   // What the daemon logs as warnings at load, before the summary.
   std::vector<std::string> warnings = map_warnings(spec, report);
   for (std::string& w : desktop_warnings(spec)) warnings.push_back(std::move(w));
+  for (std::string& w : service_path_warnings(spec)) warnings.push_back(std::move(w));
   for (const std::string& w : warnings) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
   write_stdout(summary(spec, scene, report));
   return 0;
