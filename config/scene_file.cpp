@@ -565,8 +565,8 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
 
 namespace {
 
-// Said after a file the service could not open where its sandbox hides the folder: to the service the file is
-// simply not there.
+// Said after a file the service could not open where its sandbox hides the folder: to the service the folder is
+// there but cannot be entered (Permission denied), or empty.
 std::string service_hint(const std::filesystem::path& path) {
   const std::optional<std::string_view> hidden = hidden_from_the_service(path);
   if (!hidden) return "";
@@ -611,8 +611,9 @@ SceneSpec parse_scene_file(const std::filesystem::path& file, MethodRegistry met
   std::error_code ignored;
   if (!in) {
     const int error = errno;
-    throw ConfigError(fmt::format("{}: cannot open the scene file: {}{}", file.string(), std::strerror(error),
-                                  error == ENOENT ? service_hint(std::filesystem::absolute(file, ignored)) : ""));
+    throw ConfigError(
+        fmt::format("{}: cannot open the scene file: {}{}", file.string(), std::strerror(error),
+                    error == ENOENT || error == EACCES ? service_hint(std::filesystem::absolute(file, ignored)) : ""));
   }
   // A folder opens, and reads as an empty scene: a daemon given /etc/pseudohaptic/ would run flat, silently.
   if (std::filesystem::is_directory(file, ignored))

@@ -338,6 +338,29 @@ int main(int argc, char** argv) {
     StrokeCount again = run_stroke(mouse, *out, model, nullptr, stroke(60, 8, 0), "across again");
     pass("systemctl reload with an invalid scene keeps the previous one",
          fmt::format("journal: \"{}\"; still active; 60 frames as the depth scene, {} changed", line, again.changed));
+    // A scene whose image lies under /root, which the sandbox hides (ProtectHome=yes): check-config reads it; the
+    // service cannot, says why and keeps its scene.
+    const std::string hidden_dir = "/root/ph-service-check";
+    must_run("mkdir -p " + hidden_dir + " && cp " + dir.string() + "/" + hole.name() + ".normal.png " + hidden_dir +
+             "/");
+    std::string hidden_scene = scene_text(hole, "curvature");
+    const std::string image = "normal_map = \"" + hole.name() + ".normal.png\"";
+    const std::size_t image_at = hidden_scene.find(image);
+    if (image_at == std::string::npos) throw Fatal("the scene text has no '" + image + "'");
+    hidden_scene.replace(image_at, image.size(), "normal_map = \"" + hidden_dir + "/" + hole.name() + ".normal.png\"");
+    write_file(scene_file, hidden_scene);
+    const CommandResult checked = run("pseudohaptic check-config " + scene_file);
+    if (checked.status != 0 ||
+        checked.output.find("lies under /root, which pseudohapticd.service cannot read") == std::string::npos)
+      throw Fatal("pseudohaptic check-config on the scene with an image under /root: " + checked.output);
+    before = journal();
+    must_run("systemctl reload " + kUnit);
+    line = expect_journal(before, "(/root is hidden from pseudohapticd.service, ProtectHome=yes");
+    expect_journal(before, "keeping the previous scene");
+    if (run("systemctl is-active --quiet " + kUnit).status != 0) throw Fatal("the unit is not active after it");
+    pass("an image under /root: check-config warns, the service's reload says the sandbox hides it and keeps its scene",
+         fmt::format("journal: \"{}\"", line));
+    must_run("rm -r " + hidden_dir);
     write_file(scene_file, scene_text(hole, "depth"));  // valid again, for the starts that follow
 
     // stop with a button held through the daemon.
