@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/engine/geometry.hpp"
@@ -15,9 +16,12 @@ struct ConnectorMode {
   std::int32_t width = 0, height = 0;
 };
 
+// Where the kernel lists the displays' connectors.
+inline constexpr std::string_view kDrmDir = "/sys/class/drm";
+
 // Connected connectors (status "connected") and the first mode each lists (the kernel lists the
 // preferred mode first), in name order. Missing or unreadable files are skipped.
-std::vector<ConnectorMode> connected_modes(const std::filesystem::path& drm_dir = "/sys/class/drm");
+std::vector<ConnectorMode> connected_modes(const std::filesystem::path& drm_dir = kDrmDir);
 
 // sysfs does not say how the compositor arranges the outputs, so they are taken side by side, left to
 // right in name order: width = sum of widths, height = largest height. nullopt when none is connected.

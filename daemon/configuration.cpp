@@ -34,7 +34,7 @@ Configuration load_configuration(const ConfigChoice& choice) {
     } else {
       c.notes.push_back(
           fmt::format("no scene file at {}; using the embedded default scene (three targets of the "
-                      "curvature paper, see pseudohapticd(8))",
+                      "curvature paper in the middle of the desktop, see pseudohapticd(8))",
                       choice.default_file.string()));
     }
   }
@@ -53,13 +53,20 @@ Configuration load_configuration(const ConfigChoice& choice) {
     c.settings = spec.daemon;
     c.source = file->string();
   } else {
-    c.scene = std::make_shared<const Scene>(default_scene());
     c.source = "the embedded default scene";
     c.embedded = true;
   }
   std::string warning;
   c.pipeline = pipeline_config_of(c.settings, resolve_desktop(c.settings.desktop, choice.drm_dir, warning));
   if (!warning.empty()) c.warnings.push_back(warning);
+  // Laid out for the desktop found: its targets in the middle, as many as fit (Daemon::layout lays them out again
+  // for the session helper's).
+  if (c.embedded) {
+    c.scene = std::make_shared<const Scene>(default_scene(c.pipeline.desktop));
+    c.notes.push_back(fmt::format("the embedded default scene on the desktop {},{} {}x{} px: {}", c.pipeline.desktop.x,
+                                  c.pipeline.desktop.y, c.pipeline.desktop.w, c.pipeline.desktop.h,
+                                  default_scene_places(*c.scene)));
+  }
   // With desktop = "auto" read from the connected displays, regions off it are said here (a configured desktop's
   // are, above, with their lines; the session helper's layout is checked again when it comes: Daemon::layout).
   if (!c.settings.desktop && warning.empty()) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "config/daemon_config.hpp"
+#include "config/desktop_geometry.hpp"
 #include "core/engine/pipeline.hpp"
 #include "core/engine/scene.hpp"
 
@@ -18,7 +19,7 @@ struct ConfigChoice {
   std::optional<std::filesystem::path> file;  // --config; nullopt: the default path if it exists
   bool default_scene = false;                 // --default-scene: the embedded scene, no file
   std::filesystem::path default_file;         // kDefaultSceneFile; a parameter so tests can point elsewhere
-  std::filesystem::path drm_dir = "/sys/class/drm";
+  std::filesystem::path drm_dir = kDrmDir;
 };
 
 struct Configuration {

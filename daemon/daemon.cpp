@@ -16,6 +16,7 @@
 #include <string_view>
 
 #include "config/scene_file.hpp"
+#include "core/engine/default_scene.hpp"
 #include "core/engine/frame_path.hpp"
 
 namespace ph {
@@ -658,6 +659,13 @@ void Daemon::layout(Rect desktop) {
   helper_desktop_ = desktop;
   if (desktop == config_.pipeline.desktop) return;
   log_.info("desktop {}x{}+{}+{} (from the session helper)", desktop.w, desktop.h, desktop.x, desktop.y);
+  if (config_.embedded && !default_scene_laid_out_for(*config_.scene, desktop)) {
+    std::shared_ptr<const Scene> replaced = config_.scene;
+    config_.scene = std::make_shared<const Scene>(default_scene(desktop));
+    pipeline_->set_scene(config_.scene);
+    reloader_.dispose(std::move(replaced));  // freed off the event loop
+    log_.info("the embedded default scene laid out again for it: {}", default_scene_places(*config_.scene));
+  }
   // The scene file could not say this: its desktop is "auto" (config/scene_file.hpp, desktop_warnings).
   for (const std::string& note : off_desktop_notes(*config_.scene, desktop))
     log_.warning("{}: {}", config_.source, note);
@@ -721,6 +729,8 @@ void Daemon::on_reload_ended() {
 // until SYN_REPORT, so every frame goes through one scene.
 void Daemon::apply(Configuration next) {
   if (helper_desktop_ && !next.settings.desktop) next.pipeline.desktop = *helper_desktop_;
+  if (next.embedded && !default_scene_laid_out_for(*next.scene, next.pipeline.desktop))
+    next.scene = std::make_shared<const Scene>(default_scene(next.pipeline.desktop));
   log_notes(next);
   std::shared_ptr<const Scene> replaced = config_.scene;
   if (only_scene_differs(config_, next)) {

@@ -81,8 +81,11 @@ TEST(DaemonConfiguration, MissingDefaultFileMeansTheEmbeddedScene) {
   const Configuration c = load_configuration(choice_in(dir));
   EXPECT_EQ(c.source, "the embedded default scene");
   EXPECT_EQ(c.scene->regions().size(), 3u);
-  ASSERT_EQ(c.notes.size(), 1u);
+  ASSERT_EQ(c.notes.size(), 2u);
   EXPECT_NE(c.notes[0].find("no scene file at"), std::string::npos) << c.notes[0];
+  EXPECT_EQ(c.notes[1],
+            "the embedded default scene on the desktop 0,0 1920x1080 px: bump-gaussian-h1-r200 at 135,290, "
+            "hole-polynomial-h1-r200 at 710,290, bump-linear-h1-r100 at 1285,290 (500x500 px each)");
   ASSERT_EQ(c.warnings.size(), 1u);  // no display found: 1920 x 1080 assumed
   EXPECT_EQ(c.pipeline.desktop, (Rect{0, 0, 1920, 1080}));
 }
@@ -239,20 +242,35 @@ TEST(DaemonConfiguration, ARegionOffTheDesktopIsWarned) {
       << c.warnings[0];
 }
 
-// With desktop = "auto" the connected displays give the desktop: on a 1366 x 768 laptop the embedded default scene,
-// laid out for 1920 x 1080, is cut on every target, and the daemon says so at start.
-TEST(DaemonConfiguration, RegionsOffTheDisplaysDesktopAreWarned) {
-  const ScratchDir dir("daemon-config-laptop");
-  ConfigChoice choice = choice_in(dir);
-  std::filesystem::create_directories(choice.drm_dir / "card0-eDP-1");
-  std::ofstream(choice.drm_dir / "card0-eDP-1" / "status") << "connected\n";
-  std::ofstream(choice.drm_dir / "card0-eDP-1" / "modes") << "1366x768\n";
-  const Configuration c = load_configuration(choice);
-  EXPECT_EQ(c.pipeline.desktop, (Rect{0, 0, 1366, 768}));
-  ASSERT_EQ(c.warnings.size(), 3u);
-  EXPECT_EQ(c.warnings[2],
-            "the embedded default scene: region 'bump-linear-h1-r100' at 1285,290 (500x500 px): only 81x478 px of it "
-            "lie on the desktop 0,0 1366x768 px (desktop = \"auto\": the connected displays side by side)");
+// With desktop = "auto" the connected displays give the desktop, and the embedded default scene is laid out for it:
+// on a 1366 x 768 laptop, two of its targets side by side in the middle, nothing off the desktop. On a screen
+// smaller than a target, the one target left is cut, and the daemon says so at start.
+TEST(DaemonConfiguration, TheEmbeddedSceneIsLaidOutForTheDisplaysDesktop) {
+  for (const bool tiny : {false, true}) {
+    const ScratchDir dir(tiny ? "daemon-config-tiny" : "daemon-config-laptop");
+    ConfigChoice choice = choice_in(dir);
+    std::filesystem::create_directories(choice.drm_dir / "card0-eDP-1");
+    std::ofstream(choice.drm_dir / "card0-eDP-1" / "status") << "connected\n";
+    std::ofstream(choice.drm_dir / "card0-eDP-1" / "modes") << (tiny ? "800x480\n" : "1366x768\n");
+    const Configuration c = load_configuration(choice);
+    if (!tiny) {
+      EXPECT_EQ(c.pipeline.desktop, (Rect{0, 0, 1366, 768}));
+      ASSERT_EQ(c.scene->regions().size(), 2u);
+      EXPECT_EQ(c.scene->regions()[0].rect, (Rect{145, 134, 500, 500}));
+      EXPECT_EQ(c.scene->regions()[1].rect, (Rect{720, 134, 500, 500}));
+      EXPECT_EQ(c.notes.back(),
+                "the embedded default scene on the desktop 0,0 1366x768 px: bump-gaussian-h1-r200 at 145,134, "
+                "hole-polynomial-h1-r200 at 720,134 (500x500 px each)");
+      EXPECT_TRUE(c.warnings.empty()) << c.warnings.front();
+    } else {
+      ASSERT_EQ(c.scene->regions().size(), 1u);
+      EXPECT_EQ(c.scene->regions()[0].rect, (Rect{150, -10, 500, 500}));
+      ASSERT_EQ(c.warnings.size(), 1u);
+      EXPECT_EQ(c.warnings[0],
+                "the embedded default scene: region 'bump-gaussian-h1-r200' at 150,-10 (500x500 px): only 500x480 px "
+                "of it lie on the desktop 0,0 800x480 px (desktop = \"auto\": the connected displays side by side)");
+    }
+  }
 }
 
 // A hybrid region whose depth map holds its relief at half the scale of its normal map (relief_px 50 where the normals

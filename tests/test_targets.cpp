@@ -12,6 +12,7 @@
 #include "config/image_io.hpp"
 #include "config/target_files.hpp"
 #include "core/engine/decode.hpp"
+#include "core/engine/default_scene.hpp"
 #include "core/engine/targets.hpp"
 #include "tests/file_bytes.hpp"
 #include "tests/scratch_dir.hpp"
@@ -31,6 +32,39 @@ std::vector<Vec2> sample_points(const TargetSpec& spec) {
 double distance_from_centre(const TargetSpec& spec, Vec2 p) {
   const double c = spec.size / 2.0;
   return length(p - Vec2{c, c});
+}
+
+// The embedded default scene follows the desktop: the targets side by side in its middle, 75 px apart on full HD
+// (the layout it was first given), closer where only that lets three fit, and as many as fit its width, at least one.
+TEST(DefaultScene, LaysOutAsManyTargetsAsFitInTheMiddleOfTheDesktop) {
+  auto xs = [](const Rect& desktop) {
+    std::vector<int> out;
+    for (const Rect& r : default_scene_layout(desktop)) {
+      EXPECT_EQ(r.w, 500);
+      EXPECT_EQ(r.h, 500);
+      EXPECT_EQ(r.y, desktop.y + (desktop.h - 500) / 2);
+      out.push_back(r.x);
+    }
+    return out;
+  };
+  EXPECT_EQ(xs(kDefaultSceneDesktop), (std::vector<int>{135, 710, 1285}));
+  EXPECT_EQ(xs({0, 0, 3840, 2160}), (std::vector<int>{1095, 1670, 2245}));
+  EXPECT_EQ(xs({0, 0, 1536, 864}), (std::vector<int>{9, 518, 1027}));     // 9 px apart
+  EXPECT_EQ(xs({0, 0, 1500, 900}), (std::vector<int>{0, 500, 1000}));     // touching
+  EXPECT_EQ(xs({0, 0, 1366, 768}), (std::vector<int>{145, 720}));         // two
+  EXPECT_EQ(xs({-1366, 0, 1366, 768}), (std::vector<int>{-1221, -646}));  // a desktop left of the origin
+  EXPECT_EQ(xs({0, 0, 800, 600}), (std::vector<int>{150}));
+  EXPECT_EQ(xs({0, 0, 300, 200}), (std::vector<int>{-100}));  // one, cut: smaller than a target
+
+  const Scene scene = default_scene(Rect{0, 0, 1366, 768});
+  ASSERT_EQ(scene.regions().size(), 2u);
+  EXPECT_EQ(scene.regions()[0].name, "bump-gaussian-h1-r200");
+  EXPECT_EQ(scene.regions()[1].name, "hole-polynomial-h1-r200");
+  EXPECT_TRUE(default_scene_laid_out_for(scene, {0, 0, 1366, 768}));
+  EXPECT_FALSE(default_scene_laid_out_for(scene, {0, 0, 1370, 768}));
+  EXPECT_FALSE(default_scene_laid_out_for(scene, kDefaultSceneDesktop));
+  EXPECT_EQ(default_scene_places(scene),
+            "bump-gaussian-h1-r200 at 145,134, hole-polynomial-h1-r200 at 720,134 (500x500 px each)");
 }
 
 TEST(Targets, AllTargetsHaveDistinctNamesInTheStatedOrder) {

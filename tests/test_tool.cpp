@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -17,9 +19,11 @@
 #include <string_view>
 #include <vector>
 
+#include "config/desktop_geometry.hpp"
 #include "config/image_io.hpp"
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
+#include "core/engine/default_scene.hpp"
 #include "core/engine/targets.hpp"
 #include "core/lab/map_storage.hpp"
 #include "tests/csv_table.hpp"
@@ -698,10 +702,17 @@ TEST(Tool, CheckConfigWithoutAFileDescribesTheEmbeddedDefaultScene) {
   ScratchDir dir;
   const ToolResult r = run_tool("check-config", dir);
   ASSERT_EQ(r.rc, 0) << r.err;
+  // Laid out for the displays connected here, as the daemon would; a build machine has none (1920 x 1080).
+  std::string no_display;
+  const Rect desktop = resolve_desktop(std::nullopt, kDrmDir, no_display);
+  const Scene expected = default_scene(desktop);
+  const Rect last = expected.regions().back().rect;
   for (const std::string& part :
        {default_file.string() + ": no such file, so pseudohapticd runs its embedded default scene",
-        std::string("\n  output: absolute\n"), std::string("\nregions: 3\n"),
-        std::string("\n  [2] 'bump-linear-h1-r100': 1285,290 500x500 px, curvature, ")}) {
+        std::string("\n  output: absolute\n"), fmt::format("\nregions: {}\n", expected.regions().size()),
+        fmt::format("\nlaid out for: {},{} {}x{} px (", desktop.x, desktop.y, desktop.w, desktop.h),
+        fmt::format("\n  [{}] '{}': {},{} 500x500 px, curvature, ", expected.regions().size() - 1,
+                    expected.regions().back().name, last.x, last.y)}) {
     EXPECT_TRUE(contains(r.out, part)) << "expected '" << part << "' in: " << r.out;
   }
   EXPECT_TRUE(r.err.empty()) << r.err;

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "config/daemon_config.hpp"
+#include "config/desktop_geometry.hpp"
 #include "config/field_loader.hpp"
 #include "config/scene_file.hpp"
 #include "core/engine/decode.hpp"
@@ -144,12 +145,19 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
 std::string default_scene_summary(const std::string& file) {
   fmt::memory_buffer out;
   const auto to = std::back_inserter(out);
+  // Laid out as the daemon would lay it out here at start: on the connected displays (the session helper's layout
+  // lays it out again).
+  std::string no_display;
+  const Rect desktop = resolve_desktop(std::nullopt, kDrmDir, no_display);
   fmt::format_to(to,
                  "{}: no such file, so pseudohapticd runs its embedded default scene (three targets of the curvature "
-                 "paper, laid out for a 1920x1080 desktop; see pseudohapticd(8)) with the [daemon] table's defaults\n",
+                 "paper in the middle of the desktop; see pseudohapticd(8)) with the [daemon] table's defaults\n",
                  file);
   append_daemon(out, DaemonSettings{});
-  const Scene scene = default_scene();
+  fmt::format_to(to, "laid out for: {},{} {}x{} px ({}; the session helper's layout lays it out again)\n", desktop.x,
+                 desktop.y, desktop.w, desktop.h,
+                 no_display.empty() ? "the connected displays side by side" : "no connected display found here");
+  const Scene scene = default_scene(desktop);
   fmt::format_to(to, "regions: {}\n", scene.regions().size());
   for (std::size_t i = 0; i < scene.regions().size(); ++i) {
     const Region& r = scene.regions()[i];

@@ -216,18 +216,24 @@ void note_device(const std::string& input, const Recording& recording, const Rec
 }
 
 struct ReplayScene {
-  Scene scene;
+  Scene scene;            // empty for the embedded default scene, which is laid out once the desktop is known
   DaemonSettings daemon;  // its [daemon] table, or the defaults (the embedded scene's too)
+  bool embedded = false;
 };
 
-// The scene file's scene (or the embedded default), with a warning per map with invalid texels (repaired) or stretched
-// out of proportion, and per region whose normal map and depth map hold the relief at different scales. `method`, where
-// given, replaces every region's (with the region's own parameters for it where its file has them).
+// The embedded default scene laid out for the replay's desktop, as the daemon lays it out for its own; `method`, where
+// given, in every region.
+Scene embedded_scene(const std::string& method, const Rect& desktop) {
+  if (method.empty()) return default_scene(desktop);
+  return default_scene(make_default_method(builtin_methods(), method), desktop);
+}
+
+// The scene file's scene (or, without one, a note to lay out the embedded default), with a warning per map with invalid
+// texels (repaired) or stretched out of proportion, and per region whose normal map and depth map hold the relief at
+// different scales. `method`, where given, replaces every region's (with the region's own parameters for it where its
+// file has them).
 ReplayScene load_replay_scene(const std::string& scene_file, const std::string& method) {
-  if (scene_file.empty()) {
-    if (method.empty()) return {default_scene(), DaemonSettings{}};
-    return {default_scene(make_default_method(builtin_methods(), method)), DaemonSettings{}};
-  }
+  if (scene_file.empty()) return {Scene{}, DaemonSettings{}, true};
   SceneSpec spec = parse_scene_file(scene_file);
   if (!method.empty()) {
     for (RegionSpec& region : spec.regions) region.method = method;
@@ -236,7 +242,7 @@ ReplayScene load_replay_scene(const std::string& scene_file, const std::string& 
   Scene scene = load_scene(spec, &report);
   for (const std::string& w : map_warnings(spec, report)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
   for (const std::string& w : relief_scale_warnings(spec, scene)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
-  return {std::move(scene), spec.daemon};
+  return {std::move(scene), spec.daemon, false};
 }
 
 // The pipeline's settings: the flags'; with --as-daemon, the [daemon] table's as the daemon takes them
@@ -274,8 +280,7 @@ int run_replay(const ReplayOptions& o) {
   if (!o.trace.empty() && same_path(o.output, o.trace))
     throw std::invalid_argument(fmt::format("--trace {} is OUTPUT too: give each its own file", o.trace));
   // Everything is read and checked before anything is written: no partial output that looks valid.
-  const ReplayScene loaded = load_replay_scene(o.scene_file, o.method);
-  const Scene& scene = loaded.scene;
+  ReplayScene loaded = load_replay_scene(o.scene_file, o.method);
   RecordingInfo info;
   const Recording input = read_recording_file(o.input, o.device_given ? o.device : kFirstPointerDevice, &info);
   if (!(o.gain > 0.0) || !std::isfinite(o.gain)) throw std::invalid_argument("--gain must be a finite number > 0");
@@ -286,6 +291,8 @@ int run_replay(const ReplayOptions& o) {
                                             kMaxDesktopCoordinate, kMaxDesktopCoordinate));
   if (config.start && !(std::isfinite(config.start->x) && std::isfinite(config.start->y)))
     throw std::invalid_argument("--start: X and Y must be finite numbers");
+  if (loaded.embedded) loaded.scene = embedded_scene(o.method, config.desktop);
+  const Scene& scene = loaded.scene;
   // What the replay's cursor cannot reach changes nothing: said, as the daemon says it of its desktop.
   for (const std::string& note : off_desktop_notes(scene, config.desktop))
     fmt::print(stderr, "pseudohaptic: warning: {}\n", note);
@@ -375,9 +382,10 @@ Run add_replay_command(CLI::App& app) {
       ->capture_default_str()
       ->each([o](const std::string&) { o->gain_given = true; });
   app.footer(
-      "The embedded default scene: three targets of the curvature paper in the middle of a 1920x1080 desktop\n"
-      "(bump-gaussian-h1-r200 at 135,290; hole-polynomial-h1-r200 at 710,290; bump-linear-h1-r100 at\n"
-      "1285,290; 500x500 px each, curvature method).\n"
+      "The embedded default scene: three targets of the curvature paper in the middle of the desktop, as the\n"
+      "daemon lays them out (on 1920x1080: bump-gaussian-h1-r200 at 135,290; hole-polynomial-h1-r200 at\n"
+      "710,290; bump-linear-h1-r100 at 1285,290; 500x500 px each, curvature method; on a narrower desktop\n"
+      "as many as fit).\n"
       "OUTPUT and --trace: a regular file (or a new one) is written to a temporary file beside it and renamed\n"
       "over it, so it appears complete or not at all; a FIFO, a device or a symbolic link is written through.\n"
       "Example: pseudohaptic replay --trace frames.csv mouse.evemu out.evemu");
