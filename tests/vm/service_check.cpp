@@ -22,8 +22,10 @@
 #include <string>
 #include <vector>
 
+#include "config/desktop_geometry.hpp"
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
+#include "core/engine/default_scene.hpp"
 #include "core/engine/pipeline.hpp"
 #include "core/engine/targets.hpp"
 #include "tests/vm/e2e_support.hpp"
@@ -270,6 +272,20 @@ void check_sandbox() {
                          must_run("stat -c '%G %a' /dev/uinput").output));
 }
 
+// The embedded default scene the install started with, laid out for the displays the sandboxed daemon found under
+// /sys/class/drm: the same desktop as the connectors say to this test (root, outside the sandbox), and its targets
+// where default_scene_layout puts them on it.
+void check_default_scene_layout() {
+  const std::string step = "the embedded default scene is laid out for the VM's display";
+  std::string no_display;
+  const ph::Rect desktop = ph::resolve_desktop(std::nullopt, ph::kDrmDir, no_display);
+  const std::string expected =
+      fmt::format("the embedded default scene on the desktop {},{} {}x{} px: {}", desktop.x, desktop.y, desktop.w,
+                  desktop.h, ph::default_scene_places(ph::default_scene(desktop)));
+  const std::string line = expect_journal("", expected);
+  pass(step, fmt::format("{} ({})", line, no_display.empty() ? "DRM connectors read in the sandbox" : no_display));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -277,6 +293,7 @@ int main(int argc, char** argv) {
   const std::string scene_file = (dir / "scene.toml").string();
   try {
     check_sandbox();
+    check_default_scene_layout();
     const UeventMonitor uevents;
 
     // A scene file, applied by `systemctl reload` (the install ran the embedded default scene).
