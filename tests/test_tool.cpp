@@ -246,6 +246,35 @@ TEST(Tool, NumberFlagsRefuseNanAndInfinity) {
 
 // status and cursor take the socket as --socket or, as pseudohapticd and pseudohaptic-session name it, --control;
 // without a daemon there the error names the path and says what to check.
+// A full disk (/dev/full) under what a command writes: its output is lost, so it must not say success. Before, trace
+// to a file or to standard output and demo exited 0 with nothing written; and where standard error was full too,
+// the tool aborted.
+TEST(Tool, AWriteThatFailsIsAnErrorNotASuccess) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full here";
+  ScratchDir dir;
+  const std::string tool = quote(std::string(PH_TOOL_PATH));
+  auto run = [&](const std::string& args, const std::string& redirect) {
+    const int status = std::system((tool + " " + args + " " + redirect).c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  };
+  const std::string err = " 2>" + quote(dir / "stderr.txt");
+  const std::string trace = "trace --target bump-gaussian-h1-r100";
+  EXPECT_EQ(run(trace + " -o /dev/full", ">/dev/null" + err), 1);
+  EXPECT_TRUE(contains(read_text(dir / "stderr.txt"), "pseudohaptic: /dev/full: write failed: No space left on device"))
+      << read_text(dir / "stderr.txt");
+  for (const std::string& args : {trace, std::string("demo --targets ") + quote(dir / "targets")}) {
+    EXPECT_EQ(run(args, ">/dev/full" + err), 1) << args;
+    EXPECT_TRUE(
+        contains(read_text(dir / "stderr.txt"), "pseudohaptic: <stdout>: write failed: No space left on device"))
+        << args << ": " << read_text(dir / "stderr.txt");
+  }
+  EXPECT_EQ(run(trace, ">/dev/full 2>/dev/full"), 1);  // nothing can be said; the status says it, no abort
+  EXPECT_EQ(run(trace + " -o " + quote(dir / "no-such-folder" / "t.csv"), ">/dev/null" + err), 1);
+  EXPECT_TRUE(contains(read_text(dir / "stderr.txt"), "t.csv: cannot open for writing: No such file or directory"))
+      << read_text(dir / "stderr.txt");
+  EXPECT_EQ(run(trace, ">/dev/null" + err), 0) << read_text(dir / "stderr.txt");
+}
+
 TEST(Tool, StatusAndCursorNameTheSocketTheyCouldNotReach) {
   ScratchDir dir;
   const std::string socket = (dir / "no-daemon").string();

@@ -2,6 +2,9 @@
 #include <fmt/core.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <map>
@@ -9,6 +12,26 @@
 #include <string_view>
 
 #include "tools/commands.hpp"
+
+namespace {
+
+// An error for the user, on standard error. Never throws: where standard error cannot be written either (a full
+// disk), the exit status still says it.
+void say_error(const std::string& text) {
+  std::fputs(("pseudohaptic: " + text + "\n").c_str(), stderr);
+  std::fflush(stderr);
+}
+
+// What a command wrote to standard output is buffered: a disk that filled or a reader that went away shows only
+// when it is flushed, so the exit status must wait for that.
+int with_stdout_flushed(int status) {
+  errno = 0;
+  if (std::fflush(stdout) == 0 && !std::ferror(stdout)) return status;
+  say_error(std::string("<stdout>: write failed") + (errno != 0 ? std::string(": ") + std::strerror(errno) : ""));
+  return 1;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -66,7 +89,7 @@ int main(int argc, char** argv) {
   }
   try {
     for (const auto& [sub, run] : runs) {
-      if (sub->parsed()) return run();
+      if (sub->parsed()) return with_stdout_flushed(run());
     }
   } catch (const std::filesystem::filesystem_error& e) {
     // libstdc++ says "filesystem error: cannot create directories: Not a directory [out]": the path first, as the
@@ -74,10 +97,10 @@ int main(int argc, char** argv) {
     std::string what = e.what();
     if (const std::string_view prefix = "filesystem error: "; what.starts_with(prefix)) what.erase(0, prefix.size());
     if (const std::size_t at = what.rfind(" ["); at != std::string::npos && !e.path1().empty()) what.erase(at);
-    fmt::print(stderr, "pseudohaptic: {}{}\n", e.path1().empty() ? "" : e.path1().string() + ": ", what);
+    say_error((e.path1().empty() ? "" : e.path1().string() + ": ") + what);
     return 1;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "pseudohaptic: {}\n", e.what());
+    say_error(e.what());
     return 1;
   }
   return 1;
