@@ -273,6 +273,12 @@ TEST(Tool, AWriteThatFailsIsAnErrorNotASuccess) {
   EXPECT_TRUE(contains(read_text(dir / "stderr.txt"), "t.csv: cannot open for writing: No such file or directory"))
       << read_text(dir / "stderr.txt");
   EXPECT_EQ(run(trace, ">/dev/null" + err), 0) << read_text(dir / "stderr.txt");
+  // The CSV files of stability and accuracy name the file that could not be written.
+  fs::create_directories(dir / "stability");
+  fs::create_symlink("/dev/full", dir / "stability" / "stability.csv");
+  EXPECT_EQ(run("stability --small --mode jump " + quote(dir / "stability"), ">/dev/null" + err), 1);
+  EXPECT_TRUE(contains(read_text(dir / "stderr.txt"), "stability.csv: write failed: No space left on device"))
+      << read_text(dir / "stderr.txt");
 }
 
 TEST(Tool, StatusAndCursorNameTheSocketTheyCouldNotReach) {

@@ -625,22 +625,22 @@ std::vector<VariantRow> measure_all(const Workload& w, const std::vector<MethodP
 }
 
 void write_variants(const fs::path& path, const std::vector<VariantRow>& rows) {
-  std::FILE* f = open_csv(path);
-  fmt::print(f,
-             "variant,method,traversal,storage,sampling,ns_per_frame_median,ns_per_frame_p99,ns_per_step,"
-             "bytes_per_texel,precompute_ms,cd_err_rms,cd_err_max,end_err_rms_px,end_err_max_px,drift_px\n");
+  CsvFile f(path);
+  f.print(
+      "variant,method,traversal,storage,sampling,ns_per_frame_median,ns_per_frame_p99,ns_per_step,"
+      "bytes_per_texel,precompute_ms,cd_err_rms,cd_err_max,end_err_rms_px,end_err_max_px,drift_px\n");
   for (const VariantRow& r : rows) {
-    fmt::print(f, "{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", r.variant,
-               r.method, r.traversal, r.storage, r.sampling, r.ns_median, r.ns_p99, r.ns_step, r.bytes_texel,
-               r.precompute_ms, r.cd_rms, r.cd_max, r.end_rms, r.end_max, r.drift);
+    f.print("{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", r.variant,
+            r.method, r.traversal, r.storage, r.sampling, r.ns_median, r.ns_p99, r.ns_step, r.bytes_texel,
+            r.precompute_ms, r.cd_rms, r.cd_max, r.end_rms, r.end_max, r.drift);
   }
-  close_csv(f, path);
+  f.close();
 }
 
 // Fig. 5: the default variant's C/D along the centre row of each target, with the truth.
 void write_fig5(const fs::path& path, const Workload& w, const std::vector<MethodPtr>& methods) {
-  std::FILE* f = open_csv(path);
-  fmt::print(f, "target,method,x,cd,cd_truth\n");
+  CsvFile f(path);
+  f.print("target,method,x,cd,cd_truth\n");
   for (std::size_t t = 0; t < w.config.targets.size(); ++t) {
     const Shape& shape = w.config.targets[t];
     if (!shape.is_target()) continue;  // the paper's figure is of its targets
@@ -657,29 +657,29 @@ void write_fig5(const fs::path& path, const Workload& w, const std::vector<Metho
         advance(scene, cursor, {1.0, 0.0}, &log);
         score_frame(model, log.steps, start, cursor.position, {1.0, 0.0}, unused,
                     [&](double x, double cd, double truth) {
-                      fmt::print(f, "{},{},{:.4f},{:.6g},{:.6g}\n", shape.name(), method->name(), x, cd, truth);
+                      f.print("{},{},{:.4f},{:.6g},{:.6g}\n", shape.name(), method->name(), x, cd, truth);
                     });
       }
     }
   }
-  close_csv(f, path);
+  f.close();
 }
 
 // Fig. 2: the curvature method's formula over the paper's plane of cos(alpha) and delta-beta.
 void write_fig2(const fs::path& path) {
-  std::FILE* f = open_csv(path);
-  fmt::print(f, "cos_alpha,delta_beta_deg,cd\n");
+  CsvFile f(path);
+  f.print("cos_alpha,delta_beta_deg,cd\n");
   const CurvatureParams params{};
   for (int i = 0; i <= 40; ++i) {
     const double cos_alpha = -1.0 + i / 20.0;
     for (int j = 0; j <= 40; ++j) {
       const double delta_beta_deg = -2.0 + j / 10.0;
       const double theta1 = delta_beta_deg * std::numbers::pi / 180.0;
-      fmt::print(f, "{:.4g},{:.4g},{:.6g}\n", cos_alpha, delta_beta_deg,
-                 curvature_cd(params, cos_alpha, theta1, cos_alpha, 0.0, nullptr));
+      f.print("{:.4g},{:.4g},{:.6g}\n", cos_alpha, delta_beta_deg,
+              curvature_cd(params, cos_alpha, theta1, cos_alpha, 0.0, nullptr));
     }
   }
-  close_csv(f, path);
+  f.close();
 }
 
 int run_accuracy(const AccuracyOptions& o) {

@@ -69,13 +69,13 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 std::string cell(double v) { return std::isnan(v) ? std::string() : fmt::format("{:.6g}", v); }
 
 void write_modes(const fs::path& path, const std::vector<const FailureMode*>& modes) {
-  std::FILE* f = open_csv(path);
-  fmt::print(f, "mode,family,severity,has_features,description\n");
+  CsvFile f(path);
+  f.print("mode,family,severity,has_features,description\n");
   for (const FailureMode* m : modes) {
-    fmt::print(f, "{},{},{},{},{}\n", m->name, csv_quoted(m->family), csv_quoted(m->severity), m->has_features ? 1 : 0,
-               csv_quoted(m->description));
+    f.print("{},{},{},{},{}\n", m->name, csv_quoted(m->family), csv_quoted(m->severity), m->has_features ? 1 : 0,
+            csv_quoted(m->description));
   }
-  close_csv(f, path);
+  f.close();
 }
 
 int run_stability(const StabilityOptions& o) {
@@ -98,10 +98,10 @@ int run_stability(const StabilityOptions& o) {
   write_modes(outdir / "modes.csv", modes);
 
   const fs::path path = outdir / "stability.csv";
-  std::FILE* f = open_csv(path);
-  fmt::print(f,
-             "mode,family,severity,method,variant,traversal,sampling,cd_err_rms,jitter_rms,jitter_truth_rms,"
-             "travel_err_pct,travel_sens_pct,iso_pct,rate_px,contrast,contrast_truth,faults,strokes\n");
+  CsvFile f(path);
+  f.print(
+      "mode,family,severity,method,variant,traversal,sampling,cd_err_rms,jitter_rms,jitter_truth_rms,"
+      "travel_err_pct,travel_sens_pct,iso_pct,rate_px,contrast,contrast_truth,faults,strokes\n");
   std::size_t rows = 0, faults = 0;
   for (std::size_t i = 0; i < modes.size(); ++i) {
     const FailureMode& mode = *modes[i];
@@ -115,11 +115,11 @@ int run_stability(const StabilityOptions& o) {
         for (const StabilityCase& c : cases) truths.push_back(case_truth(c, *method, config.settings));
         for (const EngineOptions& engine : config.engines) {
           const StabilityRow r = measure_stability(cases, truths, method, engine, config.settings);
-          fmt::print(f, "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", mode.name, csv_quoted(mode.family),
-                     cell(severity), method->name(), label_of(engine), label_of({engine.traversal}),
-                     name_of(engine.sampling), cell(r.cd_err_rms), cell(r.jitter_rms), cell(r.jitter_truth_rms),
-                     cell(r.travel_err_pct), cell(r.travel_sens_pct), cell(r.iso_pct), cell(r.rate_px),
-                     cell(r.contrast), cell(r.contrast_truth), r.faults, r.strokes);
+          f.print("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", mode.name, csv_quoted(mode.family),
+                  cell(severity), method->name(), label_of(engine), label_of({engine.traversal}),
+                  name_of(engine.sampling), cell(r.cd_err_rms), cell(r.jitter_rms), cell(r.jitter_truth_rms),
+                  cell(r.travel_err_pct), cell(r.travel_sens_pct), cell(r.iso_pct), cell(r.rate_px), cell(r.contrast),
+                  cell(r.contrast_truth), r.faults, r.strokes);
           ++rows;
           faults += r.faults;
         }
@@ -129,7 +129,7 @@ int run_stability(const StabilityOptions& o) {
                i + 1, modes.size(), mode.name, severities.size(), config.angles_deg.size(), methods.size(),
                config.engines.size(), seconds_since(t_mode));
   }
-  close_csv(f, path);
+  f.close();
   fmt::print("wrote {} rows to {} in {:.1f} s; {} faults (NaN, C/D out of bounds, strokes that never ended)\n", rows,
              path.string(), seconds_since(t_start), faults);
   return faults == 0 ? 0 : 1;
