@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tests/file_bytes.hpp"
@@ -93,6 +94,27 @@ TEST(ManPages, TheToolsPageNamesEveryCommandAndItsOptions) {
     for (const std::string& option : long_options(output_of(fmt::format("'{}' {} --help", PH_TOOL_PATH, command)))) {
       EXPECT_TRUE(names(manual, "", option, "")) << "pseudohaptic.1 does not name " << command << " " << option;
     }
+  }
+}
+
+// One version everywhere: the project's (CMakeLists.txt) in each program's --version and in each page's title line.
+TEST(ManPages, EveryProgramAndPageCarriesTheProjectsVersion) {
+  std::vector<std::pair<std::string, std::string>> programs = {{"pseudohapticd", PH_DAEMON_PATH},
+                                                               {"pseudohaptic", PH_TOOL_PATH}};
+  std::vector<std::string> pages = {PH_DAEMON_MAN_PAGE, PH_TOOL_MAN_PAGE};
+#ifdef PH_SESSION_PATH
+  programs.emplace_back("pseudohaptic-session", PH_SESSION_PATH);
+  pages.emplace_back(PH_SESSION_MAN_PAGE);
+#endif
+  for (const auto& [name, path] : programs) {
+    EXPECT_EQ(output_of(fmt::format("'{}' --version", path)), fmt::format("{} {}\n", name, PH_PROJECT_VERSION));
+  }
+  for (const std::string& page : pages) {
+    const std::string manual = ph::read_file_text(page);
+    const std::string title = manual.substr(0, manual.find('\n'));
+    EXPECT_TRUE(title.starts_with(".TH ") &&
+                title.find(fmt::format("\"pseudohaptic {}\"", PH_PROJECT_VERSION)) != std::string::npos)
+        << page << ": " << title;
   }
 }
 
