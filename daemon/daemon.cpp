@@ -415,7 +415,8 @@ void Daemon::sync_mice() {
 }
 
 void Daemon::on_hotplug() {
-  for (const InputHotplug& hotplug : udev_.receive_all()) {
+  const UdevWatch::Received received = udev_.receive_all();
+  for (const InputHotplug& hotplug : received.inputs) {
     if (hotplug.action == InputHotplug::Action::add) {
       log_.debug("{} added", hotplug.devnode);
       passed_over_.erase(hotplug.devnode);  // a new device may reuse the node of one passed over
@@ -426,6 +427,7 @@ void Daemon::on_hotplug() {
       let_go(hotplug.devnode, "removed");
     }
   }
+  if (received.displays_changed) on_displays_changed();
 }
 
 void Daemon::on_signal() {
@@ -657,8 +659,22 @@ void Daemon::layout(Rect desktop) {
     return;
   }
   helper_desktop_ = desktop;
+  change_desktop(desktop, "from the session helper");
+}
+
+// desktop = "auto" without a session helper: the connected displays, read again when DRM says they changed (the
+// helper's layout, where there is one, knows the arrangement, which sysfs does not).
+void Daemon::on_displays_changed() {
+  if (config_.settings.desktop || helper_desktop_) return;
+  std::string no_display;
+  const Rect desktop = resolve_desktop(std::nullopt, choice_.drm_dir, no_display);
+  if (!no_display.empty() && desktop != config_.pipeline.desktop) log_.warning("{}", no_display);
+  change_desktop(desktop, "the connected displays changed");
+}
+
+void Daemon::change_desktop(Rect desktop, std::string_view why) {
   if (desktop == config_.pipeline.desktop) return;
-  log_.info("desktop {}x{}+{}+{} (from the session helper)", desktop.w, desktop.h, desktop.x, desktop.y);
+  log_.info("desktop {}x{}+{}+{} ({})", desktop.w, desktop.h, desktop.x, desktop.y, why);
   if (config_.embedded && !default_scene_laid_out_for(*config_.scene, desktop)) {
     std::shared_ptr<const Scene> replaced = config_.scene;
     config_.scene = std::make_shared<const Scene>(default_scene(desktop));

@@ -79,6 +79,8 @@ class Daemon final : private ControlHandler {
   void position(Vec2 position, bool from_helper) override;
   void layout(Rect desktop) override;
   void helper_changed(bool present) override;
+  void on_displays_changed();
+  void change_desktop(Rect desktop, std::string_view why);
   void passthrough(bool on) override;
   void route(Mouse& mouse, const InputEvent& event);
   bool make_passthrough_sink(const std::string& node, Mouse& mouse);

@@ -25,6 +25,7 @@ UdevWatch::UdevWatch() : udev_(udev_new()) {
   monitor_.reset(udev_monitor_new_from_netlink(udev_.get(), kernel_events_ ? "kernel" : "udev"));
   if (!monitor_) throw UdevError(fmt::format("cannot listen for device hotplug (netlink): {}", std::strerror(errno)));
   if (udev_monitor_filter_add_match_subsystem_devtype(monitor_.get(), "input", nullptr) < 0 ||
+      udev_monitor_filter_add_match_subsystem_devtype(monitor_.get(), "drm", nullptr) < 0 ||
       udev_monitor_enable_receiving(monitor_.get()) < 0) {
     throw UdevError(fmt::format("cannot listen for input hotplug: {}", std::strerror(errno)));
   }
@@ -51,18 +52,23 @@ std::vector<std::string> UdevWatch::event_nodes() const {
   return nodes;
 }
 
-std::vector<InputHotplug> UdevWatch::receive_all() {
-  std::vector<InputHotplug> hotplugs;
+UdevWatch::Received UdevWatch::receive_all() {
+  Received received;
   // The monitor's socket is non-blocking: this ends when nothing more is queued.
   while (std::unique_ptr<udev_device, UdevUnref> device{udev_monitor_receive_device(monitor_.get())}) {
+    const char* subsystem = udev_device_get_subsystem(device.get());
+    if (subsystem != nullptr && std::string_view(subsystem) == "drm") {
+      received.displays_changed = true;
+      continue;
+    }
     const char* devnode = udev_device_get_devnode(device.get());
     const char* action = udev_device_get_action(device.get());
     if (!is_event_node(devnode) || action == nullptr) continue;
     const std::string_view a = action;
-    if (a == "add") hotplugs.push_back({InputHotplug::Action::add, devnode});
-    if (a == "remove") hotplugs.push_back({InputHotplug::Action::remove, devnode});
+    if (a == "add") received.inputs.push_back({InputHotplug::Action::add, devnode});
+    if (a == "remove") received.inputs.push_back({InputHotplug::Action::remove, devnode});
   }
-  return hotplugs;
+  return received;
 }
 
 }  // namespace ph

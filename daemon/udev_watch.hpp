@@ -1,4 +1,5 @@
-// Input devices as udev sees them: the event nodes present at start, and hotplug add/remove.
+// Input devices as udev sees them: the event nodes present at start, and hotplug add/remove; and that the
+// displays changed (a DRM event: a monitor plugged in or out, a mode forced), for desktop = "auto".
 // Without a running udevd (no /run/udev/control: an initramfs, a container, our test VM) the monitor
 // listens to the kernel's uevents directly; device nodes then come from devtmpfs.
 #pragma once
@@ -41,9 +42,13 @@ class UdevWatch {
   // /dev/input/event* nodes of the input devices present now, in sysfs order.
   std::vector<std::string> event_nodes() const;
 
-  // The pending hotplugs of event nodes, in order; messages about anything else (a parent inputN
-  // device, a change event) are read and dropped.
-  std::vector<InputHotplug> receive_all();
+  // The pending hotplugs of event nodes, in order, and whether a DRM device sent any event among them;
+  // messages about anything else (a parent inputN device, an input change event) are read and dropped.
+  struct Received {
+    std::vector<InputHotplug> inputs;
+    bool displays_changed = false;
+  };
+  Received receive_all();
 
  private:
   std::unique_ptr<udev, UdevUnref> udev_;

@@ -11,6 +11,7 @@
 #include <spawn.h>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cmath>
 #include <cstdio>
@@ -286,6 +287,33 @@ void check_default_scene_layout() {
   pass(step, fmt::format("{} ({})", line, no_display.empty() ? "DRM connectors read in the sandbox" : no_display));
 }
 
+// A monitor unplugged and plugged in again, without a session helper: the connector forced off (as the kernel's
+// sysfs lets root do) and back to detection, each followed by the DRM device's change event (which udev also sends
+// for a real plug). The daemon, with desktop = "auto", reads the displays again and lays its default scene out anew.
+void check_display_hotplug() {
+  const std::string step = "a display unplugged and plugged in again: the daemon follows the connected displays";
+  std::string connector;
+  for (const auto& entry : std::filesystem::directory_iterator(ph::kDrmDir)) {
+    std::ifstream status(entry.path() / "status");
+    std::string state;
+    if (status >> state && state == "connected") connector = entry.path().string();
+  }
+  if (connector.empty()) throw Fatal(step + ": no connected connector under /sys/class/drm");
+  const std::string card = connector.substr(0, connector.find('-'));  // /sys/class/drm/card0
+  std::vector<std::string> lines;
+  for (const char* state : {"off", "detect"}) {
+    const std::string before = journal();
+    must_run(fmt::format("echo {} > {}/status && echo change > {}/uevent", state, connector, card));
+    std::string no_display;
+    const ph::Rect desktop = ph::resolve_desktop(std::nullopt, ph::kDrmDir, no_display);
+    lines.push_back(expect_journal(before, fmt::format("desktop {}x{}+{}+{} (the connected displays changed)",
+                                                       desktop.w, desktop.h, desktop.x, desktop.y)));
+    lines.push_back(expect_journal(before, "the embedded default scene laid out again for it: " +
+                                               ph::default_scene_places(ph::default_scene(desktop))));
+  }
+  pass(step, fmt::format("{}: journal \"{}\"", connector, fmt::join(lines, "\", \"")));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -294,6 +322,7 @@ int main(int argc, char** argv) {
   try {
     check_sandbox();
     check_default_scene_layout();
+    check_display_hotplug();
     const UeventMonitor uevents;
 
     // A scene file, applied by `systemctl reload` (the install ran the embedded default scene).
