@@ -317,6 +317,7 @@ void Daemon::wait_for_release_elsewhere(const std::string& node, Mouse& mouse) {
   mouse.held_elsewhere = true;
   watch(epoll_.get(), mouse.device->fd());
   update_retry_timer();
+  notifier_.status(status_line());
 }
 
 bool Daemon::on_released_elsewhere(int fd) {
@@ -344,12 +345,13 @@ void Daemon::let_go(const std::string& node, std::string_view why) {
     return;
   }
   Mouse& mouse = *it->second;
-  if (mouse.held_elsewhere) ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, mouse.device->fd(), nullptr);
+  const bool held_elsewhere = mouse.held_elsewhere;
+  if (held_elsewhere) ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, mouse.device->fd(), nullptr);
   const bool taken = mouse.frames != nullptr;
   if (taken && !why.empty()) log_.info("let go of {} {} ({})", node, quoted_name(*mouse.device), why);
   // Stops its reader, releases held buttons on the virtual device, destroys it, ungrabs.
   mice_.erase(it);
-  if (taken) notifier_.status(status_line());
+  if (taken || held_elsewhere) notifier_.status(status_line());
   update_retry_timer();
 }
 
@@ -763,12 +765,14 @@ void Daemon::apply(Configuration next) {
 
 std::string Daemon::status_line() const {
   std::string names;
-  std::size_t taken = 0;
+  std::size_t taken = 0, held = 0;
   for (const auto& [node, mouse] : mice_) {
+    held += mouse->held_elsewhere;
     if (mouse->frames == nullptr) continue;
     names += (taken++ == 0 ? "" : ", ") + mouse->device->name();
   }
-  const std::string mice = taken == 0 ? std::string("waiting for a mouse") : fmt::format("{} mice: {}", taken, names);
+  std::string mice = taken == 0 ? std::string("waiting for a mouse") : fmt::format("{} mice: {}", taken, names);
+  if (held > 0) mice += fmt::format("; {} held by another program", held);
   const bool helper = control_ && control_->has_helper();
   return fmt::format("{}; scene: {} ({} regions); {} output{}", mice, config_.source, config_.scene->regions().size(),
                      config_.pipeline.mode == OutputMode::absolute ? "absolute" : "relative",

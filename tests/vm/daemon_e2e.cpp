@@ -1409,6 +1409,16 @@ void default_scene_part(Report& report, const Options& options, Latency& latency
     const std::optional<ph::control::Status> while_held = status_now();
     check.expect(while_held && while_held->mice == 1 && while_held->held_elsewhere == 1,
                  "while held elsewhere, expected 'status' to say 1 mouse taken and 1 held elsewhere");
+    // What systemctl status shows (sd_notify's STATUS=), sent before the log line; read by the socket's thread.
+    const bool told_systemd = wait_until(
+        [&] {
+          const std::vector<std::string> lines = notify->history();
+          return std::any_of(lines.begin(), lines.end(), [](const std::string& line) {
+            return line.starts_with("STATUS=") && line.find("; 1 held by another program; ") != std::string::npos;
+          });
+        },
+        2s);
+    check.expect(told_systemd, "expected a STATUS= line saying '1 held by another program'");
     std::string tool_said = "(no pseudohaptic tool found: --tool)";
     if (!options.tool.empty()) {
       ChildProcess tool({options.tool, "status", "--socket", control_path}, {"PATH=/usr/bin:/bin", "LANG=C.UTF-8"},
