@@ -747,8 +747,11 @@ void Daemon::on_reload_ended() {
 // until SYN_REPORT, so every frame goes through one scene.
 void Daemon::apply(Configuration next) {
   if (helper_desktop_ && !next.settings.desktop) next.pipeline.desktop = *helper_desktop_;
-  if (next.embedded && !default_scene_laid_out_for(*next.scene, next.pipeline.desktop))
+  if (next.embedded && !default_scene_laid_out_for(*next.scene, next.pipeline.desktop)) {
     next.scene = std::make_shared<const Scene>(default_scene(next.pipeline.desktop));
+    next.notes.push_back("the embedded default scene laid out again for the session helper's desktop: " +
+                         default_scene_places(*next.scene));
+  }
   log_notes(next);
   std::shared_ptr<const Scene> replaced = config_.scene;
   if (only_scene_differs(config_, next)) {
