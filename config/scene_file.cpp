@@ -579,7 +579,8 @@ std::string service_hint(const std::filesystem::path& path) {
 }  // namespace
 
 std::optional<std::string_view> hidden_from_the_service(const std::filesystem::path& path) {
-  const std::filesystem::path normal = path.lexically_normal();
+  std::error_code ignored;
+  const std::filesystem::path normal = std::filesystem::absolute(path, ignored).lexically_normal();
   for (const std::string_view folder : {"/home", "/root", "/run/user"}) {
     const std::filesystem::path inside = normal.lexically_relative(std::filesystem::path(folder));
     if (!inside.empty() && *inside.begin() != "..") return folder;
@@ -593,8 +594,7 @@ std::vector<std::string> service_path_warnings(const SceneSpec& spec) {
     for (const auto& [key, map] :
          {std::pair{"normal_map", r.sources.normal_map}, std::pair{"depth_map", r.sources.depth_map}}) {
       if (!map) continue;
-      std::error_code ignored;
-      const std::optional<std::string_view> hidden = hidden_from_the_service(std::filesystem::absolute(*map, ignored));
+      const std::optional<std::string_view> hidden = hidden_from_the_service(*map);
       if (!hidden) continue;
       out.push_back(
           fmt::format("{}:{}: region '{}': {} {} lies under {}, which pseudohapticd.service cannot read "
@@ -608,14 +608,13 @@ std::vector<std::string> service_path_warnings(const SceneSpec& spec) {
 
 SceneSpec parse_scene_file(const std::filesystem::path& file, MethodRegistry methods) {
   std::ifstream in(file, std::ios::binary);
-  std::error_code ignored;
   if (!in) {
     const int error = errno;
-    throw ConfigError(
-        fmt::format("{}: cannot open the scene file: {}{}", file.string(), std::strerror(error),
-                    error == ENOENT || error == EACCES ? service_hint(std::filesystem::absolute(file, ignored)) : ""));
+    throw ConfigError(fmt::format("{}: cannot open the scene file: {}{}", file.string(), std::strerror(error),
+                                  error == ENOENT || error == EACCES ? service_hint(file) : ""));
   }
   // A folder opens, and reads as an empty scene: a daemon given /etc/pseudohaptic/ would run flat, silently.
+  std::error_code ignored;
   if (std::filesystem::is_directory(file, ignored))
     throw ConfigError(fmt::format("{}: is a folder, not a scene file", file.string()));
   std::ostringstream text;
@@ -663,8 +662,7 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
       std::string hint;
       for (const auto& map : {r.sources.normal_map, r.sources.depth_map}) {
         std::error_code ignored;
-        if (map && hint.empty() && !std::filesystem::exists(*map, ignored))
-          hint = service_hint(std::filesystem::absolute(*map, ignored));
+        if (map && hint.empty() && !std::filesystem::exists(*map, ignored)) hint = service_hint(*map);
       }
       throw ConfigError(fmt::format("{}:{}: region '{}': {}{}", spec.file.string(), r.line, r.name, e.what(), hint));
     } catch (const std::invalid_argument& e) {

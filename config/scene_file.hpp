@@ -125,7 +125,8 @@ std::optional<std::string> off_desktop_note(const Rect& rect, const Rect& deskto
 std::vector<std::string> off_desktop_notes(const Scene& scene, const Rect& desktop);
 
 // The folder of those the service's sandbox hides (ProtectHome=yes in pseudohapticd.service: /home, /root and
-// /run/user) that `path` lies in, or nullopt. Lexical: `path` as the scene file resolved it.
+// /run/user) that `path` lies in, or nullopt. Lexical: `path` made absolute against the working folder, as the
+// scene file resolved it, links not followed.
 std::optional<std::string_view> hidden_from_the_service(const std::filesystem::path& path);
 
 // One line per region and map that lies where the service cannot read it (hidden_from_the_service), "FILE:LINE:

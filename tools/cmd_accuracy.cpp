@@ -84,6 +84,7 @@
 #include "core/lab/map_storage.hpp"
 #include "core/lab/surfaces.hpp"
 #include "tools/commands.hpp"
+#include "tools/csv_file.hpp"
 #include "tools/measured.hpp"
 
 namespace ph::tools {

@@ -23,6 +23,7 @@
 #include "core/lab/stability.hpp"
 #include "tools/commands.hpp"
 #include "tools/csv_cell.hpp"
+#include "tools/csv_file.hpp"
 #include "tools/measured.hpp"
 
 namespace ph::tools {

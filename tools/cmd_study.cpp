@@ -10,7 +10,6 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -20,6 +19,7 @@
 #include "core/lab/study.hpp"
 #include "core/lab/study_stats.hpp"
 #include "tools/commands.hpp"
+#include "tools/csv_file.hpp"
 #include "tools/finite_check.hpp"
 #include "tools/study_techniques.hpp"
 
@@ -72,10 +72,9 @@ const PaperNumber* paper_number(const std::string& technique, const GroupSummary
 std::string cell(double v, int decimals) { return std::isfinite(v) ? fmt::format("{:.{}f}", v, decimals) : ""; }
 
 void write_file(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
-  out.close();
-  if (!out) throw std::runtime_error(path.string() + ": write failed");
+  CsvFile file(path);
+  file.write(text);
+  file.close();
 }
 
 std::vector<StudyTechnique> chosen_techniques(const StudyOptions& o) {

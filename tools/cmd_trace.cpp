@@ -3,11 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
-#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -21,6 +17,7 @@
 #include "core/lab/stroke.hpp"
 #include "tools/commands.hpp"
 #include "tools/csv_cell.hpp"
+#include "tools/csv_file.hpp"
 #include "tools/map_flags.hpp"
 
 namespace ph::tools {
@@ -157,18 +154,12 @@ int run_trace(const TraceOptions& o) {
   check_stroke_options(o);
   stroke.motor_step_px = o.step ? *o.step : o.speed ? *o.speed / o.rate : 1.0;
 
-  std::FILE* file = o.output == "-" ? stdout : std::fopen(o.output.c_str(), "w");
-  if (file == nullptr)
-    throw std::runtime_error(fmt::format("{}: cannot open for writing: {}", o.output, std::strerror(errno)));
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> closer(file == stdout ? nullptr : file, &std::fclose);
-  const std::string name = o.output == "-" ? "<stdout>" : o.output;
-
+  CsvFile file(o.output);
   fmt::memory_buffer out;
   fmt::format_to(std::back_inserter(out),
                  "frame,x,y,texel_x,texel_y,cos_alpha,delta_beta_deg,kmax,kmin,dh,cd,region\n");
   auto flush = [&] {
-    if (std::fwrite(out.data(), 1, out.size(), file) != out.size())
-      throw std::runtime_error(fmt::format("{}: write failed: {}", name, std::strerror(errno)));
+    file.write({out.data(), out.size()});
     out.clear();
   };
   const StrokeResult result = run_stroke(scene, stroke, [&](std::size_t frame, const StepRecord& s) {
@@ -183,10 +174,7 @@ int run_trace(const TraceOptions& o) {
     if (out.size() > (1 << 16)) flush();
   });
   flush();
-  if (std::fflush(file) != 0 || std::ferror(file) != 0)
-    throw std::runtime_error(fmt::format("{}: write failed: {}", name, std::strerror(errno)));
-  if (file != stdout && std::fclose(closer.release()) != 0)
-    throw std::runtime_error(fmt::format("{}: write failed: {}", name, std::strerror(errno)));
+  file.close();
   fmt::print(stderr, "{} frames, cursor ended at ({:.3f}, {:.3f}), C/D range [{:.4g}, {:.4g}]{}\n", result.frames,
              result.end.position.x, result.end.position.y, result.cd_min, result.cd_max,
              result.reached ? "" : " (stopped before the end point)");
