@@ -154,6 +154,7 @@ std::string ControlServer::answer(int fd, const std::string& line, ControlHandle
     return control::format_ok();
   }
   if (const auto* l = std::get_if<control::LayoutRequest>(&request)) {
+    layout_fd_ = fd;
     handler.layout(l->desktop);
     return control::format_ok();
   }
@@ -187,6 +188,10 @@ void ControlServer::drop(int fd, ControlHandler& handler) {
     helper_fd_ = -1;
     log_.info("control socket: the session helper went away");
     handler.helper_changed(false);
+  }
+  if (fd == layout_fd_) {
+    layout_fd_ = -1;
+    handler.layout_source_gone();
   }
   clients_.erase(fd);
 }

@@ -25,6 +25,9 @@ class ControlHandler {
   // otherwise a user's explicit `pseudohaptic cursor --set`.
   virtual void position(Vec2 position, bool from_helper) = 0;
   virtual void layout(Rect desktop) = 0;
+  // The connection that sent the last layout has closed (the session ended, the helper stopped): nothing keeps
+  // that layout up to date any more.
+  virtual void layout_source_gone() = 0;
   virtual void helper_changed(bool present) = 0;
   // An application that reads raw relative motion (a game holding a pointer grab) has the focus: the
   // mice's frames go unchanged through relative devices until it is off again.
@@ -76,6 +79,7 @@ class ControlServer {
   UniqueFd listener_;
   std::map<int, std::unique_ptr<Client>> clients_;
   int helper_fd_ = -1;
+  int layout_fd_ = -1;  // the connection that sent the last layout (a helper, or a layout-only one)
 };
 
 // The socket's path: `--control` if given, else $RUNTIME_DIRECTORY/control under systemd, else

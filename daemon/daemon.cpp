@@ -661,13 +661,35 @@ void Daemon::layout(Rect desktop) {
     return;
   }
   helper_desktop_ = desktop;
+  helper_desktop_kept_up_ = true;
   change_desktop(desktop, "from the session helper");
 }
 
-// desktop = "auto" without a session helper: the connected displays, read again when DRM says they changed (the
-// helper's layout, where there is one, knows the arrangement, which sysfs does not).
+void Daemon::layout_source_gone() {
+  helper_desktop_kept_up_ = false;
+  if (helper_desktop_ && !config_.settings.desktop)
+    log_.info(
+        "the session helper's layout {}x{}+{}+{} stays until the connected displays change (the connection "
+        "that gave it has closed)",
+        helper_desktop_->w, helper_desktop_->h, helper_desktop_->x, helper_desktop_->y);
+}
+
+// desktop = "auto": the connected displays, read again when DRM says they changed. The session helper's layout
+// knows the arrangement, which sysfs does not, so it stays while the helper that gave it is connected (and reports
+// the change itself) and, once it has gone, until the displays change: after a logout nothing else would tell the
+// daemon that a monitor was unplugged, and the cursor would stay bounded by a desktop that is no longer there.
 void Daemon::on_displays_changed() {
-  if (config_.settings.desktop || helper_desktop_) return;
+  if (config_.settings.desktop) return;
+  if (helper_desktop_) {
+    if (helper_desktop_kept_up_) {
+      log_.info("the connected displays changed; the session helper's layout stays (the helper reports it)");
+      return;
+    }
+    helper_desktop_.reset();
+    log_.info(
+        "the connected displays changed and the session helper that gave the layout has gone: "
+        "following the displays");
+  }
   std::string no_display;
   const Rect desktop = resolve_desktop(std::nullopt, choice_.drm_dir, no_display);
   if (!no_display.empty() && desktop != config_.pipeline.desktop) log_.warning("{}", no_display);

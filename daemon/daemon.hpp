@@ -78,6 +78,7 @@ class Daemon final : private ControlHandler {
   Vec2 cursor() const override;
   void position(Vec2 position, bool from_helper) override;
   void layout(Rect desktop) override;
+  void layout_source_gone() override;
   void helper_changed(bool present) override;
   void on_displays_changed();
   void change_desktop(Rect desktop, std::string_view why);
@@ -124,7 +125,8 @@ class Daemon final : private ControlHandler {
   const Logger& log_;
   const ServiceNotifier& notifier_;
   Configuration config_;
-  std::optional<Rect> helper_desktop_;  // the session helper's layout, over `desktop = "auto"`
+  std::optional<Rect> helper_desktop_;   // the session helper's layout, over `desktop = "auto"`
+  bool helper_desktop_kept_up_ = false;  // the connection that gave it is open, and reports changes
   std::unique_ptr<Pipeline> pipeline_;
   UdevWatch udev_;
   UniqueFd epoll_, signals_, retry_timer_, watchdog_timer_, resync_timer_, hold_timer_;

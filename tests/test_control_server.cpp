@@ -52,6 +52,7 @@ class RecordingHandler final : public ControlHandler {
     std::lock_guard lock(mutex_);
     desktop_ = d;
   }
+  void layout_source_gone() override { layout_sources_gone_ += 1; }
   void helper_changed(bool present) override { helper_present_ = present; }
   void passthrough(bool on) override { passthrough_ = on; }
   std::atomic<bool> passthrough_{false};
@@ -69,6 +70,7 @@ class RecordingHandler final : public ControlHandler {
     return helper_positions_;
   }
   std::atomic<bool> helper_present_{false};
+  std::atomic<int> layout_sources_gone_{0};
 
  private:
   std::mutex mutex_;
@@ -159,6 +161,41 @@ TEST(ControlServer, AnswersEveryRequestAndQueriesTheHelper) {
   }
   for (int i = 0; i < 100 && server.handler.helper_present_; ++i) std::this_thread::sleep_for(10ms);
   EXPECT_FALSE(server.handler.helper_present_);  // the helper's connection closed
+}
+
+// The daemon keeps a session helper's layout over the connected displays only while the connection that sent it
+// is open: it is told when that connection closes, and only for the connection whose layout is the latest.
+TEST(ControlServer, SaysWhenTheConnectionThatGaveTheLayoutCloses) {
+  const ScratchDir dir("control");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  ServerLoop server(path, sessions);
+  auto wait_for_gone = [&](int count) {
+    for (int i = 0; i < 200 && server.handler.layout_sources_gone_ < count; ++i) std::this_thread::sleep_for(10ms);
+    return server.handler.layout_sources_gone_.load();
+  };
+  {
+    control::Client tool(path);  // a client that sends no layout
+    EXPECT_TRUE(tool.request("status").ok);
+  }
+  {
+    control::Client layout_only(path);  // as the helper on a Wayland desktop that gives no pointer
+    ASSERT_TRUE(layout_only.request("layout 0 0 1600 900").ok);
+    control::Client tool(path);
+    EXPECT_TRUE(tool.request("status").ok);
+  }
+  EXPECT_EQ(wait_for_gone(1), 1);
+  control::Client first(path);
+  ASSERT_TRUE(first.request("helper test").ok);
+  ASSERT_TRUE(first.request("layout 0 0 1280 800").ok);
+  {
+    control::Client second(path);  // a restarted session's helper: its layout is the latest
+    ASSERT_TRUE(second.request("layout 0 0 1920 1080").ok);
+    EXPECT_EQ(server.handler.desktop(), (Rect{0, 0, 1920, 1080}));
+  }
+  EXPECT_EQ(wait_for_gone(2), 2);
+  std::this_thread::sleep_for(50ms);
+  EXPECT_EQ(server.handler.layout_sources_gone_, 2);  // the older layout's connection is still open, and not told of
 }
 
 // A second daemon started beside a running one (`sudo pseudohapticd` while the service runs) must not take the

@@ -26,6 +26,7 @@
 #include "config/desktop_geometry.hpp"
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
+#include "control/client.hpp"
 #include "core/engine/default_scene.hpp"
 #include "core/engine/pipeline.hpp"
 #include "core/engine/targets.hpp"
@@ -287,31 +288,79 @@ void check_default_scene_layout() {
   pass(step, fmt::format("{} ({})", line, no_display.empty() ? "DRM connectors read in the sandbox" : no_display));
 }
 
-// A monitor unplugged and plugged in again, without a session helper: the connector forced off (as the kernel's
-// sysfs lets root do) and back to detection, each followed by the DRM device's change event (which udev also sends
-// for a real plug). The daemon, with desktop = "auto", reads the displays again and lays its default scene out anew.
-void check_display_hotplug() {
-  const std::string step = "a display unplugged and plugged in again: the daemon follows the connected displays";
-  std::string connector;
+// The connector the VM's display is on, and the command that forces it `off` or back to `detect` (as the kernel's
+// sysfs lets root do) followed by the DRM device's change event (which udev also sends for a real plug).
+struct Connector {
+  std::string path;  // /sys/class/drm/card0-Virtual-1
+  std::string hotplug(std::string_view state) const {
+    const std::string card = path.substr(0, path.find('-'));  // /sys/class/drm/card0
+    return fmt::format("echo {} > {}/status && echo change > {}/uevent", state, path, card);
+  }
+};
+
+Connector connected_connector(const std::string& step) {
   for (const auto& entry : std::filesystem::directory_iterator(ph::kDrmDir)) {
     std::ifstream status(entry.path() / "status");
     std::string state;
-    if (status >> state && state == "connected") connector = entry.path().string();
+    if (status >> state && state == "connected") return {entry.path().string()};
   }
-  if (connector.empty()) throw Fatal(step + ": no connected connector under /sys/class/drm");
-  const std::string card = connector.substr(0, connector.find('-'));  // /sys/class/drm/card0
+  throw Fatal(step + ": no connected connector under /sys/class/drm");
+}
+
+std::string displays_changed_line() {
+  std::string no_display;
+  const ph::Rect desktop = ph::resolve_desktop(std::nullopt, ph::kDrmDir, no_display);
+  return fmt::format("desktop {}x{}+{}+{} (the connected displays changed)", desktop.w, desktop.h, desktop.x,
+                     desktop.y);
+}
+
+// A monitor unplugged and plugged in again, without a session helper: the daemon, with desktop = "auto", reads the
+// displays again and lays its default scene out anew.
+void check_display_hotplug() {
+  const std::string step = "a display unplugged and plugged in again: the daemon follows the connected displays";
+  const Connector connector = connected_connector(step);
   std::vector<std::string> lines;
   for (const char* state : {"off", "detect"}) {
     const std::string before = journal();
-    must_run(fmt::format("echo {} > {}/status && echo change > {}/uevent", state, connector, card));
+    must_run(connector.hotplug(state));
     std::string no_display;
     const ph::Rect desktop = ph::resolve_desktop(std::nullopt, ph::kDrmDir, no_display);
-    lines.push_back(expect_journal(before, fmt::format("desktop {}x{}+{}+{} (the connected displays changed)",
-                                                       desktop.w, desktop.h, desktop.x, desktop.y)));
+    lines.push_back(expect_journal(before, displays_changed_line()));
     lines.push_back(expect_journal(before, "the embedded default scene laid out again for it: " +
                                                ph::default_scene_places(ph::default_scene(desktop))));
   }
-  pass(step, fmt::format("{}: journal \"{}\"", connector, fmt::join(lines, "\", \"")));
+  pass(step, fmt::format("{}: journal \"{}\"", connector.path, fmt::join(lines, "\", \"")));
+}
+
+// A session helper's layout knows how the displays are arranged, which sysfs does not: while the connection that
+// gave it is open, a display change is the helper's to report. Once it has closed (the user logged out), the next
+// change is followed from the displays again; before, the helper's desktop stayed until the daemon restarted, and
+// the cursor at the login screen was bounded by screens that were gone.
+void check_display_hotplug_after_the_helper() {
+  const std::string step = "a session helper's layout, kept while it is connected, then the displays followed again";
+  const Connector connector = connected_connector(step);
+  std::vector<std::string> lines;
+  std::string before = journal();
+  {
+    // Layout only, as the helper sends on a Wayland desktop that gives no pointer position.
+    ph::control::Client helper{std::string(ph::control::kDefaultSocket)};
+    const ph::control::Reply reply = helper.request("layout 0 0 1000 700");
+    if (!reply.ok) throw Fatal(step + ": the layout was refused: " + reply.text);
+    lines.push_back(expect_journal(before, "desktop 1000x700+0+0 (from the session helper)"));
+    before = journal();
+    must_run(connector.hotplug("off"));
+    lines.push_back(expect_journal(before, "the session helper's layout stays"));
+    const std::optional<ph::control::Status> status = ph::control::parse_status(helper.request("status").text);
+    if (!status || status->desktop != ph::Rect{0, 0, 1000, 700})
+      throw Fatal(step + ": the daemon left the helper's layout while the helper was connected");
+    before = journal();
+  }
+  lines.push_back(expect_journal(before, "stays until the connected displays change"));
+  before = journal();
+  must_run(connector.hotplug("detect"));
+  lines.push_back(expect_journal(before, "following the displays"));
+  lines.push_back(expect_journal(before, displays_changed_line()));
+  pass(step, fmt::format("journal \"{}\"", fmt::join(lines, "\", \"")));
 }
 
 }  // namespace
@@ -323,6 +372,7 @@ int main(int argc, char** argv) {
     check_sandbox();
     check_default_scene_layout();
     check_display_hotplug();
+    check_display_hotplug_after_the_helper();
     const UeventMonitor uevents;
 
     // A scene file, applied by `systemctl reload` (the install ran the embedded default scene).
