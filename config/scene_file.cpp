@@ -5,6 +5,7 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
@@ -568,22 +569,27 @@ namespace {
 // Said after a file the service could not open where its sandbox hides the folder: to the service the folder is
 // there but cannot be entered (Permission denied), or empty.
 std::string service_hint(const std::filesystem::path& path) {
-  const std::optional<std::string_view> hidden = hidden_from_the_service(path);
+  const std::optional<HiddenFolder> hidden = hidden_from_the_service(path);
   if (!hidden) return "";
   return fmt::format(
-      " ({} is hidden from pseudohapticd.service, ProtectHome=yes: keep scene files and images under "
+      " ({} is hidden from pseudohapticd.service, {}: keep scene files and images under "
       "/etc/pseudohaptic or /usr/local/share)",
-      *hidden);
+      hidden->folder, hidden->setting);
 }
 
 }  // namespace
 
-std::optional<std::string_view> hidden_from_the_service(const std::filesystem::path& path) {
+std::optional<HiddenFolder> hidden_from_the_service(const std::filesystem::path& path) {
+  static constexpr std::array<HiddenFolder, 5> kHidden = {{{"/home", "ProtectHome=yes"},
+                                                           {"/root", "ProtectHome=yes"},
+                                                           {"/run/user", "ProtectHome=yes"},
+                                                           {"/tmp", "PrivateTmp=yes"},
+                                                           {"/var/tmp", "PrivateTmp=yes"}}};
   std::error_code ignored;
   const std::filesystem::path normal = std::filesystem::absolute(path, ignored).lexically_normal();
-  for (const std::string_view folder : {"/home", "/root", "/run/user"}) {
-    const std::filesystem::path inside = normal.lexically_relative(std::filesystem::path(folder));
-    if (!inside.empty() && *inside.begin() != "..") return folder;
+  for (const HiddenFolder& hidden : kHidden) {
+    const std::filesystem::path inside = normal.lexically_relative(std::filesystem::path(hidden.folder));
+    if (!inside.empty() && *inside.begin() != "..") return hidden;
   }
   return std::nullopt;
 }
@@ -594,13 +600,13 @@ std::vector<std::string> service_path_warnings(const SceneSpec& spec) {
     for (const auto& [key, map] :
          {std::pair{"normal_map", r.sources.normal_map}, std::pair{"depth_map", r.sources.depth_map}}) {
       if (!map) continue;
-      const std::optional<std::string_view> hidden = hidden_from_the_service(*map);
+      const std::optional<HiddenFolder> hidden = hidden_from_the_service(*map);
       if (!hidden) continue;
       out.push_back(
           fmt::format("{}:{}: region '{}': {} {} lies under {}, which pseudohapticd.service cannot read "
-                      "(ProtectHome=yes; the daemon run by hand can): keep the images under "
+                      "({}; the daemon run by hand can): keep the images under "
                       "/etc/pseudohaptic or /usr/local/share",
-                      spec.file.string(), r.line, r.name, key, map->string(), *hidden));
+                      spec.file.string(), r.line, r.name, key, map->string(), hidden->folder, hidden->setting));
     }
   }
   return out;

@@ -124,10 +124,18 @@ std::optional<std::string> off_desktop_note(const Rect& rect, const Rect& deskto
 // text: for a desktop learnt while running (the displays, the session helper's layout, a replay's --desktop).
 std::vector<std::string> off_desktop_notes(const Scene& scene, const Rect& desktop);
 
-// The folder of those the service's sandbox hides (ProtectHome=yes in pseudohapticd.service: /home, /root and
-// /run/user) that `path` lies in, or nullopt. Lexical: `path` made absolute against the working folder, as the
-// scene file resolved it, links not followed.
-std::optional<std::string_view> hidden_from_the_service(const std::filesystem::path& path);
+// A folder the service's sandbox hides, and the setting of pseudohapticd.service that hides it.
+struct HiddenFolder {
+  std::string_view folder;   // "/home"
+  std::string_view setting;  // "ProtectHome=yes"
+  bool operator==(const HiddenFolder&) const = default;
+};
+
+// The folder of those the service's sandbox hides that `path` lies in, or nullopt: /home, /root and /run/user
+// (ProtectHome=yes: there but empty or not to be entered), /tmp and /var/tmp (PrivateTmp=yes: the service has its
+// own, empty). Lexical: `path` made absolute against the working folder, as the scene file resolved it, links not
+// followed.
+std::optional<HiddenFolder> hidden_from_the_service(const std::filesystem::path& path);
 
 // One line per region and map that lies where the service cannot read it (hidden_from_the_service), "FILE:LINE:
 // region 'NAME': " and the map, the folder and where to keep images instead; none where every map can be read.

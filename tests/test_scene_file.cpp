@@ -379,8 +379,7 @@ TEST(SceneFileErrors, RegionMustBeAnArrayOfTables) {
 }
 
 TEST(SceneFileErrors, MissingSceneFileIsNamed) {
-  ScratchDir dir;
-  const fs::path missing = dir / "nope.toml";
+  const fs::path missing = "/ph-test-no-such-folder/nope.toml";  // not where the service's sandbox hides files
   try {
     parse_scene_file(missing);
     ADD_FAILURE() << "no ConfigError";
@@ -391,16 +390,23 @@ TEST(SceneFileErrors, MissingSceneFileIsNamed) {
   }
 }
 
-// pseudohapticd.service hides /home, /root and /run/user (ProtectHome=yes): a scene that works by hand and in
-// check-config fails under the service, where its files are simply not there. Both are said.
+// pseudohapticd.service hides /home, /root and /run/user (ProtectHome=yes), and has a /tmp and /var/tmp of its own
+// (PrivateTmp=yes): a scene that works by hand and in check-config fails under the service, where its files are
+// simply not there. Both are said.
 TEST(SceneFileErrors, FilesTheServiceCannotReadAreWarnedOfAndNamedWhenMissing) {
-  EXPECT_EQ(hidden_from_the_service("/home/ann/maps/n.png"), "/home");
-  EXPECT_EQ(hidden_from_the_service("/root/n.png"), "/root");
-  EXPECT_EQ(hidden_from_the_service("/run/user/1000/n.png"), "/run/user");
-  EXPECT_EQ(hidden_from_the_service("/home/../etc/pseudohaptic/n.png"), std::nullopt);
-  for (const char* readable :
-       {"/homework/n.png", "/run/udev/n.png", "/etc/pseudohaptic/n.png", "/usr/local/share/n.png"})
-    EXPECT_EQ(hidden_from_the_service(readable), std::nullopt) << readable;
+  const auto folder = [](const char* path) {
+    const std::optional<HiddenFolder> hidden = hidden_from_the_service(path);
+    return hidden ? std::string(hidden->folder) + " " + std::string(hidden->setting) : std::string("readable");
+  };
+  EXPECT_EQ(folder("/home/ann/maps/n.png"), "/home ProtectHome=yes");
+  EXPECT_EQ(folder("/root/n.png"), "/root ProtectHome=yes");
+  EXPECT_EQ(folder("/run/user/1000/n.png"), "/run/user ProtectHome=yes");
+  EXPECT_EQ(folder("/tmp/maps/n.png"), "/tmp PrivateTmp=yes");
+  EXPECT_EQ(folder("/var/tmp/n.png"), "/var/tmp PrivateTmp=yes");
+  EXPECT_EQ(folder("/home/../etc/pseudohaptic/n.png"), "readable");
+  for (const char* readable : {"/homework/n.png", "/run/udev/n.png", "/etc/pseudohaptic/n.png",
+                               "/usr/local/share/n.png", "/tmpfs/n.png", "/var/lib/n.png"})
+    EXPECT_EQ(folder(readable), "readable") << readable;
 
   const std::string missing_home = "/home/ph-test-no-such-user/maps";
   const SceneSpec spec = parse_scene_text(
@@ -429,6 +435,14 @@ TEST(SceneFileErrors, FilesTheServiceCannotReadAreWarnedOfAndNamedWhenMissing) {
     EXPECT_TRUE(contains(e.what(), "No such file or directory (/root is hidden from pseudohapticd.service"))
         << e.what();
   }
+  const std::vector<std::string> in_tmp = service_path_warnings(
+      parse_scene_text("[[region]]\nname = \"tried\"\nwidth = 2\nheight = 2\nnormal_map = \"/tmp/targets/n.png\"\n",
+                       "/etc/pseudohaptic/scene.toml"));
+  ASSERT_EQ(in_tmp.size(), 1u);
+  EXPECT_TRUE(contains(in_tmp[0],
+                       "normal_map /tmp/targets/n.png lies under /tmp, which pseudohapticd.service cannot "
+                       "read (PrivateTmp=yes; the daemon run by hand can)"))
+      << in_tmp[0];
 }
 
 // A region the cursor cannot reach on the configured desktop, wholly or in part, is warned of; with desktop = "auto"
