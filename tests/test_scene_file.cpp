@@ -812,6 +812,33 @@ std::set<std::string, std::less<>> bold_words(std::string_view roff) {
   return words;
 }
 
+// The README's scene file, its three toml blocks ([daemon], a region, its effects) one after the other as a user
+// copies them into one file, is a valid scene: one region with both effects. (Its wells block once set both the
+// isophotes' light and the contours' levels, which the parser refuses.)
+TEST(SceneFileDocs, TheReadmesSceneIsValid) {
+  const std::string readme = read_file_text(PH_README);
+  std::string scene;
+  int blocks = 0;
+  for (std::size_t at = readme.find("```toml\n"); at != std::string::npos; at = readme.find("```toml\n", at)) {
+    at += 8;
+    const std::size_t end = readme.find("```", at);
+    ASSERT_NE(end, std::string::npos);
+    scene += readme.substr(at, end - at);
+    blocks += 1;
+  }
+  ASSERT_EQ(blocks, 3) << "the README's toml blocks changed: check that they still make one scene";
+  SCOPED_TRACE(scene);
+  try {
+    const SceneSpec spec = parse_scene_text(scene, "README.md");
+    ASSERT_EQ(spec.regions.size(), 1u);
+    EXPECT_EQ(spec.regions[0].name, "bump");
+    EXPECT_TRUE(spec.regions[0].materials.has_value());
+    EXPECT_TRUE(spec.regions[0].wells.has_value());
+  } catch (const ConfigError& e) {
+    ADD_FAILURE() << e.what();
+  }
+}
+
 TEST(SceneFileDocs, TheManPageNamesEveryKeyTheParserAllows) {
   const std::set<std::string, std::less<>> documented = bold_words(read_file_text(PH_DAEMON_MAN_PAGE));
   for (const char* table : {"daemon", "region", "curvature", "depth", "hybrid", "materials", "materials.damping",
