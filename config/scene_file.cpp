@@ -323,7 +323,13 @@ void parse_region_engine(const Reporter& rep, const toml::table& t, const std::s
       rep, t, "lut_directions", where, [&] { return e.lut_directions == 8 || e.lut_directions == 16; },
       "must be 8 or 16");
   if (r.engine_auto && e.sampling == Sampling::bilinear) {
-    rep.fail(t.get("sampling"), where + "sampling", "traversal = \"auto\" chooses with nearest sampling");
+    // "auto" chooses among the nearest-sampling variants: a bilinear [daemon] table is the others' default, not
+    // this region's; bilinear asked for in the region itself contradicts it.
+    if (t.get("sampling") != nullptr) {
+      rep.fail(t.get("sampling"), where + "sampling",
+               "traversal = \"auto\" chooses with nearest sampling: set sampling = \"nearest\" or leave it out");
+    }
+    e.sampling = Sampling::nearest;
   }
   if (const std::string problem = validate(e); !problem.empty()) rep.fail(&t, where + "traversal", problem);
   r.engine = e;

@@ -378,6 +378,20 @@ TEST(SceneFileErrors, RegionMustBeAnArrayOfTables) {
   expect_error("region = [{ width = 2, height = 2, normal_map = \"n.png\" }, 3]\n", 1, "region", {"[[region]]"});
 }
 
+// traversal = "auto" chooses among nearest-sampling variants: bilinear asked for in the region is an error at its
+// line; the [daemon] table's bilinear, the other regions' default, does not apply to it.
+TEST(SceneFileErrors, AutoWithBilinearSamplingInTheRegionIsRefusedAndNotInherited) {
+  const std::string region = "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\ntraversal = \"auto\"\n";
+  expect_error(region + "sampling = \"bilinear\"\n", 6, "region[0].sampling",
+               {"chooses with nearest sampling", "set sampling = \"nearest\" or leave it out"});
+  const SceneSpec spec = parse_scene_text("[daemon]\nsampling = \"bilinear\"\n" + region, kOrigin);
+  EXPECT_EQ(spec.daemon.engine.sampling, Sampling::bilinear);
+  ASSERT_EQ(spec.regions.size(), 1u);
+  ASSERT_TRUE(spec.regions[0].engine.has_value());
+  EXPECT_TRUE(spec.regions[0].engine_auto);
+  EXPECT_EQ(spec.regions[0].engine->sampling, Sampling::nearest);
+}
+
 TEST(SceneFileErrors, MissingSceneFileIsNamed) {
   const fs::path missing = "/ph-test-no-such-folder/nope.toml";  // not where the service's sandbox hides files
   try {
