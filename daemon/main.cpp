@@ -27,7 +27,11 @@ int main(int argc, char** argv) {
   app.add_option("-c,--config", config,
                  fmt::format("Scene file (TOML; check it with `pseudohaptic check-config FILE`). Default: {} if it "
                              "exists, else the embedded default scene",
-                             ph::kDefaultSceneFile));
+                             ph::kDefaultSceneFile))
+      // An empty path (a drop-in's unset variable) must not quietly become the default file or the embedded scene.
+      ->check([](const std::string& path) {
+        return path.empty() ? std::string("an empty path; leave -c out for the default") : std::string();
+      });
   app.add_flag("--default-scene", default_scene,
                "Use the embedded default scene (three targets of the curvature paper) and no file")
       ->excludes(app.get_option("--config"));

@@ -2,6 +2,7 @@
 // that neither can gain an option the other does not show.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <array>
@@ -116,6 +117,22 @@ TEST(ManPages, EveryProgramAndPageCarriesTheProjectsVersion) {
                 title.find(fmt::format("\"pseudohaptic {}\"", PH_PROJECT_VERSION)) != std::string::npos)
         << page << ": " << title;
   }
+}
+
+// pseudohapticd(8): a command-line error exits with 100 to 127 before anything starts. `-c ""` (a drop-in whose
+// variable is unset) is one: it used to run the default scene file or the embedded scene without a word.
+TEST(ManPages, TheDaemonRefusesAnEmptySceneFilePathAsTheCommandLineErrorItIs) {
+  FILE* pipe = ::popen(fmt::format("'{}' -c '' --control '' 2>&1", PH_DAEMON_PATH).c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string out;
+  std::array<char, 4096> buffer{};
+  while (const std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
+  const int status = ::pclose(pipe);
+  ASSERT_TRUE(WIFEXITED(status)) << out;
+  EXPECT_GE(WEXITSTATUS(status), 100) << out;
+  EXPECT_LE(WEXITSTATUS(status), 127) << out;
+  EXPECT_NE(out.find("--config: an empty path"), std::string::npos) << out;
+  EXPECT_EQ(out.find("default scene"), std::string::npos) << out;
 }
 
 TEST(ManPages, TheDaemonsPageNamesEveryOption) { expect_page_names_every_option(PH_DAEMON_PATH, PH_DAEMON_MAN_PAGE); }
