@@ -90,8 +90,9 @@ TEST(ManPages, TheToolsPageNamesEveryCommandAndItsOptions) {
   EXPECT_GE(commands.size(), 10u);
   for (const std::string& command : commands) {
     EXPECT_TRUE(names(manual, "\n.B pseudohaptic ", command, "\n")) << command << ": not in pseudohaptic.1's synopsis";
-    EXPECT_TRUE(names(manual, "\n.BI \"", command, " ") || names(manual, "\n.B ", command, "\n"))
-        << command << ": no entry in pseudohaptic.1's COMMANDS";
+    // Each entry a tagged paragraph of its own: without its .TP it runs on in the paragraph before.
+    EXPECT_TRUE(names(manual, "\n.TP\n.BI \"", command, " ") || names(manual, "\n.TP\n.B ", command, "\n"))
+        << command << ": no entry of its own (.TP) in pseudohaptic.1's COMMANDS";
     for (const std::string& option : long_options(output_of(fmt::format("'{}' {} --help", PH_TOOL_PATH, command)))) {
       EXPECT_TRUE(names(manual, "", option, "")) << "pseudohaptic.1 does not name " << command << " " << option;
     }
