@@ -137,6 +137,23 @@ std::vector<std::string> map_notes(const FieldSources& sources, const FieldLoadR
   };
   note("normal map", sources.normal_map, report.normals);
   note("depth map", sources.depth_map, report.depth);
+  // Settings that silently flatten what a map holds. An image of unsigned codes has value_step > 0 (a signed
+  // integer TIFF, whose codes the reader gives as values in [-1, 1], has none).
+  const std::string none = "(none)";
+  if (was_read(report.normals) && sources.normal_options.encoding == NormalEncoding::signed_values &&
+      report.normals.value_step > 0.0) {
+    notes.push_back(
+        fmt::format("normal map {}: normal_encoding = \"signed\" reads this image's unsigned codes as "
+                    "values from 0 to 1, so no normal leans left or up and most of the relief is lost; "
+                    "\"auto\" (or \"unorm\") decodes them as 2c/cmax - 1",
+                    sources.normal_map ? sources.normal_map->string() : none));
+  }
+  if (was_read(report.depth) && sources.depth_options.relief_px == 0.0) {
+    notes.push_back(
+        fmt::format("depth map {}: relief_px = 0 makes every height 0: what reads the heights feels the "
+                    "region flat",
+                    sources.depth_map ? sources.depth_map->string() : none));
+  }
   return notes;
 }
 

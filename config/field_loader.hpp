@@ -42,7 +42,8 @@ std::string map_size_description(const DecodeReport& map, std::int32_t width, st
 
 // What a region of width x height px should say at load of its maps: invalid_texel_notes, then one line per map whose
 // size is out of proportion with the region's, so that its relief is stretched on the screen ("normal map PATH: " and
-// map_size_description's text). For the log, as invalid_texel_notes.
+// map_size_description's text), then settings that flatten a map read (normal_encoding = "signed" on an image of
+// unsigned codes, relief_px = 0). For the log, as invalid_texel_notes.
 std::vector<std::string> map_notes(const FieldSources& sources, const FieldLoadReport& report, std::int32_t width,
                                    std::int32_t height);
 

@@ -227,6 +227,36 @@ TEST(DaemonConfiguration, MapsStretchedOutOfProportionAreWarned) {
                 "2 down");
 }
 
+// Settings that flatten what a map holds are warned of at load: normal_encoding = "signed" on a PNG, whose codes are
+// all >= 0 (no normal leans left or up), and relief_px = 0 on a map whose heights a method reads.
+TEST(DaemonConfiguration, SettingsThatFlattenAMapAreWarned) {
+  const ScratchDir dir("daemon-config-flatten");
+  write_normal_png16(dir / "bump.png", NormalImage(10, 10));
+  write_gray_png16(dir / "heights.png", Grid<float>(10, 10, 0.5f));
+  std::ofstream(dir / "scene.toml") << "[daemon]\ndesktop = [0, 0, 800, 600]\n"
+                                       "[[region]]\nname = \"signed\"\nwidth = 10\nheight = 10\n"
+                                       "normal_map = \"bump.png\"\nnormal_encoding = \"signed\"\n"
+                                       "[[region]]\nname = \"unorm\"\nx = 20\nwidth = 10\nheight = 10\n"
+                                       "normal_map = \"bump.png\"\nnormal_encoding = \"unorm\"\n"
+                                       "[[region]]\nname = \"level\"\nx = 40\nwidth = 10\nheight = 10\n"
+                                       "method = \"depth\"\ndepth_map = \"heights.png\"\nrelief_px = 0\n";
+  const Configuration c = load_configuration(choice_in(dir));
+  std::string all;
+  for (const std::string& w : c.warnings) all += w + "\n";
+  ASSERT_EQ(c.warnings.size(), 2u) << all;
+  const std::string scene = (dir / "scene.toml").string();
+  EXPECT_EQ(c.warnings[0].rfind(scene + ":3: region 'signed': normal map " + (dir / "bump.png").string() +
+                                    ": normal_encoding = \"signed\" reads this image's unsigned codes",
+                                0),
+            0u)
+      << all;
+  EXPECT_EQ(c.warnings[1].rfind(scene + ":16: region 'level': depth map " + (dir / "heights.png").string() +
+                                    ": relief_px = 0 makes every height 0",
+                                0),
+            0u)
+      << all;
+}
+
 // A region off the configured desktop is logged at load (config/scene_file.hpp, desktop_warnings).
 TEST(DaemonConfiguration, ARegionOffTheDesktopIsWarned) {
   const ScratchDir dir("daemon-config-off");
