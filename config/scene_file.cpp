@@ -744,6 +744,35 @@ std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scen
 
 namespace {
 
+// Whether a nearest-pattern field holds no pattern texel: every texel is kNoPattern, including those on the pattern
+// itself, which are (0, 0).
+bool pattern_is_empty(const PatternField& field) {
+  return std::all_of(field.offsets.values.begin(), field.offsets.values.end(),
+                     [](const PatternOffset& o) { return o.dx == kNoPatternComponent; });
+}
+
+}  // namespace
+
+std::vector<std::string> effect_warnings(const SceneSpec& spec, const Scene& scene) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < spec.regions.size() && i < scene.regions().size(); ++i) {
+    const RegionSpec& r = spec.regions[i];
+    for (const EffectPtr& effect : scene.regions()[i].effects) {
+      const auto* wells = dynamic_cast<const WellsEffect*>(effect.get());
+      if (wells == nullptr || !pattern_is_empty(wells->field())) continue;
+      const std::string why = wells->params().pattern == WellPattern::contours
+                                  ? "no contour level lies within the region's heights (check levels against the "
+                                    "depth map's heights, (v - depth_zero) * relief_px)"
+                                  : "no texel's normal lies on the isophote (check light and cos_alpha)";
+      out.push_back(fmt::format("{}:{}: region '{}': wells: {}, so the pattern is empty and the wells do nothing",
+                                spec.file.string(), r.line, r.name, why));
+    }
+  }
+  return out;
+}
+
+namespace {
+
 // The width and height of the part of `a` that lies inside `b` (0 where they do not meet).
 std::pair<std::int64_t, std::int64_t> overlap(const Rect& a, const Rect& b) {
   const auto along = [](std::int64_t a0, std::int64_t an, std::int64_t b0, std::int64_t bn) {

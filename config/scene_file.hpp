@@ -115,6 +115,10 @@ std::optional<ReliefScale> relief_scale(const RegionSpec& region, const RegionFi
 // relief_px would make them agree; none where they agree.
 std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scene& scene);
 
+// One line per region whose gravity wells found no pattern texel (contour levels outside the heights, an isophote no
+// normal meets), "FILE:LINE: region 'NAME': wells: ..." and what to check: such wells do nothing. None otherwise.
+std::vector<std::string> effect_warnings(const SceneSpec& spec, const Scene& scene);
+
 // Where a region of `rect` lies wholly or partly off `desktop`: "at X,Y (WxH px) lies outside the desktop X,Y WxH px:
 // the cursor never reaches it, ..." or "at X,Y (WxH px): only WxH px of it lie on the desktop ..."; nullopt where
 // all of it lies on the desktop.

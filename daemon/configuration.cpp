@@ -49,6 +49,7 @@ Configuration load_configuration(const ConfigChoice& choice) {
     // (docs/METHODS.md, "Screen, regions and fields").
     for (std::string& warning : map_warnings(spec, report)) c.warnings.push_back(std::move(warning));
     for (std::string& warning : relief_scale_warnings(spec, *c.scene)) c.warnings.push_back(std::move(warning));
+    for (std::string& warning : effect_warnings(spec, *c.scene)) c.warnings.push_back(std::move(warning));
     for (std::string& warning : desktop_warnings(spec)) c.warnings.push_back(std::move(warning));
     c.settings = spec.daemon;
     c.source = file->string();

@@ -257,6 +257,34 @@ TEST(DaemonConfiguration, SettingsThatFlattenAMapAreWarned) {
       << all;
 }
 
+// Gravity wells whose pattern is empty do nothing: contour levels that miss the heights (a relief_px off by ten) are
+// warned of at load; levels within them are not.
+TEST(DaemonConfiguration, WellsWithAnEmptyPatternAreWarned) {
+  const ScratchDir dir("daemon-config-wells");
+  Grid<float> ramp(20, 20, 0.0f);
+  for (std::int32_t y = 0; y < 20; ++y)
+    for (std::int32_t x = 0; x < 20; ++x) ramp.at(x, y) = static_cast<float>(x) / 19.0f;
+  write_gray_png16(dir / "ramp.png", ramp);
+  const auto region = [](const char* name, int x, const char* levels) {
+    return fmt::format(
+        "\n[[region]]\nname = \"{}\"\nx = {}\nwidth = 20\nheight = 20\nmethod = \"depth\"\n"
+        "depth_map = \"ramp.png\"\nrelief_px = 10\n[region.wells]\npattern = \"contours\"\nlevels = {}\n",
+        name, x, levels);
+  };
+  std::ofstream(dir / "scene.toml") << "[daemon]\ndesktop = [0, 0, 800, 600]\n"
+                                    << region("missed", 0, "[50.0, 90.0]") << region("met", 40, "[4.5]");
+  const Configuration c = load_configuration(choice_in(dir));
+  std::string all;
+  for (const std::string& w : c.warnings) all += w + "\n";
+  ASSERT_EQ(c.warnings.size(), 1u) << all;
+  EXPECT_EQ(c.warnings[0].rfind((dir / "scene.toml").string() +
+                                    ":4: region 'missed': wells: no contour level lies within the region's heights",
+                                0),
+            0u)
+      << all;
+  EXPECT_NE(c.warnings[0].find("the wells do nothing"), std::string::npos) << all;
+}
+
 // A region off the configured desktop is logged at load (config/scene_file.hpp, desktop_warnings).
 TEST(DaemonConfiguration, ARegionOffTheDesktopIsWarned) {
   const ScratchDir dir("daemon-config-off");
