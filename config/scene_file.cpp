@@ -380,8 +380,14 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
     rep.fail(t.get("method"), where + "method",
              fmt::format("unknown method '{}' (allowed: {})", r.method, methods.names()));
 
-  if (auto p = get_string(rep, t, "normal_map", where)) r.sources.normal_map = resolve(base_dir, *p);
-  if (auto p = get_string(rep, t, "depth_map", where)) r.sources.depth_map = resolve(base_dir, *p);
+  for (const auto& [key, map] :
+       {std::pair{"normal_map", &r.sources.normal_map}, std::pair{"depth_map", &r.sources.depth_map}}) {
+    const std::optional<std::string> path = get_string(rep, t, key, where);
+    if (!path) continue;
+    // Resolved against the scene file's folder, "" would name that folder: said here, at its line.
+    if (path->empty()) rep.fail(t.get(key), where + key, "must be the path of an image file, not empty");
+    *map = resolve(base_dir, *path);
+  }
   const std::string green = get_string(rep, t, "normal_green", where).value_or("opengl");
   if (green == "opengl") {
     r.sources.normal_options.green = GreenConvention::opengl;
@@ -662,6 +668,14 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
     }
     if (r.wells) needs = joined(needs, wells_needs(*r.wells));
     FieldLoadReport field_report;
+    for (const auto& [key, map] :
+         {std::pair{"normal_map", r.sources.normal_map}, std::pair{"depth_map", r.sources.depth_map}}) {
+      std::error_code ignored;
+      if (map && std::filesystem::is_directory(*map, ignored)) {
+        throw ConfigError(fmt::format("{}:{}: region '{}': {} {}: is a folder, not an image file", spec.file.string(),
+                                      r.line, r.name, key, map->string()));
+      }
+    }
     try {
       region.fields = fields_from.load_fields(r.sources, r.rect.w, r.rect.h, needs, field_report);
       // Effects keep what they precompute (a class map, a nearest-pattern field), not the fields.

@@ -392,6 +392,28 @@ TEST(SceneFileErrors, AutoWithBilinearSamplingInTheRegionIsRefusedAndNotInherite
   EXPECT_EQ(spec.regions[0].engine->sampling, Sampling::nearest);
 }
 
+// A map's path that is empty, or a folder, is said as such at its line: "" used to resolve to the scene file's own
+// folder and reach the image reader, which said "ImageInput::create() called with no filename" or could not find "a
+// format reader".
+TEST(SceneFileErrors, AnEmptyMapPathOrAFolderIsSaidAsSuch) {
+  expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"\"\n", 4, "region[0].normal_map",
+               {"must be the path of an image file, not empty"});
+  expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\ndepth_map = \"\"\n", 5,
+               "region[0].depth_map", {"not empty"});
+  const ScratchDir dir("scene-folder-map");
+  std::filesystem::create_directories(dir / "maps");
+  const SceneSpec spec =
+      parse_scene_text("[[region]]\nname = \"r\"\nwidth = 2\nheight = 2\nnormal_map = \"maps\"\n", dir / "scene.toml");
+  try {
+    load_scene(spec);
+    ADD_FAILURE() << "no ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_TRUE(contains(e.what(), (dir / "scene.toml").string() + ":1: region 'r': normal_map " +
+                                       (dir / "maps").string() + ": is a folder, not an image file"))
+        << e.what();
+  }
+}
+
 TEST(SceneFileErrors, MissingSceneFileIsNamed) {
   const fs::path missing = "/ph-test-no-such-folder/nope.toml";  // not where the service's sandbox hides files
   try {
