@@ -23,6 +23,19 @@ std::pair<std::string, std::vector<std::vector<std::string>>> read_csv_rows(cons
   return {table.header, std::move(table.rows)};
 }
 
+// A folder in the way of a result file fails the run before it measures (the whole run takes minutes), naming it,
+// and writes none of the three files.
+TEST(ToolAccuracy, AFolderInTheWayFailsBeforeTheMeasuring) {
+  ScratchDir dir;
+  const fs::path out = dir / "acc";
+  fs::create_directories(out / "fig2_grid.csv");
+  const ToolResult r = run_tool("accuracy --small " + quote(out), dir);
+  EXPECT_EQ(r.rc, 1) << r.err;
+  EXPECT_NE(r.err.find((out / "fig2_grid.csv").string() + ": is a folder"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("engine variants"), std::string::npos) << "it began measuring: " << r.err;
+  EXPECT_FALSE(fs::exists(out / "variants.csv"));
+}
+
 TEST(ToolAccuracy, SmallRunWritesTheThreeCsvFiles) {
   ScratchDir dir;
   const fs::path out = dir / "acc";

@@ -86,6 +86,7 @@
 #include "tools/commands.hpp"
 #include "tools/csv_file.hpp"
 #include "tools/measured.hpp"
+#include "tools/output_folder.hpp"
 
 namespace ph::tools {
 
@@ -686,7 +687,7 @@ void write_fig2(const fs::path& path) {
 int run_accuracy(const AccuracyOptions& o) {
   const Clock::time_point t_start = Clock::now();
   const fs::path outdir(o.outdir);
-  fs::create_directories(outdir);
+  prepare_output_folder(outdir, {"variants.csv", "fig5_traces.csv", "fig2_grid.csv"});
   const Workload workload = make_workload(o.small);
   fmt::print(stderr, "accuracy: {} shapes, {} strokes, {} engine variants\n", workload.config.targets.size(),
              workload.strokes.size(), workload.engines.size());
