@@ -2,8 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <system_error>
 
 #include "recording/evemu.hpp"
 #include "recording/libinput_record.hpp"
@@ -84,7 +88,14 @@ Recording read_recording(std::istream& in, const std::string& origin, std::size_
 Recording read_recording_file(const std::string& path, std::size_t device_index, RecordingInfo* info) {
   if (path == "-") return read_recording(std::cin, "<stdin>", device_index, info);
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw RecordingError(fmt::format("{}: cannot open", path));
+  if (!in) {
+    const int error = errno;
+    throw RecordingError(fmt::format("{}: cannot open: {}", path, std::strerror(error)));
+  }
+  // A folder opens, and then fails to read with no reason given: said here, as the scene file's reader says it.
+  std::error_code ignored;
+  if (std::filesystem::is_directory(path, ignored))
+    throw RecordingError(fmt::format("{}: is a folder, not a recording", path));
   return read_recording(in, path, device_index, info);
 }
 

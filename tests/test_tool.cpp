@@ -630,6 +630,104 @@ TEST(Tool, TraceFromTo) {
   expect_clean_failure(run_tool("trace --target " + kBump + " --from 3,4 --to 3,4", dir), {"no length"});
 }
 
+// An error found before the first row (a stroke of no length) leaves the output as it was: an earlier trace is not
+// truncated to nothing.
+TEST(Tool, TraceErrorBeforeAnyRowLeavesTheOutputAsItWas) {
+  ScratchDir dir;
+  const fs::path csv = dir / "x.csv";
+  ASSERT_EQ(run_tool("trace --target " + kBump + " -o " + quote(csv), dir).rc, 0);
+  const std::string earlier = read_text(csv);
+  ASSERT_FALSE(earlier.empty());
+  expect_clean_failure(run_tool("trace --target " + kBump + " --from 10,10 --to 10,10 -o " + quote(csv), dir),
+                       {"the stroke has no length"});
+  EXPECT_EQ(read_text(csv), earlier);
+  expect_clean_failure(
+      run_tool("trace --target " + kBump + " --from 10,10 --to 10,10 -o " + quote(dir / "new.csv"), dir),
+      {"the stroke has no length"});
+  EXPECT_FALSE(fs::exists(dir / "new.csv"));
+}
+
+// -o naming a file the trace reads (the scene file, a map it names, a map given as a flag; by another spelling or
+// through a link) is refused before anything is read or written, as replay refuses it.
+TEST(Tool, TraceRefusesToWriteOverItsInput) {
+  ScratchDir dir;
+  const TargetSpec spec = target_named(kBump);
+  const std::vector<fs::path> scenes = write_target_files(dir.path(), {spec});
+  ASSERT_EQ(scenes.size(), 1u);
+  const TargetFilePaths paths = target_file_paths(dir.path(), spec);
+  fs::create_symlink(scenes[0], dir / "link.toml");
+  const std::string scene = "--scene " + quote(scenes[0]);
+  struct Case {
+    std::string args;
+    fs::path output;
+    std::string says;
+  };
+  for (const Case& c :
+       {Case{scene, scenes[0], "is the file --scene reads"},
+        Case{scene, dir / "." / scenes[0].filename(), "is the file --scene reads"},
+        Case{scene, dir / "link.toml", "is the file --scene reads"},
+        Case{scene, paths.normal_map, "is the normal_map of region '" + kBump + "'"},
+        Case{scene, paths.depth_map, "is the depth_map of region '" + kBump + "'"},
+        Case{"--normal-map " + quote(paths.normal_map), paths.normal_map, "is the file --normal-map reads"},
+        Case{"--normal-map " + quote(paths.normal_map) + " --depth-map " + quote(paths.depth_map), paths.depth_map,
+             "is the file --depth-map reads"}}) {
+    SCOPED_TRACE(c.args + " -o " + c.output.string());
+    const std::vector<char> before = read_file_bytes(c.output);
+    ASSERT_FALSE(before.empty());
+    const ToolResult r = run_tool("trace " + c.args + " -o " + quote(c.output), dir);
+    expect_clean_failure(r, {"-o " + c.output.string() + " " + c.says, "write the trace to another file"});
+    EXPECT_EQ(read_file_bytes(c.output), before);
+  }
+  EXPECT_TRUE(fs::is_symlink(dir / "link.toml"));
+}
+
+// The N numbers of ones, "1,1,...".
+std::string ones(std::size_t n) {
+  std::string out;
+  for (std::size_t i = 0; i < n; ++i) out += i == 0 ? "1" : ",1";
+  return out;
+}
+
+// An option of a few numbers ("X,Y") takes one argument, and a wrong count of numbers, an empty one or a word is an
+// error that names the option and the form it expects (CLI11's own said "At Most 2 required but received 4", or
+// took the positional arguments after the option for its numbers). The command line is refused as it is read: no
+// file named need exist, and nothing is written.
+TEST(Tool, CommaOptionsSayTheFormTheyExpect) {
+  ScratchDir dir;
+  const std::string out = quote(dir / "out");
+  struct Option {
+    std::string command, flag, rest;  // the command line: command, the flag and its argument, rest
+    std::string form, words;
+    bool integers = false;
+  };
+  const std::string replay_files = quote(dir / "in.evemu") + " " + out + " --trace " + quote(dir / "t.csv");
+  const std::string inspect_files = out + " --normal-map " + quote(dir / "n.png");
+  const std::string trace = "trace --target " + kBump;
+  const Option options[] = {
+      {"replay", "--start", replay_files, "X,Y", "two numbers separated by a comma"},
+      {"replay", "--desktop", replay_files, "X,Y,W,H", "four integers separated by commas", true},
+      {"inspect", "--size", inspect_files, "W,H", "two integers separated by a comma", true},
+      {"inspect", "--light", inspect_files, "X,Y,Z", "three numbers separated by commas"},
+      {trace, "--from", "-o " + out, "X,Y", "two numbers separated by a comma"},
+      {trace, "--to", "-o " + out, "X,Y", "two numbers separated by a comma"},
+      {trace, "--kmax-limits", "-o " + out, "LO,HI", "two numbers separated by a comma"},
+      {trace, "--kmin-limits", "-o " + out, "LO,HI", "two numbers separated by a comma"},
+      {"cursor", "--set", "--socket " + quote(dir / "socket"), "X,Y", "two numbers separated by a comma"},
+  };
+  for (const Option& o : options) {
+    const std::size_t count = static_cast<std::size_t>(std::count(o.form.begin(), o.form.end(), ',')) + 1;
+    std::vector<std::string> wrong = {ones(count - 1), ones(count + 1), ones(count - 1) + ",x", ones(count - 1) + ",",
+                                      "," + ones(count - 1)};
+    if (o.integers) wrong.push_back(ones(count - 1) + ",1.5");
+    for (const std::string& value : wrong) {
+      const std::string command = o.command + " " + o.flag + " " + value + " " + o.rest;
+      SCOPED_TRACE(command);
+      expect_clean_failure(run_tool(command, dir), {o.flag + ": expected " + o.form + " (" + o.words + ")"});
+      EXPECT_FALSE(fs::exists(dir / "out"));
+    }
+  }
+}
+
 // Eq. 1-3 from a row's own cells (the values are printed to 6 significant digits).
 void expect_eq2(const Csv& csv, std::size_t i, double kmax_lo, double kmax_hi, double kmin_lo, double kmin_hi) {
   SCOPED_TRACE("row " + std::to_string(i));

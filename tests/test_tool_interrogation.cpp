@@ -11,6 +11,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "config/field_loader.hpp"
 #include "config/image_io.hpp"
@@ -126,13 +127,18 @@ TEST(ToolInterrogation, InspectWritesPicturesWhoseClassColoursMatchTheClassMap) 
   for (std::size_t n : seen) EXPECT_GT(n, 0u) << "every class appears on the bump";
 }
 
-TEST(ToolInterrogation, InspectOptionsAndErrors) {
-  ScratchDir dir;
+// A saddle's depth map, 64 x 64 px, written to `path` (with depth_zero 0.5 and relief_px 16).
+void write_saddle_depth_map(const fs::path& path) {
   const SurfaceSpec saddle{SurfaceKind::simple_saddle, 64};
-  const fs::path depth_map = dir / "saddle.depth.png";
   Grid<float> depth = surface_depth_field(saddle);
   for (float& v : depth.values) v = static_cast<float>(v / (2 * saddle.relief_px()) + 0.5);
-  write_gray_png16(depth_map, depth);
+  write_gray_png16(path, depth);
+}
+
+TEST(ToolInterrogation, InspectOptionsAndErrors) {
+  ScratchDir dir;
+  const fs::path depth_map = dir / "saddle.depth.png";
+  write_saddle_depth_map(depth_map);
   const fs::path out = dir / "out";
   {
     // Depth only, resampled to another size, explicit radius and tolerances.
@@ -175,6 +181,47 @@ TEST(ToolInterrogation, InspectOptionsAndErrors) {
     expect_clean_failure(r, {"--size", "16384"});
     EXPECT_FALSE(fs::exists(dir / "x"));
   }
+}
+
+// --size and --light take their one argument wherever they stand: before OUTDIR with an option after it, CLI11 took
+// OUTDIR for another number ("--size: Value ins not in range").
+TEST(ToolInterrogation, InspectCommaOptionsBeforeOutdirLeaveItAlone) {
+  ScratchDir dir;
+  const fs::path depth_map = dir / "saddle.depth.png";
+  write_saddle_depth_map(depth_map);
+  const fs::path out = dir / "out";
+  const ToolResult r = run_tool("inspect --size 80,40 --light 1,1,2 " + quote(out) + " --depth-map " +
+                                    quote(depth_map) + " --depth-zero 0.5 --relief-px 16",
+                                dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const RawImage k = read_image(out / "K.png");
+  EXPECT_EQ(k.width, 80);
+  EXPECT_EQ(k.height, 40);
+}
+
+// What the computation refuses (a light of no length) fails before any picture is written: no OUTDIR made, and an
+// earlier run's pictures left as they were, not some of them replaced by this run's.
+TEST(ToolInterrogation, InspectChecksEverythingBeforeWritingAnything) {
+  ScratchDir dir;
+  const fs::path depth_map = dir / "saddle.depth.png";
+  write_saddle_depth_map(depth_map);
+  const std::string maps = " --depth-map " + quote(depth_map) + " --depth-zero 0.5 --relief-px 16";
+  const fs::path out = dir / "out";
+  ASSERT_EQ(run_tool("inspect " + quote(out) + maps, dir).rc, 0);
+  std::map<std::string, std::vector<char>> earlier;
+  for (const auto& entry : fs::directory_iterator(out))
+    earlier[entry.path().filename().string()] = read_file_bytes(entry.path());
+  ASSERT_EQ(earlier.size(), 5u);  // K, H, class, isophotes, contours
+
+  const ToolResult r = run_tool("inspect " + quote(out) + maps + " --size 32,32 --light 0,0,0", dir);
+  expect_clean_failure(r, {"the light vector must be finite and non-zero"});
+  std::map<std::string, std::vector<char>> now;
+  for (const auto& entry : fs::directory_iterator(out))
+    now[entry.path().filename().string()] = read_file_bytes(entry.path());
+  EXPECT_TRUE(now == earlier) << "a picture of the failed run was written";
+
+  expect_clean_failure(run_tool("inspect " + quote(dir / "new") + maps + " --light 0,0,0", dir), {"light vector"});
+  EXPECT_FALSE(fs::exists(dir / "new"));
 }
 
 }  // namespace

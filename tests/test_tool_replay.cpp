@@ -331,7 +331,7 @@ TEST(ReplayTool, StartPlacesTheCursorModel) {
   {
     SCOPED_TRACE("a malformed start");
     const ToolResult r = run_tool("replay --start 1 " + quote(in) + " " + quote(dir / "x.evemu"), dir);
-    EXPECT_NE(r.rc, 0);
+    expect_clean_failure(r, {"--start: expected X,Y (two numbers separated by a comma)"});
     EXPECT_FALSE(fs::exists(dir / "x.evemu"));
   }
   {
@@ -340,6 +340,30 @@ TEST(ReplayTool, StartPlacesTheCursorModel) {
     expect_clean_failure(r, {"--start: X and Y must be finite numbers"});
     EXPECT_FALSE(fs::exists(dir / "x.evemu"));
   }
+}
+
+// --start and --desktop take their one argument wherever they stand. Before INPUT and OUTPUT with an option after
+// them, CLI11 took INPUT and OUTPUT for more numbers ("--start: At Most 2 required but received 4"), even from
+// --start=X,Y.
+TEST(ReplayTool, CommaOptionsBeforeThePositionalsLeaveThemAlone) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir, "in.evemu", 100, 3, 0);
+  auto run = [&](const std::string& before, const std::string& out, const std::string& after) {
+    const ToolResult r = run_tool("replay " + before + " " + quote(in) + " " + quote(dir / out) + " " + after, dir);
+    EXPECT_EQ(r.rc, 0) << before << " IN OUT " << after << ": " << r.err;
+  };
+  const std::string options = "--start 385.5,540.5 --desktop 0,0,1920,1080";
+  run("", "after.evemu", options + " --trace " + quote(dir / "after.csv"));
+  run(options, "before.evemu", "--trace " + quote(dir / "before.csv"));
+  run("--start=385.5,540.5 --desktop=0,0,1920,1080", "equals.evemu", "--trace " + quote(dir / "equals.csv"));
+  const std::string replayed = read_text(dir / "after.evemu");
+  EXPECT_NE(replayed, read_text(in));  // from the centre of the Gaussian bump: slowed
+  for (const char* name : {"before", "equals"}) {
+    EXPECT_EQ(read_text(dir / (std::string(name) + ".evemu")), replayed) << name;
+    EXPECT_EQ(read_text(dir / (std::string(name) + ".csv")), read_text(dir / "after.csv")) << name;
+  }
+  run("--start=400,300", "daemon.evemu", "--as-daemon");
+  EXPECT_TRUE(fs::exists(dir / "daemon.evemu"));
 }
 
 // --desktop takes what a scene file's desktop takes: one of 2e9 px gave absolute output an axis range that
@@ -580,9 +604,17 @@ TEST(ReplayTool, MalformedInputNamesFileAndLineAndWritesNothing) {
     EXPECT_FALSE(fs::exists(dir / "new.evemu"));
   }
   {
-    SCOPED_TRACE("a missing input");
+    SCOPED_TRACE("a missing input: the reason, as the scene file's errors give it");
     const ToolResult r = run_tool("replay " + quote(dir / "none.evemu") + " " + quote(dir / "new.evemu"), dir);
-    expect_clean_failure(r, {"none.evemu: cannot open"});
+    expect_clean_failure(r, {"none.evemu: cannot open: No such file or directory"});
+    EXPECT_FALSE(fs::exists(dir / "new.evemu"));
+  }
+  {
+    SCOPED_TRACE("a folder as the input: said, not a read error");
+    fs::create_directory(dir / "folder.evemu");
+    const ToolResult r = run_tool("replay " + quote(dir / "folder.evemu") + " " + quote(dir / "new.evemu"), dir);
+    expect_clean_failure(r, {"folder.evemu: is a folder, not a recording"});
+    EXPECT_FALSE(contains(r.err, "read error")) << r.err;
     EXPECT_FALSE(fs::exists(dir / "new.evemu"));
   }
 }

@@ -102,5 +102,35 @@ TEST(ToolStudy, UnknownTechniqueIsNamedWithTheKnownOnes) {
   EXPECT_NE(r.err.find("depth"), std::string::npos) << r.err;
 }
 
+// Without a texture the observer is at chance whatever its noise, so no Weber fraction of the range gives the
+// paper's pooled error: the calibration says so and fails, rather than print the end of the range as the answer.
+TEST(ToolStudy, CalibrationThatCannotReachThePapersErrorFails) {
+  ScratchDir dir;
+  const ToolResult r = run_tool("study --calibrate --participants 2 --technique none", dir);
+  expect_clean_failure(r, {"pseudohaptic: calibrate: the paper's pooled error of 5.47 % is not reached with a Weber "
+                           "fraction from 0.02 to 2: the pooled error was "});
+  EXPECT_EQ(r.out.find("gives the paper's pooled error"), std::string::npos) << r.out;
+}
+
+// One participant has no interval over participants: the summaries' would read as certainty ([4.22, 4.22]).
+TEST(ToolStudy, OneParticipantIsRefused) {
+  ScratchDir dir;
+  const ToolResult r = run_tool("study --participants 1 " + quote(dir / "one"), dir);
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("--participants"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "one"));
+}
+
+// --technique chooses what --calibrate pools over, and its help says so.
+TEST(ToolStudy, CalibrateHelpSaysWhichTechniquesItPools) {
+  ScratchDir dir;
+  const ToolResult r = run_tool("study --help", dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const std::size_t at = r.out.find("--calibrate");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const std::string line = r.out.substr(at, r.out.find('\n', at) - at);
+  EXPECT_NE(line.find("the paper's two techniques unless --technique names others"), std::string::npos) << line;
+}
+
 }  // namespace
 }  // namespace ph

@@ -11,6 +11,7 @@
 #include "control/protocol.hpp"
 #include "tools/commands.hpp"
 #include "tools/finite_check.hpp"
+#include "tools/number_tuple.hpp"
 
 namespace ph::tools {
 
@@ -81,10 +82,7 @@ Run add_cursor_command(CLI::App& app) {
       "Print the daemon's cursor model as X,Y (px), or with --set move the model there first (with absolute\n"
       "output the desktop's cursor follows at the next motion of the mouse).");
   add_socket_option(app, *o);
-  app.add_option("--set", o->set, "X,Y: move the cursor model here (px)")
-      ->delimiter(',')
-      ->expected(2)
-      ->check(finite_number());
+  add_number_tuple(app, "--set", o->set, "X,Y", "Move the cursor model here (px)", {finite_number()});
   return [o] { return run_cursor(*o); };
 }
 

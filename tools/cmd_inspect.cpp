@@ -22,6 +22,7 @@
 #include "tools/commands.hpp"
 #include "tools/finite_check.hpp"
 #include "tools/map_flags.hpp"
+#include "tools/number_tuple.hpp"
 
 namespace ph::tools {
 namespace {
@@ -84,6 +85,45 @@ void write_mask(const std::filesystem::path& path, const Grid<std::uint8_t>& mas
   write_picture(path, mask, [](std::uint8_t m) { return m ? Rgb{0, 0, 0} : Rgb{255, 255, 255}; });
 }
 
+// Everything inspect writes, computed before any of it is: an option that the computation refuses (a light of no
+// length) must not leave a folder of some of the pictures, from this run, beside older ones.
+struct InspectPictures {
+  std::int32_t width = 0, height = 0;
+  int bits = 8;
+  DerivativeFilter filter;
+  ClassTolerances tolerances;
+  CurvatureFields curvature;
+  Grid<std::uint8_t> classes, isophotes;
+  std::optional<Grid<std::uint8_t>> contours;  // with a depth map
+};
+
+InspectPictures compute_pictures(const InspectOptions& o, const FieldSources& sources, const ImageSize& image,
+                                 bool from_depth, FieldLoadReport& report) {
+  InspectPictures p;
+  p.width = o.size.size() == 2 ? o.size[0] : image.width;
+  p.height = o.size.size() == 2 ? o.size[1] : image.height;
+  const RegionFields fields = load_region_fields(sources, p.width, p.height, {true, !o.depth_map.empty()}, report);
+
+  p.bits = image.code_max == 255 ? 8 : 16;
+  p.filter = o.radius ? DerivativeFilter{*o.radius} : DerivativeFilter::recommended(from_depth, p.bits);
+  p.tolerances = ClassTolerances::recommended(p.bits);
+  if (o.planar_curvedness) p.tolerances.planar_curvedness = *o.planar_curvedness;
+  if (o.parabolic_ratio) p.tolerances.parabolic_ratio = *o.parabolic_ratio;
+  p.curvature =
+      from_depth ? curvature_from_depth(*fields.depth, p.filter) : curvature_from_gradient(*fields.gradient, p.filter);
+  p.classes = class_map(p.curvature, p.tolerances);
+  IsophoteParams isophotes;
+  if (o.light.size() == 3) isophotes.light = {o.light[0], o.light[1], o.light[2]};
+  if (o.cos_alpha) isophotes.cos_alpha = *o.cos_alpha;
+  p.isophotes = isophote_mask(*fields.gradient, isophotes);
+  if (fields.depth) {
+    ContourParams contours;
+    if (o.contours) contours.count = *o.contours;
+    p.contours = contour_mask(*fields.depth, contours);
+  }
+  return p;
+}
+
 int run_inspect(const InspectOptions& o) {
   if (o.normal_map.empty() && o.depth_map.empty()) throw std::invalid_argument("give --normal-map or --depth-map");
   const bool from_depth = o.from.empty() ? o.normal_map.empty() : o.from == "depth";
@@ -96,52 +136,33 @@ int run_inspect(const InspectOptions& o) {
   if (!o.depth_map.empty()) sources.depth_map = o.depth_map;
   apply_map_flags(o.maps, sources);
   const ImageSize image = read_image_size(from_depth ? o.depth_map : o.normal_map);
-  const std::int32_t width = o.size.size() == 2 ? o.size[0] : image.width;
-  const std::int32_t height = o.size.size() == 2 ? o.size[1] : image.height;
   FieldLoadReport report;
-  const RegionFields fields = load_region_fields(sources, width, height, {true, !o.depth_map.empty()}, report);
-
-  const int bits = image.code_max == 255 ? 8 : 16;
-  const DerivativeFilter filter =
-      o.radius ? DerivativeFilter{*o.radius} : DerivativeFilter::recommended(from_depth, bits);
-  ClassTolerances tolerances = ClassTolerances::recommended(bits);
-  if (o.planar_curvedness) tolerances.planar_curvedness = *o.planar_curvedness;
-  if (o.parabolic_ratio) tolerances.parabolic_ratio = *o.parabolic_ratio;
-  const CurvatureFields curvature =
-      from_depth ? curvature_from_depth(*fields.depth, filter) : curvature_from_gradient(*fields.gradient, filter);
-  const Grid<std::uint8_t> classes = class_map(curvature, tolerances);
+  const InspectPictures p = compute_pictures(o, sources, image, from_depth, report);
 
   const std::filesystem::path out = o.outdir;
   std::filesystem::create_directories(out);
-  const double k_scale = write_diverging(out / "K.png", curvature.gaussian);
-  const double h_scale = write_diverging(out / "H.png", curvature.mean);
-  write_picture(out / "class.png", classes, [](std::uint8_t c) { return kClassColours[c & 3]; });
-  IsophoteParams isophotes;
-  if (o.light.size() == 3) isophotes.light = {o.light[0], o.light[1], o.light[2]};
-  if (o.cos_alpha) isophotes.cos_alpha = *o.cos_alpha;
-  write_mask(out / "isophotes.png", isophote_mask(*fields.gradient, isophotes));
-  if (fields.depth) {
-    ContourParams contours;
-    if (o.contours) contours.count = *o.contours;
-    write_mask(out / "contours.png", contour_mask(*fields.depth, contours));
-  }
+  const double k_scale = write_diverging(out / "K.png", p.curvature.gaussian);
+  const double h_scale = write_diverging(out / "H.png", p.curvature.mean);
+  write_picture(out / "class.png", p.classes, [](std::uint8_t c) { return kClassColours[c & 3]; });
+  write_mask(out / "isophotes.png", p.isophotes);
+  if (p.contours) write_mask(out / "contours.png", *p.contours);
 
-  fmt::print("{} x {} texels, curvature from the {} map ({}-bit), filter radius {}\n", width, height,
-             from_depth ? "depth" : "normal", image.code_max == 0 ? 32 : bits, filter.radius);
+  fmt::print("{} x {} texels, curvature from the {} map ({}-bit), filter radius {}\n", p.width, p.height,
+             from_depth ? "depth" : "normal", image.code_max == 0 ? 32 : p.bits, p.filter.radius);
   fmt::print("K.png: K in 1/px^2, blue < 0 < red, full colour at +-{:.4g} (99th percentile of |K|)\n", k_scale);
   fmt::print("H.png: H in 1/px, blue < 0 < red (a bump is blue), full colour at +-{:.4g}\n", h_scale);
   fmt::print("class.png: planar below curvedness {:g} /px, parabolic below |k_small|/|k_large| {:g}\n",
-             tolerances.planar_curvedness, tolerances.parabolic_ratio);
+             p.tolerances.planar_curvedness, p.tolerances.parabolic_ratio);
   std::array<std::size_t, 4> counts{};
-  for (std::uint8_t c : classes.values) ++counts[c & 3];
+  for (std::uint8_t c : p.classes.values) ++counts[c & 3];
   for (std::uint8_t c = 0; c < 4; ++c) {
     const Rgb rgb = kClassColours[c];
     fmt::print("  {:<10} #{:02x}{:02x}{:02x} {:6.2f}%\n", class_name(static_cast<CurvatureClass>(c)), rgb[0], rgb[1],
-               rgb[2], 100.0 * counts[c] / std::max<std::size_t>(classes.values.size(), 1));
+               rgb[2], 100.0 * counts[c] / std::max<std::size_t>(p.classes.values.size(), 1));
   }
-  fmt::print("isophotes.png{}: pattern texels black\n", fields.depth ? ", contours.png" : "");
+  fmt::print("isophotes.png{}: pattern texels black\n", p.contours ? ", contours.png" : "");
   // As `trace` and the daemon warn: invalid texels (repaired), and a --size out of the maps' proportion.
-  for (const std::string& note : map_notes(sources, report, width, height))
+  for (const std::string& note : map_notes(sources, report, p.width, p.height))
     fmt::print(stderr, "pseudohaptic: warning: {}\n", note);
   return 0;
 }
@@ -160,10 +181,9 @@ Run add_inspect_command(CLI::App& app) {
   app.add_option("--from", o->from, "Curvature from the normal or the depth map (default: normal when given)")
       ->check(CLI::IsMember({"normal", "depth"}));
   add_map_flags(app, o->maps);
-  app.add_option("--size", o->size, "W,H region size in px the maps are resampled to (default: the image's size)")
-      ->delimiter(',')
-      ->expected(2)
-      ->check(CLI::Range(1, kMaxRegionSide));  // a region's largest
+  add_number_tuple(app, "--size", o->size, "W,H",
+                   "Region size in px the maps are resampled to (default: the image's size)",
+                   {CLI::Range(1, kMaxRegionSide)});  // a region's largest
   app.add_option("--radius", o->radius,
                  "Derivative filter radius r, a (2r+1)^2 least-squares window (default: 3 for 16-bit normal maps, "
                  "8 for 16-bit depth maps, 16 for 8-bit maps)")
@@ -176,10 +196,8 @@ Run add_inspect_command(CLI::App& app) {
                  "Parabolic below this |k_small|/|k_large| (default 0.1; 0.25 for 8-bit maps)")
       ->check(finite_number())
       ->check(CLI::Range(0.0, 1.0));
-  app.add_option("--light", o->light, "X,Y,Z light direction for isophotes (default -1,-1,2: top left)")
-      ->delimiter(',')
-      ->expected(3)
-      ->check(finite_number());
+  add_number_tuple(app, "--light", o->light, "X,Y,Z", "Light direction for isophotes (default -1,-1,2: top left)",
+                   {finite_number()});
   app.add_option("--cos-alpha", o->cos_alpha, "Isophote value n.l (default 0.95)")
       ->check(finite_number())
       ->check(CLI::Range(-1.0, 1.0));

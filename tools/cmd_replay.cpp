@@ -25,6 +25,8 @@
 #include "recording/recording_file.hpp"
 #include "tools/commands.hpp"
 #include "tools/finite_check.hpp"
+#include "tools/number_tuple.hpp"
+#include "tools/same_path.hpp"
 
 namespace ph::tools {
 
@@ -63,20 +65,6 @@ bool write_all(int fd, const std::string& text) {
     done += static_cast<std::size_t>(n);
   }
   return true;
-}
-
-bool same_file(const struct stat& a, const struct stat& b) { return a.st_dev == b.st_dev && a.st_ino == b.st_ino; }
-
-// Whether two paths of the command name one file: an existing one by its inode (through links and other
-// spellings), a new one by its path made absolute. "-" is a stream, never a file here.
-bool same_path(const std::string& a, const std::string& b) {
-  if (a == "-" || b == "-") return false;
-  struct stat sa {};
-  struct stat sb {};
-  const bool a_exists = ::stat(a.c_str(), &sa) == 0, b_exists = ::stat(b.c_str(), &sb) == 0;
-  if (a_exists || b_exists) return a_exists && b_exists && same_file(sa, sb);
-  std::error_code ignored;
-  return std::filesystem::weakly_canonical(a, ignored) == std::filesystem::weakly_canonical(b, ignored);
 }
 
 // One file the command writes: its text is complete in memory before anything is written, and it goes out
@@ -346,9 +334,8 @@ Run add_replay_command(CLI::App& app) {
       ->check(CLI::IsMember(methods));
   app.add_option("--trace", o->trace,
                  "CSV, one row per frame: time_us,in_dx,in_dy,out_dx,out_dy,cursor_x,cursor_y,cd_min,cd_max,dropped");
-  app.add_option("--start", o->start, "X,Y start of the cursor model, screen px (default: the desktop's centre)")
-      ->delimiter(',')
-      ->expected(2);
+  add_number_tuple(app, "--start", o->start, "X,Y",
+                   "Start of the cursor model, screen px (default: the desktop's centre)");
   app.add_flag("--as-daemon", o->as_daemon,
                "Run the pipeline as the daemon would with the scene file: output mode, acceleration, speed, "
                "mouse_dpi, pointer_speed and desktop from its [daemon] table, or the daemon's defaults (absolute "
@@ -374,10 +361,8 @@ Run add_replay_command(CLI::App& app) {
       ->check(CLI::Range(kMinMouseDpi, kMaxMouseDpi))
       ->capture_default_str()
       ->each([o](const std::string&) { o->dpi_given = true; });
-  app.add_option("--desktop", o->desktop,
-                 "X,Y,W,H desktop rectangle the cursor model is kept in (default 0,0,1920,1080)")
-      ->delimiter(',')
-      ->expected(4);
+  add_number_tuple(app, "--desktop", o->desktop, "X,Y,W,H",
+                   "Desktop rectangle the cursor model is kept in (default 0,0,1920,1080)");
   app.add_option("--gain", o->gain, "Screen px per device count at C/D 1 (the base pointer speed)")
       ->capture_default_str()
       ->each([o](const std::string&) { o->gain_given = true; });

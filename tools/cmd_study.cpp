@@ -202,17 +202,33 @@ double pooled_error_pct(const std::vector<TrialRecord>& trials) {
   return n > 0 ? 100.0 * errors / n : 0.0;
 }
 
-// Bisection in log(Weber fraction) for the paper's pooled error over its two techniques: the error grows with
-// the noise. The bound stays as it is.
+// The Weber fractions the calibration searches.
+constexpr double kCalibrationLowest = 0.02, kCalibrationHighest = 2.0;
+
+// Bisection in log(Weber fraction) for the paper's pooled error over the techniques run (the paper's two unless
+// --technique names others): the error grows with the noise. The bound stays as it is. Where every fraction tried
+// errs on one side of the paper's error, the bisection only closes in on an end of the range, which does not give
+// that error: an error, with the error at the fraction tried nearest that end (the last one).
 int run_calibration(StudyDesign design, const std::vector<StudyTechnique>& techniques) {
-  double lo = std::log(0.02), hi = std::log(2.0);
+  double lo = std::log(kCalibrationLowest), hi = std::log(kCalibrationHighest);
+  bool lo_moved = false, hi_moved = false;
+  double last_error = 0.0;
   for (int i = 0; i < 10; ++i) {
     const double mid = 0.5 * (lo + hi);
     design.observer.weber = std::exp(mid);
-    const double error = pooled_error_pct(run_study(design, techniques));
+    last_error = pooled_error_pct(run_study(design, techniques));
     fmt::print(stderr, "calibrate: Weber fraction {:.4f}: pooled error {:.2f} % (paper {:.2f} %)\n",
-               design.observer.weber, error, kPaperPooledErrorPct);
-    (error > kPaperPooledErrorPct ? hi : lo) = mid;
+               design.observer.weber, last_error, kPaperPooledErrorPct);
+    const bool above = last_error > kPaperPooledErrorPct;
+    (above ? hi : lo) = mid;
+    (above ? hi_moved : lo_moved) = true;
+  }
+  if (!lo_moved || !hi_moved) {
+    throw std::runtime_error(fmt::format(
+        "calibrate: the paper's pooled error of {:.2f} % is not reached with a Weber fraction from {} to {}: the "
+        "pooled error was {:.2f} % at {:.4f} ({} participants, seed {})",
+        kPaperPooledErrorPct, kCalibrationLowest, kCalibrationHighest, last_error, design.observer.weber,
+        design.participants, design.seed));
   }
   fmt::print(
       "Weber fraction {:.4f} gives the paper's pooled error of {:.2f} % with bound {:.2f} ({} participants, "
@@ -266,8 +282,9 @@ Run add_study_command(CLI::App& app) {
       "Techniques: every method of the engine (both readings of delta_beta_sign where a method has it) and the\n"
       "interrogation effects on the curvature method; the same seed gives the same files.");
   app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)");
-  app.add_option("--participants", o->participants, "Simulated participants (default 12, as in the paper)")
-      ->check(CLI::Range(1, 100000));
+  // At least 2: the summaries' confidence intervals are over participants, and of one there is none.
+  app.add_option("--participants", o->participants, "Simulated participants, 2 or more (default 12, as in the paper)")
+      ->check(CLI::Range(2, 100000));
   app.add_option("--seed", o->seed, "Seed of every random choice (default 1)");
   app.add_flag("--small", o->small,
                "4 participants and the paper's two techniques unless --technique says otherwise (for CI)");
@@ -284,7 +301,8 @@ Run add_study_command(CLI::App& app) {
       ->check(finite_number())
       ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--calibrate", o->calibrate,
-               "Print the Weber fraction that gives the paper's pooled error over its two techniques; writes nothing");
+               "Print the Weber fraction that gives the paper's pooled error, pooled over the paper's two techniques "
+               "unless --technique names others, or fail where none from 0.02 to 2 gives it; writes nothing");
   return [o] {
     StudyOptions options = *o;
     if (options.small && options.participants == 12) options.participants = 4;

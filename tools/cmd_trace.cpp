@@ -19,6 +19,8 @@
 #include "tools/csv_cell.hpp"
 #include "tools/csv_file.hpp"
 #include "tools/map_flags.hpp"
+#include "tools/number_tuple.hpp"
+#include "tools/same_path.hpp"
 
 namespace ph::tools {
 
@@ -96,6 +98,29 @@ Scene scene_from_target(const TraceOptions& o) {
   throw std::invalid_argument(fmt::format("no target named '{}' (see `pseudohaptic targets`)", o.target));
 }
 
+// The trace would replace a file it reads: refused before anything is read or written, as `replay` refuses it.
+void check_output_is_no_input(const TraceOptions& o) {
+  for (const auto& [flag, input] : {std::pair<const char*, const std::string&>{"--scene", o.scene_file},
+                                    {"--normal-map", o.normal_map},
+                                    {"--depth-map", o.depth_map}}) {
+    if (!input.empty() && same_path(input, o.output))
+      throw std::invalid_argument(
+          fmt::format("-o {} is the file {} reads: write the trace to another file", o.output, flag));
+  }
+}
+
+// As check_output_is_no_input, for the maps the scene file names, once it is read and before they are.
+void check_output_is_no_map(const std::string& output, const SceneSpec& spec) {
+  for (const RegionSpec& r : spec.regions) {
+    for (const auto& [key, map] :
+         {std::pair{"normal_map", r.sources.normal_map}, std::pair{"depth_map", r.sources.depth_map}}) {
+      if (map && same_path(map->string(), output))
+        throw std::invalid_argument(fmt::format("-o {} is the {} of region '{}' of {}: write the trace to another file",
+                                                output, key, r.name, spec.file.string()));
+    }
+  }
+}
+
 // The scene to trace; `warnings` gets a line per map with invalid texels (repaired) or stretched out of proportion.
 Scene build_scene(const TraceOptions& o, std::vector<std::string>& warnings) {
   const int sources = !o.scene_file.empty() + !o.target.empty() + (!o.normal_map.empty() || !o.depth_map.empty());
@@ -111,6 +136,7 @@ Scene build_scene(const TraceOptions& o, std::vector<std::string>& warnings) {
   if (o.scene_file.empty()) return scene_from_maps(o, warnings);
   SceneSpec spec = parse_scene_file(o.scene_file);
   if (spec.regions.empty()) throw std::invalid_argument(fmt::format("{}: the scene has no region", spec.file.string()));
+  check_output_is_no_map(o.output, spec);
   for (RegionSpec& r : spec.regions) apply_overrides(o, r);
   SceneLoadReport report;
   Scene scene = load_scene(spec, &report);
@@ -142,17 +168,29 @@ void append_number(fmt::memory_buffer& out, double v) {
   if (std::isfinite(v)) fmt::format_to(std::back_inserter(out), "{:.6g}", v == 0.0 ? 0.0 : v);
 }
 
-int run_trace(const TraceOptions& o) {
-  std::vector<std::string> warnings;
-  const Scene scene = build_scene(o, warnings);
-  for (const std::string& w : warnings) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
+// The stroke across the scene (by default the first region's width at its middle height), checked: its options
+// each by name, then by the stroke itself, run for no frame (a stroke of no length), so that the output is opened
+// only for a stroke that runs.
+StrokeSpec checked_stroke(const TraceOptions& o, const Scene& scene) {
+  check_stroke_options(o);
   const Rect first = scene.regions().front().rect;
   StrokeSpec stroke;
   const double mid_y = first.y + first.h / 2.0;
   stroke.from = point(o.from, {static_cast<double>(first.x), mid_y});
   stroke.to = point(o.to, {static_cast<double>(first.x + first.w), mid_y});
-  check_stroke_options(o);
   stroke.motor_step_px = o.step ? *o.step : o.speed ? *o.speed / o.rate : 1.0;
+  StrokeSpec no_frame = stroke;
+  no_frame.max_frames = 0;
+  run_stroke(scene, no_frame);
+  return stroke;
+}
+
+int run_trace(const TraceOptions& o) {
+  check_output_is_no_input(o);
+  std::vector<std::string> warnings;
+  const Scene scene = build_scene(o, warnings);
+  for (const std::string& w : warnings) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
+  const StrokeSpec stroke = checked_stroke(o, scene);
 
   CsvFile file(o.output);
   fmt::memory_buffer out;
@@ -208,23 +246,15 @@ Run add_trace_command(CLI::App& app) {
       ->check(CLI::IsMember(methods));
   app.add_option("--kmax-prime", o->kmax_prime, "Curvature: k'max, largest C/D when delta-beta = 0 (default 4)");
   app.add_option("--kmin-prime", o->kmin_prime, "Curvature: k'min, 1 / smallest C/D when delta-beta = 0 (default 1.5)");
-  app.add_option("--kmax-limits", o->kmax_limits, "Curvature: LO,HI limits of kmax (default 1,30)")
-      ->delimiter(',')
-      ->expected(2);
-  app.add_option("--kmin-limits", o->kmin_limits, "Curvature: LO,HI limits of kmin (default 1,5)")
-      ->delimiter(',')
-      ->expected(2);
+  add_number_tuple(app, "--kmax-limits", o->kmax_limits, "LO,HI", "Curvature: limits of kmax (default 1,30)");
+  add_number_tuple(app, "--kmin-limits", o->kmin_limits, "LO,HI", "Curvature: limits of kmin (default 1,5)");
   app.add_option("--delta-beta-sign", o->delta_beta_sign,
                  "Curvature: 1 = Eq. 1 as printed (default), -1 = the paper's prose reading");
   app.add_option("--gain", o->gain, "Depth: C/D change per px of height change per px (default 3)");
   app.add_option("--depth-kmax", o->depth_kmax, "Depth: largest C/D (default 4)");
   app.add_option("--depth-kmin", o->depth_kmin, "Depth: 1 / smallest C/D (default 1.5)");
-  app.add_option("--from", o->from, "X,Y start of the stroke, screen px (default: left edge, middle height)")
-      ->delimiter(',')
-      ->expected(2);
-  app.add_option("--to", o->to, "X,Y end of the stroke (default: right edge, middle height)")
-      ->delimiter(',')
-      ->expected(2);
+  add_number_tuple(app, "--from", o->from, "X,Y", "Start of the stroke, screen px (default: left edge, middle height)");
+  add_number_tuple(app, "--to", o->to, "X,Y", "End of the stroke (default: right edge, middle height)");
   app.add_option("--step", o->step, "Motor travel per frame, px at C/D 1 (default 1)");
   app.add_option("--speed", o->speed, "Hand speed, px/s at C/D 1; the step is speed / rate");
   app.add_option("--rate", o->rate, "Frames per second with --speed")->capture_default_str();

@@ -1,0 +1,29 @@
+// Whether two paths of a command line name one file, so that a command refuses to write its output over one of
+// its inputs (`replay`, `trace`).
+#pragma once
+
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <string>
+#include <system_error>
+
+namespace ph::tools {
+
+inline bool same_file(const struct stat& a, const struct stat& b) {
+  return a.st_dev == b.st_dev && a.st_ino == b.st_ino;
+}
+
+// Whether two paths of the command name one file: an existing one by its inode (through links and other
+// spellings), a new one by its path made absolute. "-" is a stream, never a file here.
+inline bool same_path(const std::string& a, const std::string& b) {
+  if (a == "-" || b == "-") return false;
+  struct stat sa {};
+  struct stat sb {};
+  const bool a_exists = ::stat(a.c_str(), &sa) == 0, b_exists = ::stat(b.c_str(), &sb) == 0;
+  if (a_exists || b_exists) return a_exists && b_exists && same_file(sa, sb);
+  std::error_code ignored;
+  return std::filesystem::weakly_canonical(a, ignored) == std::filesystem::weakly_canonical(b, ignored);
+}
+
+}  // namespace ph::tools
