@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
@@ -147,8 +148,39 @@ void get_number_into(const Reporter& rep, const toml::table& t, std::string_view
 }
 
 // A parameter struct's own check, reported at its table: the message names the parameter and its range.
+// Where `name` stands in `text` as a word of its own (not inside a longer key), or npos.
+std::size_t find_key(std::string_view text, std::string_view name) {
+  const auto part_of_key = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_'; };
+  for (std::size_t at = text.find(name); at != std::string_view::npos; at = text.find(name, at + 1)) {
+    const bool starts = at == 0 || (!part_of_key(text[at - 1]) && text[at - 1] != '.');
+    const bool ends = at + name.size() == text.size() || !part_of_key(text[at + name.size()]);
+    if (starts && ends) return at;
+  }
+  return std::string_view::npos;
+}
+
+// The node of `t` (or of a table in it, as "table.key") that a validate() message names first, so that the error
+// points at that key's line; `t` itself where it names none.
+const toml::node* node_named_in(const toml::table& t, std::string_view problem) {
+  const toml::node* named = &t;
+  std::size_t first = std::string_view::npos;
+  const auto consider = [&](const std::string& name, const toml::node& node) {
+    const std::size_t at = find_key(problem, name);
+    if (at < first) first = at, named = &node;
+  };
+  for (const auto& [key, node] : t) {
+    if (const toml::table* inner = node.as_table()) {
+      for (const auto& [inner_key, inner_node] : *inner)
+        consider(std::string(key.str()) + "." + std::string(inner_key.str()), inner_node);
+    } else {
+      consider(std::string(key.str()), node);
+    }
+  }
+  return named;
+}
+
 void check_params(const Reporter& rep, const toml::table& t, std::string_view where, const std::string& problem) {
-  if (!problem.empty()) rep.fail(&t, std::string(where.substr(0, where.size() - 1)), problem);
+  if (!problem.empty()) rep.fail(node_named_in(t, problem), std::string(where.substr(0, where.size() - 1)), problem);
 }
 
 // Bit depth of the map a region's classes come from: 8-bit maps get the wider filter and tolerances.

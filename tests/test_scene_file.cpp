@@ -414,6 +414,16 @@ TEST(SceneFileErrors, AnEmptyMapPathOrAFolderIsSaidAsSuch) {
   }
 }
 
+// An effect's parameter out of its range is said at the key's own line, not at its table's header.
+TEST(SceneFileErrors, AnEffectsParameterOutOfRangeNamesItsLine) {
+  const std::string region = "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n";
+  expect_error(region +
+                   "[region.materials]\nplanar = \"friction\"\n[region.materials.friction]\nbreakaway_px = 10.0\n"
+                   "stuck_cd = 50\n",
+               9, "region[0].materials", {"friction.stuck_cd = 50 is outside [1, 20]"});
+  expect_error(region + "[region.wells]\nradius_px = 16\nmax_gain = 9\n", 7, "region[0].wells", {"max_gain"});
+}
+
 TEST(SceneFileErrors, MissingSceneFileIsNamed) {
   const fs::path missing = "/ph-test-no-such-folder/nope.toml";  // not where the service's sandbox hides files
   try {
@@ -666,7 +676,7 @@ TEST(SceneFileInterrogation, MistakesNameTheKeyAndWhatIsAllowed) {
                {"unknown 'glue'", "none, damping, friction, stick_slip"});
   expect_error(head + "[region.materials]\nsource = \"colour\"\n", 8, "region[0].materials.source",
                {"auto, normals, depth"});
-  expect_error(head + "[region.materials]\nfriction = { stuck_cd = 50 }\n", 7, "region[0].materials",
+  expect_error(head + "[region.materials]\nfriction = { stuck_cd = 50 }\n", 8, "region[0].materials",
                {"stuck_cd", "20"});
   expect_error(head + "[region.materials.damping]\nspeed = 1\n", 8, "region[0].materials.damping.speed",
                {"unknown key", "cd_max"});
@@ -677,7 +687,7 @@ TEST(SceneFileInterrogation, MistakesNameTheKeyAndWhatIsAllowed) {
                {"isophotes"});
   expect_error(head + "[region.wells]\npattern = \"contours\"\nlevels = \"many\"\n", 9, "region[0].wells.levels",
                {"count", "list"});
-  expect_error(head + "[region.wells]\nradius_px = 0\n", 7, "region[0].wells", {"radius_px"});
+  expect_error(head + "[region.wells]\nradius_px = 0\n", 8, "region[0].wells", {"radius_px"});
   expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n[region.wells]\npattern = \"contours\"\n", 5,
                "region[0].wells.pattern", {"depth_map"});
 }
