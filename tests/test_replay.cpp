@@ -164,6 +164,26 @@ TEST(Replay, NonMotionEventsPassThroughInTheirFrameInAbsoluteMode) {
   }
 }
 
+// A device without REL_X/REL_Y (a tablet) is not one the daemon takes: in absolute mode too its description stays its
+// own, rather than the desktop's ranges over events in the tablet's.
+TEST(Replay, ADeviceWithoutRelativeMotionKeepsItsDescriptionInAbsoluteMode) {
+  Recording tablet;
+  tablet.device.name = "Test Tablet";
+  tablet.device.enable(ev::kAbs, ev::kAbsX);
+  tablet.device.enable(ev::kAbs, ev::kAbsY);
+  tablet.device.absinfo[ev::kAbsX] = AbsInfo{0, 15200, 0, 0, 100};
+  tablet.device.absinfo[ev::kAbsY] = AbsInfo{0, 9500, 0, 0, 100};
+  tablet.events = {{0, ev::kAbs, ev::kAbsX, 7600}, {0, ev::kAbs, ev::kAbsY, 4750}, {0, ev::kSyn, ev::kSynReport, 0}};
+  PipelineConfig config = start_at({960.5, 540.5});
+  config.mode = OutputMode::absolute;
+  const Recording output = replay(tablet, bump_scene(), config);
+  EXPECT_EQ(output.device, tablet.device);
+  EXPECT_EQ(output.events, tablet.events);
+  // A mouse is described as the daemon's absolute device.
+  const Recording mouse = scripted_stroke(10, 3, 1);
+  EXPECT_TRUE(replay(mouse, bump_scene(), config).device.has(ev::kAbs, ev::kAbsX));
+}
+
 TEST(Replay, DroppedFrameIsPassedThroughAndNotApplied) {
   Recording input;
   input.device = testing::test_mouse();

@@ -16,7 +16,10 @@ void run_stream(EventSource& source, Pipeline& pipeline, EventSink& sink, std::v
 Recording replay(const Recording& input, const Scene& scene, const PipelineConfig& config,
                  std::vector<FrameReport>* reports) {
   Recording output;
-  output.device = config.mode == OutputMode::absolute ? output_device(input.device, config) : input.device;
+  // Absolute output describes a tablet-like device of the desktop's size, for a pointer the daemon takes; a device
+  // without relative motion (a tablet, a keyboard) the daemon never takes, and its description stays its own.
+  const bool taken = input.device.has(ev::kRel, ev::kRelX) && input.device.has(ev::kRel, ev::kRelY);
+  output.device = config.mode == OutputMode::absolute && taken ? output_device(input.device, config) : input.device;
   output.events.reserve(input.events.size());
   // The scene outlives this call: share it without owning it.
   Pipeline pipeline(std::shared_ptr<const Scene>(std::shared_ptr<const Scene>(), &scene), config);
