@@ -412,7 +412,7 @@ TEST(Wells, ValidateNamesTheParameterAndItsRange) {
             }).find("levels"),
             std::string::npos);
   EXPECT_NE(message([](WellsParams& p) { p.contours.count = -1; }).find("count"), std::string::npos);
-  EXPECT_NE(message([](WellsParams& p) { p.contours.tol = -1; }).find("tol"), std::string::npos);
+  EXPECT_NE(message([](WellsParams& p) { p.contours.tol = -1; }).find("contour tolerance"), std::string::npos);
   WellsParams bad;
   bad.max_gain = 5.0;
   EXPECT_THROW(make_wells_effect(paraboloid_fields(), kSize, kSize, bad), std::invalid_argument);

@@ -422,6 +422,9 @@ TEST(SceneFileErrors, AnEffectsParameterOutOfRangeNamesItsLine) {
                    "stuck_cd = 50\n",
                9, "region[0].materials", {"friction.stuck_cd = 50 is outside [1, 20]"});
   expect_error(region + "[region.wells]\nradius_px = 16\nmax_gain = 9\n", 7, "region[0].wells", {"max_gain"});
+  // The key is `tolerance` in the file, whatever the field is called in the code.
+  expect_error(region + "[region.wells]\nradius_px = 16\ncos_alpha = 0.9\ntolerance = -1\n", 8, "region[0].wells",
+               {"wells isophote tolerance must be a finite number >= 0"});
 }
 
 TEST(SceneFileErrors, MissingSceneFileIsNamed) {

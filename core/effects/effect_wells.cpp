@@ -27,7 +27,7 @@ std::string validate_isophotes(const IsophoteParams& p) {
   const double len = std::sqrt(l.x * l.x + l.y * l.y + l.z * l.z);
   if (!(std::isfinite(len) && len > 0.0)) return "wells isophote light must be a finite, non-zero vector";
   if (auto e = check_range("isophote cos_alpha", p.cos_alpha, -1.0, 1.0); !e.empty()) return e;
-  if (!(std::isfinite(p.tol) && p.tol >= 0.0)) return "wells isophote tol must be a finite number >= 0";
+  if (!(std::isfinite(p.tol) && p.tol >= 0.0)) return "wells isophote tolerance must be a finite number >= 0";
   return {};
 }
 
@@ -37,7 +37,7 @@ std::string validate_contours(const ContourParams& p) {
   for (double level : p.levels) {
     if (!std::isfinite(level)) return "wells contour levels must be finite";
   }
-  if (!(std::isfinite(p.tol) && p.tol >= 0.0)) return "wells contour tol must be a finite number >= 0";
+  if (!(std::isfinite(p.tol) && p.tol >= 0.0)) return "wells contour tolerance must be a finite number >= 0";
   return {};
 }
 

@@ -125,7 +125,7 @@ Grid<std::uint8_t> isophote_mask(const GradientField& gradient, const IsophotePa
   const double len = std::sqrt(l.x * l.x + l.y * l.y + l.z * l.z);
   check(std::isfinite(len) && len > 0.0, "the light vector must be finite and non-zero");
   check(params.cos_alpha >= -1.0 && params.cos_alpha <= 1.0, "cos_alpha must be in [-1, 1]");
-  check(std::isfinite(params.tol) && params.tol >= 0.0, "isophote tol must be finite and >= 0");
+  check(std::isfinite(params.tol) && params.tol >= 0.0, "isophote tolerance must be finite and >= 0");
   const double lx = l.x / len;
   const double ly = l.y / len;
   const double lz = l.z / len;
@@ -142,7 +142,7 @@ Grid<std::uint8_t> isophote_mask(const GradientField& gradient, const IsophotePa
 }
 
 Grid<std::uint8_t> contour_mask(const DepthField& depth, const ContourParams& params) {
-  check(std::isfinite(params.tol) && params.tol >= 0.0, "contour tol must be finite and >= 0");
+  check(std::isfinite(params.tol) && params.tol >= 0.0, "contour tolerance must be finite and >= 0");
   const std::vector<double> levels = contour_levels(depth, params);
   const std::int32_t w = depth.width;
   return mark_pattern(w, depth.height, levels, params.rule, params.tol, [&](std::int32_t y, double* out) {
