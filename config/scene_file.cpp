@@ -766,6 +766,13 @@ std::optional<ReliefScale> relief_scale(const RegionSpec& region, const RegionFi
   return ReliefScale{*fields.normals_to_depth_slope_ratio, region.sources.depth_options.relief_px};
 }
 
+std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadReport& report, const Scene& scene) {
+  std::vector<std::string> out = map_warnings(spec, report);
+  for (std::string& w : relief_scale_warnings(spec, scene)) out.push_back(std::move(w));
+  for (std::string& w : effect_warnings(spec, scene)) out.push_back(std::move(w));
+  return out;
+}
+
 std::string ReliefScale::described() const {
   std::string line =
       fmt::format("the normal map's slopes are {:.2g} times the depth map's where both show the relief sloping", ratio);
@@ -782,8 +789,7 @@ std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scen
     const RegionSpec& r = spec.regions[i];
     const std::optional<ReliefScale> scale = relief_scale(r, scene.regions()[i].fields);
     if (!scale || !scale->mismatched()) continue;
-    out.push_back(fmt::format("{}:{}: region '{}': {} (the hybrid method compares them to find steps and noise)",
-                              spec.file.string(), r.line, r.name, scale->described()));
+    out.push_back(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, scale->warning()));
   }
   return out;
 }

@@ -108,6 +108,8 @@ struct ReliefScale {
   // "the normal map's slopes are R times the depth map's ..." and, where mismatched, the relief_px that makes them
   // agree.
   std::string described() const;
+  // described() and why it matters: for a warning where it is mismatched.
+  std::string warning() const { return described() + " (the hybrid method compares them to find steps and noise)"; }
 };
 std::optional<ReliefScale> relief_scale(const RegionSpec& region, const RegionFields& fields);
 
@@ -118,6 +120,10 @@ std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scen
 // One line per region whose gravity wells found no pattern texel (contour levels outside the heights, an isophote no
 // normal meets), "FILE:LINE: region 'NAME': wells: ..." and what to check: such wells do nothing. None otherwise.
 std::vector<std::string> effect_warnings(const SceneSpec& spec, const Scene& scene);
+
+// What loading the scene found to warn of, in this order: map_warnings, relief_scale_warnings and effect_warnings. What
+// the daemon logs at load (with desktop_warnings), and what the tools that load a scene file print.
+std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadReport& report, const Scene& scene);
 
 // Where a region of `rect` lies wholly or partly off `desktop`: "at X,Y (WxH px) lies outside the desktop X,Y WxH px:
 // the cursor never reaches it, ..." or "at X,Y (WxH px): only WxH px of it lie on the desktop ..."; nullopt where

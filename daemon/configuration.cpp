@@ -47,9 +47,7 @@ Configuration load_configuration(const ConfigChoice& choice) {
     c.scene = std::make_shared<const Scene>(load_scene(spec, &report, &images));
     // Invalid texels are counted, repaired and reported at load, as are maps stretched out of proportion
     // (docs/METHODS.md, "Screen, regions and fields").
-    for (std::string& warning : map_warnings(spec, report)) c.warnings.push_back(std::move(warning));
-    for (std::string& warning : relief_scale_warnings(spec, *c.scene)) c.warnings.push_back(std::move(warning));
-    for (std::string& warning : effect_warnings(spec, *c.scene)) c.warnings.push_back(std::move(warning));
+    for (std::string& warning : load_warnings(spec, report, *c.scene)) c.warnings.push_back(std::move(warning));
     for (std::string& warning : desktop_warnings(spec)) c.warnings.push_back(std::move(warning));
     c.settings = spec.daemon;
     c.source = file->string();

@@ -199,7 +199,14 @@ TEST(Tool, HelpNamesTheCommandsAndEveryTraceFlag) {
     EXPECT_TRUE(contains(help.out, std::string(flag) + " ")) << flag << " missing from:\n" << help.out;
   }
 
-  expect_clean_failure(run_tool("", dir), {});  // no command
+  // No command, or an option before it: said, with the list of commands.
+  const ToolResult none = run_tool("", dir);
+  EXPECT_EQ(none.rc, 2);
+  EXPECT_TRUE(contains(none.err, "give a command: targets, surfaces")) << none.err;
+  const ToolResult option = run_tool("--step 2 trace", dir);
+  EXPECT_EQ(option.rc, 2);
+  EXPECT_TRUE(contains(option.err, "unknown option '--step' before the command (commands: targets")) << option.err;
+  EXPECT_EQ(run_tool("--version", dir).rc, 0);
   // A misspelt command is named, with the list of commands.
   const ToolResult unknown = run_tool("trcae --step 2", dir);
   EXPECT_EQ(unknown.rc, 2);
@@ -447,6 +454,65 @@ TEST(Tool, TraceErrors) {
     expect_clean_failure(run_tool("trace --scene " + quote(scene) + out, dir),
                          {scene.string() + ":5:", "region[0].normal_green"});
   }
+}
+
+// An option that would change nothing in the trace asked for is refused, naming it and what would use it.
+TEST(Tool, TraceRefusesAnOptionNoTracedMethodReads) {
+  ScratchDir dir;
+  const std::string out = " -o " + quote(dir / "x.csv");
+  expect_clean_failure(run_tool("trace --target " + kBump + " --gain 5" + out, dir),
+                       {"--gain is an option of the depth method", "they use curvature", "--method depth"});
+  expect_clean_failure(run_tool("trace --target " + kBump + " --method depth --kmax-limits 1,8" + out, dir),
+                       {"--kmax-limits is an option of the curvature method", "they use depth"});
+  expect_clean_failure(run_tool("trace --target " + kBump + " --method hybrid --kmax-prime 6" + out, dir),
+                       {"--kmax-prime", "the hybrid method runs it with its default parameters"});
+  expect_clean_failure(run_tool("trace --target " + kBump + " --rate 250" + out, dir), {"--rate applies to --speed"});
+  EXPECT_FALSE(fs::exists(dir / "x.csv"));
+  // Where the method traced is the option's, its options are taken.
+  const ToolResult both = run_tool("trace --target " + kBump + " --method depth --gain 5 --depth-kmax 3" + out, dir);
+  EXPECT_EQ(both.rc, 0) << both.err;
+}
+
+// A stroke that meets no region is traced (C/D 1 throughout) with a warning; one that would take more frames than a
+// stroke may is refused before a row is written.
+TEST(Tool, TraceSaysWhenTheStrokeMissesEveryRegionOrIsTooLong) {
+  ScratchDir dir;
+  const ToolResult missed =
+      run_tool("trace --target " + kBump + " --from 600,600 --to 700,600 -o " + quote(dir / "m.csv"), dir);
+  ASSERT_EQ(missed.rc, 0) << missed.err;
+  EXPECT_TRUE(contains(missed.err, "warning: the stroke from (600, 600) to (700, 600) crosses no region"))
+      << missed.err;
+  EXPECT_TRUE(contains(missed.err, "'" + kBump + "' covers (0, 0) to (500, 500)")) << missed.err;
+  EXPECT_TRUE(contains(missed.err, "C/D range [1, 1]")) << missed.err;
+  EXPECT_TRUE(parse_trace_csv(read_text(dir / "m.csv")).rows.empty());  // no texel of any region stepped on
+  const ToolResult crossed = run_tool("trace --target " + kBump + " -o " + quote(dir / "c.csv"), dir);
+  ASSERT_EQ(crossed.rc, 0) << crossed.err;
+  EXPECT_FALSE(contains(crossed.err, "crosses no region")) << crossed.err;
+
+  expect_clean_failure(run_tool("trace --target " + kBump + " --step 1e-5 -o " + quote(dir / "s.csv"), dir),
+                       {"5e+07 frames", "more than the 10000000 a stroke may take", "a larger --step"});
+  expect_clean_failure(run_tool("trace --target " + kBump + " --speed 1 --rate 1e5 -o " + quote(dir / "s.csv"), dir),
+                       {"a larger --speed or a smaller --rate"});
+  EXPECT_FALSE(fs::exists(dir / "s.csv"));
+}
+
+// An empty path, and a negative or overlong seed, are turned down by the command line, naming the argument.
+TEST(Tool, EmptyPathsAndNegativeSeedsAreRefused) {
+  ScratchDir dir;
+  for (const std::string& args : std::initializer_list<std::string>{
+           "targets ''", "surfaces ''", "accuracy '' --small", "stability '' --small", "study ''", "inspect ''",
+           "check-config ''", "replay '' out.evemu", "replay in.evemu ''", "trace --target " + kBump + " -o ''",
+           "trace --scene ''", "status --socket ''"}) {
+    SCOPED_TRACE(args);
+    const ToolResult r = run_tool(args, dir);
+    expect_clean_failure(r, {"is empty: give a path"});
+  }
+  for (const std::string& seed : std::initializer_list<std::string>{"-1", "18446744073709551616", "1.5", "0x10"}) {
+    SCOPED_TRACE(seed);
+    expect_clean_failure(run_tool("study " + quote(dir / "s") + " --small --seed " + seed, dir),
+                         {"--seed: must be a whole number from 0 to 18446744073709551615, not " + seed});
+  }
+  EXPECT_FALSE(fs::exists(dir / "s"));
 }
 
 // How many times `part` occurs in `text`.
@@ -971,6 +1037,24 @@ TEST(Tool, CheckConfig) {
     EXPECT_TRUE(contains(halved.out, "scale: the normal map's slopes are 2 times the depth map's")) << halved.out;
     // (101: the generator's 8-bit normals read the dome's slopes a little apart from its heights' differences.)
     EXPECT_TRUE(contains(halved.out, "relief_px = 101 (now 50) makes them agree")) << halved.out;
+    // trace warns of it as the daemon does, from the scene file or from the maps given by hand.
+    const ToolResult traced =
+        run_tool("trace --scene " + quote(dir / "halved.toml") + " -o " + quote(dir / "t.csv"), dir);
+    ASSERT_EQ(traced.rc, 0) << traced.err;
+    EXPECT_TRUE(contains(traced.err, "warning: " + (dir / "halved.toml").string() +
+                                         ":1: region 'dome': the normal map's slopes are 2 times the depth map's"))
+        << traced.err;
+    EXPECT_TRUE(contains(traced.err, "relief_px = 101 (now 50) makes them agree")) << traced.err;
+    const ToolResult by_hand =
+        run_tool("trace --method hybrid --normal-map " + quote(dir / "dome_normals.png") + " --depth-map " +
+                     quote(dir / "dome_depth.png") + " --relief-px 50 -o " + quote(dir / "t.csv"),
+                 dir);
+    ASSERT_EQ(by_hand.rc, 0) << by_hand.err;
+    EXPECT_TRUE(contains(by_hand.err, "warning: the normal map's slopes are 2 times the depth map's")) << by_hand.err;
+    const ToolResult agreeing =
+        run_tool("trace --scene " + quote(dir / "generated.toml") + " -o " + quote(dir / "t.csv"), dir);
+    ASSERT_EQ(agreeing.rc, 0) << agreeing.err;
+    EXPECT_FALSE(contains(agreeing.err, "makes them agree")) << agreeing.err;
     // The same heights under normals of their exact slopes with noise of sigma 0.05 on each: pulled to the heights.
     NormalImage noisy(32, 32);
     std::mt19937_64 rng(3);

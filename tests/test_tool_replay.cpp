@@ -268,6 +268,42 @@ TEST(ReplayTool, WarnsOfInvalidTexelsInTheScene) {
       << r.err;
 }
 
+// Gravity wells whose pattern is empty (levels above every height) are warned of, as the daemon warns at load; and
+// trace, which loads the scene as replay does, warns alike.
+TEST(ReplayTool, WarnsOfWellsWithAnEmptyPatternAsTraceDoes) {
+  ScratchDir dir;
+  Grid<float> ramp(20, 20, 0.0f);
+  for (std::int32_t y = 0; y < 20; ++y)
+    for (std::int32_t x = 0; x < 20; ++x) ramp.at(x, y) = static_cast<float>(x) / 19.0f;
+  write_gray_png16(dir / "ramp.png", ramp);
+  const auto scene = [&](const std::string& file, const std::string& levels) {
+    write_file(dir / file,
+               "[[region]]\nname = \"ramp\"\nwidth = 20\nheight = 20\nmethod = \"depth\"\n"
+               "depth_map = \"ramp.png\"\nrelief_px = 10\n[region.wells]\npattern = \"contours\"\n"
+               "levels = " +
+                   levels + "\n");
+    return dir / file;
+  };
+  const fs::path missed = scene("missed.toml", "[50.0, 90.0]");
+  const fs::path met = scene("met.toml", "[4.5]");
+  const fs::path in = stroke_file(dir, "in.evemu", 20, 1, 0);
+  const std::string warning = "pseudohaptic: warning: " + missed.string() +
+                              ":1: region 'ramp': wells: no contour level lies within the region's heights";
+  const ToolResult r =
+      run_tool("replay --scene " + quote(missed) + " " + quote(in) + " " + quote(dir / "out.evemu"), dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, warning)) << r.err;
+  const ToolResult t = run_tool("trace --scene " + quote(missed) + " -o " + quote(dir / "t.csv"), dir);
+  ASSERT_EQ(t.rc, 0) << t.err;
+  EXPECT_TRUE(contains(t.err, warning)) << t.err;
+  for (const std::string& command : {"replay --scene " + quote(met) + " " + quote(in) + " " + quote(dir / "out.evemu"),
+                                     "trace --scene " + quote(met) + " -o " + quote(dir / "t.csv")}) {
+    const ToolResult quiet = run_tool(command, dir);
+    ASSERT_EQ(quiet.rc, 0) << command << "\n" << quiet.err;
+    EXPECT_FALSE(contains(quiet.err, "warning")) << command << "\n" << quiet.err;
+  }
+}
+
 TEST(ReplayTool, TraceHasItsHeaderAndOneRowPerFrame) {
   ScratchDir dir;
   const fs::path in = stroke_file(dir);
@@ -788,6 +824,36 @@ TEST(ReplayTool, RefusesToWriteOverItsInputOrOneOutputOverTheOther) {
   EXPECT_EQ(both.rc, 1);
   EXPECT_NE(both.err.find("--trace out.evemu is OUTPUT too"), std::string::npos) << both.err;
   EXPECT_EQ(listing(dir), (std::set<std::string>{"in.evemu", "link.evemu"}));
+  // The recording read from standard input (`< FILE`) is that file too.
+  for (const std::string& args : {"- " + quote(in), "--trace " + quote(dir / "link.evemu") + " - out.evemu"}) {
+    const ToolResult r = run_tool("replay " + args + " < " + quote(in), dir);
+    EXPECT_EQ(r.rc, 1) << args;
+    EXPECT_NE(r.err.find("is the file standard input reads"), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(read_text(in), recorded) << args;
+  }
+  EXPECT_EQ(listing(dir), (std::set<std::string>{"in.evemu", "link.evemu"}));
+}
+
+// A recording with nothing to rescale is replayed as it is, with a warning: it is most likely not the one meant.
+TEST(ReplayTool, ARecordingWithoutMotionIsWarnedOf) {
+  ScratchDir dir;
+  Recording keys;
+  keys.device = testing::test_mouse();
+  const fs::path empty = dir / "empty.evemu";
+  write_file(empty, evemu_text(keys));
+  const ToolResult none = run_tool("replay " + quote(empty) + " " + quote(dir / "out.evemu"), dir);
+  ASSERT_EQ(none.rc, 0) << none.err;
+  EXPECT_TRUE(contains(none.err, "warning: " + empty.string() + " holds no events: nothing was rescaled")) << none.err;
+  testing::add_frame(keys, 1000, {{0, ev::kKey, 0x110, 1}});
+  testing::add_frame(keys, 9000, {{0, ev::kKey, 0x110, 0}});
+  const fs::path clicks = dir / "clicks.evemu";
+  write_file(clicks, evemu_text(keys));
+  const ToolResult still = run_tool("replay - " + quote(dir / "out.evemu") + " < " + quote(clicks), dir);
+  ASSERT_EQ(still.rc, 0) << still.err;
+  EXPECT_TRUE(contains(still.err, "warning: <stdin> holds no REL_X/REL_Y motion: nothing was rescaled")) << still.err;
+  const ToolResult moved = run_tool("replay " + quote(stroke_file(dir)) + " " + quote(dir / "out.evemu"), dir);
+  ASSERT_EQ(moved.rc, 0) << moved.err;
+  EXPECT_FALSE(contains(moved.err, "warning")) << moved.err;
 }
 
 TEST(ReplayTool, IsDeterministicAcrossProcesses) {
@@ -845,6 +911,16 @@ TEST(ReplayTool, DeviceOfALibinputRecordFile) {
     SCOPED_TRACE("a device the file does not have");
     const ToolResult r = run_tool("replay --device 2 " + quote(two) + " " + quote(dir / "x.evemu"), dir);
     expect_clean_failure(r, {"libinput_two_devices.yml:", "no device 2: the file has 2 device(s)"});
+    EXPECT_FALSE(fs::exists(dir / "x.evemu"));
+  }
+  {
+    SCOPED_TRACE("a negative or overlong --device is refused, not read as a huge number");
+    for (const std::string device : {"-1", "-2", "99999999999999999999"}) {
+      expect_clean_failure(run_tool("replay --device " + device + " " + quote(two) + " " + quote(dir / "x.evemu"), dir),
+                           {"--device: must be a whole number from 0 to 65535, not " + device});
+    }
+    expect_clean_failure(run_tool("replay --trace '' " + quote(two) + " " + quote(dir / "x.evemu"), dir),
+                         {"--trace: is empty: give a path"});
     EXPECT_FALSE(fs::exists(dir / "x.evemu"));
   }
   {

@@ -112,6 +112,22 @@ TEST(ToolStudy, CalibrationThatCannotReachThePapersErrorFails) {
   EXPECT_EQ(r.out.find("gives the paper's pooled error"), std::string::npos) << r.out;
 }
 
+// A folder that cannot take the files fails before the participants run, with none of the files written; what
+// --calibrate finds or would not write is not also taken from the command line.
+TEST(ToolStudy, WhatCannotBeUsedIsSaidBeforeTheRun) {
+  ScratchDir dir;
+  std::filesystem::create_directories(dir / "out" / "summary.md");
+  const ToolResult r = run_tool("study --small --technique none " + quote(dir / "out"), dir);
+  expect_clean_failure(r, {(dir / "out" / "summary.md").string() + ": is a folder"});
+  EXPECT_EQ(r.err.find("participant runs"), std::string::npos) << r.err;  // no progress: nothing ran
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "trials.csv"));
+  expect_clean_failure(run_tool("study --calibrate --weber 0.3 --technique none", dir),
+                       {"--calibrate finds the Weber fraction: give it or --weber, not both"});
+  expect_clean_failure(run_tool("study --calibrate --technique none " + quote(dir / "c"), dir),
+                       {"--calibrate writes nothing: leave out OUTDIR"});
+  EXPECT_FALSE(std::filesystem::exists(dir / "c"));
+}
+
 // One participant has no interval over participants: the summaries' would read as certainty ([4.22, 4.22]).
 TEST(ToolStudy, OneParticipantIsRefused) {
   ScratchDir dir;

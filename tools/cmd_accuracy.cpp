@@ -83,6 +83,7 @@
 #include "core/lab/ground_truth.hpp"
 #include "core/lab/map_storage.hpp"
 #include "core/lab/surfaces.hpp"
+#include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/csv_file.hpp"
 #include "tools/measured.hpp"
@@ -709,7 +710,9 @@ Run add_accuracy_command(CLI::App& app) {
       "traversal x sampling, and traversal = \"auto\" at accuracy_px 0.25, 2 and 8) over seeded strokes and\n"
       "random walks across the 24 targets and the 9 interrogation surfaces; write\n"
       "OUTDIR/variants.csv, OUTDIR/fig5_traces.csv and OUTDIR/fig2_grid.csv for tools/charts.py.");
-  app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)")->required();
+  app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)")
+      ->required()
+      ->check(non_empty_path());
   app.add_flag("--small", o->small, "A handful of strokes and a short walk (seconds; for CI)");
   return [o] { return run_accuracy(*o); };
 }

@@ -20,6 +20,7 @@
 #include "config/scene_file.hpp"
 #include "core/engine/decode.hpp"
 #include "core/engine/default_scene.hpp"
+#include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
 
 namespace ph::tools {
@@ -202,6 +203,7 @@ Run add_check_config_command(CLI::App& app) {
   o->file_option = app.add_option("FILE", o->file,
                                   "Scene file to check; without it, the daemon's default, and where that does not "
                                   "exist, what the daemon runs instead (its embedded default scene)")
+                       ->check(non_empty_path())
                        ->capture_default_str();
   app.add_flag("-q,--quiet", o->quiet, "Print nothing on success");
   return [o] { return run_check_config(*o); };

@@ -9,6 +9,7 @@
 
 #include "control/client.hpp"
 #include "control/protocol.hpp"
+#include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/finite_check.hpp"
 #include "tools/number_tuple.hpp"
@@ -25,6 +26,7 @@ struct ControlOptions {
 void add_socket_option(CLI::App& app, ControlOptions& o) {
   // --control as well: the daemon and the session helper call the same path by that name.
   app.add_option("--socket,--control", o.socket, "The daemon's control socket (pseudohapticd's --control)")
+      ->check(non_empty_path())
       ->capture_default_str();
 }
 

@@ -10,6 +10,7 @@
 #include "config/target_files.hpp"
 #include "core/engine/targets.hpp"
 #include "core/lab/stroke.hpp"
+#include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/finite_check.hpp"
 #include "tools/progress_line.hpp"
@@ -50,7 +51,8 @@ Range stroke_range(const SceneSpec& target_scene, std::string_view method, doubl
 Run add_demo_command(CLI::App& app) {
   auto dir = std::make_shared<std::string>();
   auto step = std::make_shared<double>(2.0);
-  app.add_option("--targets", *dir, "Folder of the target files (default: $XDG_CACHE_HOME/pseudohaptic/targets)");
+  app.add_option("--targets", *dir, "Folder of the target files (default: $XDG_CACHE_HOME/pseudohaptic/targets)")
+      ->check(non_empty_path());
   app.add_option("--step", *step, "Motor travel per frame, px")->check(positive_number())->capture_default_str();
   return [dir, step] {
     const std::filesystem::path folder = dir->empty() ? default_targets_dir() : std::filesystem::path(*dir);

@@ -19,6 +19,7 @@
 #include "core/effects/curvature_class.hpp"
 #include "core/effects/curvature_field.hpp"
 #include "core/effects/patterns.hpp"
+#include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/finite_check.hpp"
 #include "tools/map_flags.hpp"
@@ -175,9 +176,9 @@ Run add_inspect_command(CLI::App& app) {
       "Write what the surface-interrogation methods see in a texture as false-colour PNGs into OUTDIR:\n"
       "K.png (Gaussian curvature), H.png (mean curvature), class.png (planar / parabolic / elliptic /\n"
       "hyperbolic; the legend goes to standard output), isophotes.png and, with a depth map, contours.png.");
-  app.add_option("OUTDIR", o->outdir, "Folder to write into (created if needed)")->required();
-  app.add_option("--normal-map", o->normal_map, "Normal map image (PNG, TIFF, EXR)");
-  app.add_option("--depth-map", o->depth_map, "Depth map image (one channel)");
+  app.add_option("OUTDIR", o->outdir, "Folder to write into (created if needed)")->required()->check(non_empty_path());
+  app.add_option("--normal-map", o->normal_map, "Normal map image (PNG, TIFF, EXR)")->check(non_empty_path());
+  app.add_option("--depth-map", o->depth_map, "Depth map image (one channel)")->check(non_empty_path());
   app.add_option("--from", o->from, "Curvature from the normal or the depth map (default: normal when given)")
       ->check(CLI::IsMember({"normal", "depth"}));
   add_map_flags(app, o->maps);

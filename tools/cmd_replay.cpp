@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +24,7 @@
 #include "core/lab/replay.hpp"
 #include "recording/evemu.hpp"
 #include "recording/recording_file.hpp"
+#include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/finite_check.hpp"
 #include "tools/number_tuple.hpp"
@@ -217,9 +219,9 @@ Scene embedded_scene(const std::string& method, const Rect& desktop) {
 }
 
 // The scene file's scene (or, without one, a note to lay out the embedded default), with a warning per map with invalid
-// texels (repaired) or stretched out of proportion, and per region whose normal map and depth map hold the relief at
-// different scales. `method`, where given, replaces every region's (with the region's own parameters for it where its
-// file has them).
+// texels (repaired) or stretched out of proportion, per region whose normal map and depth map hold the relief at
+// different scales, and per region whose gravity wells found no pattern. `method`, where given, replaces every region's
+// (with the region's own parameters for it where its file has them).
 ReplayScene load_replay_scene(const std::string& scene_file, const std::string& method) {
   if (scene_file.empty()) return {Scene{}, DaemonSettings{}, true};
   SceneSpec spec = parse_scene_file(scene_file);
@@ -228,8 +230,7 @@ ReplayScene load_replay_scene(const std::string& scene_file, const std::string& 
   }
   SceneLoadReport report;
   Scene scene = load_scene(spec, &report);
-  for (const std::string& w : map_warnings(spec, report)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
-  for (const std::string& w : relief_scale_warnings(spec, scene)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
+  for (const std::string& w : load_warnings(spec, report, scene)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
   return {std::move(scene), spec.daemon, false};
 }
 
@@ -262,6 +263,12 @@ int run_replay(const ReplayOptions& o) {
   if (same_path(o.input, o.output))
     throw std::invalid_argument(
         fmt::format("OUTPUT {} is the recording INPUT: write the replay to another file", o.output));
+  if (o.input == "-" && is_standard_input(o.output))
+    throw std::invalid_argument(
+        fmt::format("OUTPUT {} is the file standard input reads: write the replay to another file", o.output));
+  if (o.input == "-" && !o.trace.empty() && is_standard_input(o.trace))
+    throw std::invalid_argument(
+        fmt::format("--trace {} is the file standard input reads: write the trace to another file", o.trace));
   if (!o.trace.empty() && same_path(o.input, o.trace))
     throw std::invalid_argument(
         fmt::format("--trace {} is the recording INPUT: write the trace to another file", o.trace));
@@ -305,6 +312,14 @@ int run_replay(const ReplayOptions& o) {
     if (out.renamed() == renamed) out.commit();
   }
   if (o.output != "-") fmt::print(stderr, "replayed {} events into {}\n", input.events.size(), o.output);
+  // A recording with nothing to rescale gives its input back: said, since it is most likely not the one meant.
+  const bool moved = std::any_of(input.events.begin(), input.events.end(), [](const InputEvent& e) {
+    return e.type == ev::kRel && (e.code == ev::kRelX || e.code == ev::kRelY);
+  });
+  if (!moved) {
+    fmt::print(stderr, "pseudohaptic: warning: {} holds {}: nothing was rescaled\n",
+               o.input == "-" ? "<stdin>" : o.input, input.events.empty() ? "no events" : "no REL_X/REL_Y motion");
+  }
   return 0;
 }
 
@@ -318,13 +333,18 @@ Run add_replay_command(CLI::App& app) {
       "every non-motion event are kept, in order; only REL_X/REL_Y change. Without --as-daemon the pipeline\n"
       "runs with the flags' defaults (relative output, no acceleration), not the daemon's.");
   app.add_option("INPUT", o->input, "Recording to read (evemu or libinput record YAML); - for standard input")
-      ->required();
-  app.add_option("OUTPUT", o->output, "evemu recording to write; - for standard output")->required();
+      ->required()
+      ->check(non_empty_path());
+  app.add_option("OUTPUT", o->output, "evemu recording to write; - for standard output")
+      ->required()
+      ->check(non_empty_path());
   app.add_option("--device", o->device,
                  "Device of a libinput record file to replay, from 0 (default: device 0, or the first with "
                  "REL_X/REL_Y when device 0 has none; an evemu file holds one)")
+      ->check(whole_number(65535))
       ->each([o](const std::string&) { o->device_given = true; });
-  app.add_option("--scene", o->scene_file, "Scene file (default: the embedded default scene, described below)");
+  app.add_option("--scene", o->scene_file, "Scene file (default: the embedded default scene, described below)")
+      ->check(non_empty_path());
   std::vector<std::string> methods;
   const MethodRegistry registry = builtin_methods();
   for (const auto& entry : registry.entries()) methods.push_back(entry->name);
@@ -333,7 +353,8 @@ Run add_replay_command(CLI::App& app) {
                  "replay one recording under each method")
       ->check(CLI::IsMember(methods));
   app.add_option("--trace", o->trace,
-                 "CSV, one row per frame: time_us,in_dx,in_dy,out_dx,out_dy,cursor_x,cursor_y,cd_min,cd_max,dropped");
+                 "CSV, one row per frame: time_us,in_dx,in_dy,out_dx,out_dy,cursor_x,cursor_y,cd_min,cd_max,dropped")
+      ->check(non_empty_path());
   add_number_tuple(app, "--start", o->start, "X,Y",
                    "Start of the cursor model, screen px (default: the desktop's centre)");
   app.add_flag("--as-daemon", o->as_daemon,

@@ -21,6 +21,7 @@
 #include "core/engine/engine_options.hpp"
 #include "core/lab/failure_modes.hpp"
 #include "core/lab/stability.hpp"
+#include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/csv_cell.hpp"
 #include "tools/csv_file.hpp"
@@ -146,7 +147,9 @@ Run add_stability_command(CLI::App& app) {
       "variants worth showing, against the method's own C/D on the exact input; write OUTDIR/stability.csv\n"
       "(one row per mode, severity, method and variant) and OUTDIR/modes.csv for tools/stability_charts.py.\n"
       "Exits 1 if any stroke met a NaN, a C/D out of its method's bounds or never ended.");
-  app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)")->required();
+  app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)")
+      ->required()
+      ->check(non_empty_path());
   app.add_flag("--small", o->small, "Small canvas, two severities a mode, two variants (seconds; for CI)");
   app.add_option("--mode", o->modes, "Run only this failure mode (repeatable; default: all)")
       ->allow_extra_args(false);  // one name per --mode: OUTDIR after it stays OUTDIR

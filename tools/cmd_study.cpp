@@ -18,9 +18,11 @@
 
 #include "core/lab/study.hpp"
 #include "core/lab/study_stats.hpp"
+#include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/csv_file.hpp"
 #include "tools/finite_check.hpp"
+#include "tools/output_folder.hpp"
 #include "tools/study_techniques.hpp"
 
 namespace ph::tools {
@@ -249,7 +251,7 @@ int run_study_command(const StudyOptions& o) {
   if (o.calibrate) return run_calibration(design, techniques);
 
   const fs::path outdir(o.outdir);
-  fs::create_directories(outdir);
+  prepare_output_folder(outdir, {"trials.csv", "summary.csv", "summary.md"});  // before minutes of running
   Clock::time_point last_report = t0;
   const std::vector<TrialRecord> trials = run_study(design, techniques, [&](std::size_t done, std::size_t total) {
     const Clock::time_point now = Clock::now();
@@ -281,11 +283,11 @@ Run add_study_command(CLI::App& app) {
       "training), at most 10 s each. Writes OUTDIR/trials.csv, OUTDIR/summary.csv and OUTDIR/summary.md.\n"
       "Techniques: every method of the engine (both readings of delta_beta_sign where a method has it) and the\n"
       "interrogation effects on the curvature method; the same seed gives the same files.");
-  app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)");
+  app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)")->check(non_empty_path());
   // At least 2: the summaries' confidence intervals are over participants, and of one there is none.
   app.add_option("--participants", o->participants, "Simulated participants, 2 or more (default 12, as in the paper)")
       ->check(CLI::Range(2, 100000));
-  app.add_option("--seed", o->seed, "Seed of every random choice (default 1)");
+  app.add_option("--seed", o->seed, "Seed of every random choice (default 1)")->check(whole_number());
   app.add_flag("--small", o->small,
                "4 participants and the paper's two techniques unless --technique says otherwise (for CI)");
   app.add_option("--technique", o->techniques,
@@ -307,6 +309,11 @@ Run add_study_command(CLI::App& app) {
     StudyOptions options = *o;
     if (options.small && options.participants == 12) options.participants = 4;
     if (!options.calibrate && options.outdir.empty()) throw std::invalid_argument("OUTDIR is required");
+    // What --calibrate finds, or what it would not write, is not also taken from the command line without a word.
+    if (options.calibrate && options.weber)
+      throw std::invalid_argument("--calibrate finds the Weber fraction: give it or --weber, not both");
+    if (options.calibrate && !options.outdir.empty())
+      throw std::invalid_argument(fmt::format("--calibrate writes nothing: leave out OUTDIR ({})", options.outdir));
     return run_study_command(options);
   };
 }

@@ -7,6 +7,7 @@
 #include "config/image_io.hpp"
 #include "config/map_pair_scene.hpp"
 #include "core/lab/surfaces.hpp"
+#include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/progress_line.hpp"
 
@@ -30,7 +31,8 @@ Run add_surfaces_command(CLI::App& app) {
   auto outdir = std::make_shared<std::string>();
   auto size = std::make_shared<std::int32_t>(512);
   app.add_option("OUTDIR", *outdir, "Folder to write into (created if needed); existing files are overwritten")
-      ->required();
+      ->required()
+      ->check(non_empty_path());
   app.add_option("--size", *size, "Side of each square surface, px")->check(CLI::Range(8, 8192))->capture_default_str();
   app.footer(
       "For each surface NAME (plane, cylinder, cone, paraboloid, ellipsoid, sphere, hyperboloid, simple-saddle,\n"

@@ -2,6 +2,7 @@
 
 #include "config/target_files.hpp"
 #include "core/engine/targets.hpp"
+#include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/progress_line.hpp"
 
@@ -10,7 +11,8 @@ namespace ph::tools {
 Run add_targets_command(CLI::App& app) {
   auto outdir = std::make_shared<std::string>();
   app.add_option("OUTDIR", *outdir, "Folder to write into (created if needed); existing target files are overwritten")
-      ->required();
+      ->required()
+      ->check(non_empty_path());
   app.footer(
       "For each target NAME (e.g. bump-gaussian-h1-r200) writes NAME.normal.png (16-bit, exact analytic normals,\n"
       "OpenGL green), NAME.depth.png (16-bit, v = (depth + 1) / 2 of the depth normalised to [-1, 1]) and\n"

@@ -5,16 +5,20 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
 #include "config/field_loader.hpp"
 #include "config/image_io.hpp"
 #include "config/scene_file.hpp"
+#include "core/engine/method_hybrid.hpp"
 #include "core/engine/targets.hpp"
 #include "core/lab/stroke.hpp"
+#include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/csv_cell.hpp"
 #include "tools/csv_file.hpp"
@@ -34,6 +38,7 @@ struct TraceOptions {
   std::vector<double> kmax_limits, kmin_limits, from, to;
   std::optional<double> step, speed;
   double rate = 125.0;
+  bool rate_given = false;  // --rate on the command line (it has a default)
   std::string output = "-";
 };
 
@@ -77,7 +82,11 @@ Scene scene_from_maps(const TraceOptions& o, std::vector<std::string>& warnings)
   for (std::string& note : map_notes(r.sources, report, r.rect.w, r.rect.h)) warnings.push_back(std::move(note));
   std::vector<Region> regions;
   regions.push_back(std::move(region));
-  return Scene(std::move(regions));
+  Scene scene(std::move(regions));
+  // The maps' scales as the method found them when it prepared the fields (the hybrid does, in the scene).
+  const std::optional<ReliefScale> scale = relief_scale(r, scene.regions().front().fields);
+  if (scale && scale->mismatched()) warnings.push_back(scale->warning());
+  return scene;
 }
 
 // A target built in memory from its exact analytic fields (no files).
@@ -140,8 +149,44 @@ Scene build_scene(const TraceOptions& o, std::vector<std::string>& warnings) {
   for (RegionSpec& r : spec.regions) apply_overrides(o, r);
   SceneLoadReport report;
   Scene scene = load_scene(spec, &report);
-  for (std::string& warning : map_warnings(spec, report)) warnings.push_back(std::move(warning));
+  for (std::string& warning : load_warnings(spec, report, scene)) warnings.push_back(std::move(warning));
   return scene;
+}
+
+// A method's option that no traced region's method reads would change nothing: said rather than ignored, as a
+// decoding flag beside a scene file is. (The hybrid method runs its parents with their default parameters.)
+void check_method_options_are_used(const TraceOptions& o, const Scene& scene) {
+  std::vector<std::string> used;
+  for (const Region& region : scene.regions()) {
+    const std::string name(region.method->name());
+    if (std::find(used.begin(), used.end(), name) == used.end()) used.push_back(name);
+  }
+  const auto uses = [&](std::string_view method) { return std::find(used.begin(), used.end(), method) != used.end(); };
+  const std::pair<const char*, bool> curvature_options[] = {{"--kmax-prime", o.kmax_prime.has_value()},
+                                                            {"--kmin-prime", o.kmin_prime.has_value()},
+                                                            {"--kmax-limits", !o.kmax_limits.empty()},
+                                                            {"--kmin-limits", !o.kmin_limits.empty()},
+                                                            {"--delta-beta-sign", o.delta_beta_sign.has_value()}};
+  const std::pair<const char*, bool> depth_options[] = {{"--gain", o.gain.has_value()},
+                                                        {"--depth-kmax", o.depth_kmax.has_value()},
+                                                        {"--depth-kmin", o.depth_kmin.has_value()}};
+  for (const auto& [method, options] : {std::pair<std::string_view, std::span<const std::pair<const char*, bool>>>{
+                                            CurvatureMethod::kName, curvature_options},
+                                        {DepthMethod::kName, depth_options}}) {
+    if (uses(method)) continue;
+    for (const auto& [flag, given] : options) {
+      if (!given) continue;
+      std::string methods;
+      for (const std::string& name : used) methods += (methods.empty() ? "" : ", ") + name;
+      throw std::invalid_argument(fmt::format(
+          "{} is an option of the {} method, which no region traced uses (they use {}{}): give "
+          "--method {} to trace with it",
+          flag, method, methods,
+          uses(HybridMethod::kName) ? "; the hybrid method runs it with its default parameters" : "", method));
+    }
+  }
+  if (o.rate_given && !o.speed)
+    throw std::invalid_argument("--rate applies to --speed only (the step is speed / rate)");
 }
 
 Vec2 point(const std::vector<double>& v, Vec2 fallback) { return v.size() == 2 ? Vec2{v[0], v[1]} : fallback; }
@@ -179,6 +224,15 @@ StrokeSpec checked_stroke(const TraceOptions& o, const Scene& scene) {
   stroke.from = point(o.from, {static_cast<double>(first.x), mid_y});
   stroke.to = point(o.to, {static_cast<double>(first.x + first.w), mid_y});
   stroke.motor_step_px = o.step ? *o.step : o.speed ? *o.speed / o.rate : 1.0;
+  // Even at C/D 1 the stroke would take more frames than a stroke may: said before a CSV of millions of rows.
+  const double frames_at_cd_1 =
+      std::hypot(stroke.to.x - stroke.from.x, stroke.to.y - stroke.from.y) / stroke.motor_step_px;
+  if (frames_at_cd_1 > static_cast<double>(stroke.max_frames)) {
+    throw std::invalid_argument(fmt::format(
+        "the stroke would take {:.3g} frames of {:g} px at C/D 1, more than the {} a stroke may take: "
+        "give a larger {}",
+        frames_at_cd_1, stroke.motor_step_px, stroke.max_frames, o.speed ? "--speed or a smaller --rate" : "--step"));
+  }
   StrokeSpec no_frame = stroke;
   no_frame.max_frames = 0;
   run_stroke(scene, no_frame);
@@ -190,7 +244,9 @@ int run_trace(const TraceOptions& o) {
   std::vector<std::string> warnings;
   const Scene scene = build_scene(o, warnings);
   for (const std::string& w : warnings) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
+  check_method_options_are_used(o, scene);
   const StrokeSpec stroke = checked_stroke(o, scene);
+  bool met_a_region = false;
 
   CsvFile file(o.output);
   fmt::memory_buffer out;
@@ -202,6 +258,7 @@ int run_trace(const TraceOptions& o) {
   };
   const StrokeResult result = run_stroke(scene, stroke, [&](std::size_t frame, const StepRecord& s) {
     if (!s.entered && frame != 0) return;  // one row per texel step (and the texel the stroke starts in)
+    met_a_region = met_a_region || s.region != nullptr;
     fmt::format_to(std::back_inserter(out), "{},{:.6f},{:.6f},{},{},", frame, s.entry.x, s.entry.y, s.texel.x,
                    s.texel.y);
     for (double v : {s.detail.cos_alpha, s.detail.delta_beta_deg, s.detail.kmax, s.detail.kmin, s.detail.dh}) {
@@ -216,6 +273,22 @@ int run_trace(const TraceOptions& o) {
   fmt::print(stderr, "{} frames, cursor ended at ({:.3f}, {:.3f}), C/D range [{:.4g}, {:.4g}]{}\n", result.frames,
              result.end.position.x, result.end.position.y, result.cd_min, result.cd_max,
              result.reached ? "" : " (stopped before the end point)");
+  if (!met_a_region) {
+    const Region& first = scene.regions().front();
+    fmt::print(stderr,
+               "pseudohaptic: warning: the stroke from ({:g}, {:g}) to ({:g}, {:g}) crosses no region of the scene, so "
+               "its C/D is 1 throughout ({} '{}' covers ({}, {}) to ({}, {}))\n",
+               stroke.from.x, stroke.from.y, stroke.to.x, stroke.to.y,
+               scene.regions().size() == 1 ? "its region" : "its first region", first.name, first.rect.x, first.rect.y,
+               first.rect.x + first.rect.w, first.rect.y + first.rect.h);
+  }
+  if (!result.reached) {
+    fmt::print(stderr,
+               "pseudohaptic: error: the stroke stopped after {} frames, the most a stroke may take, before its end "
+               "point; {} holds it so far: give a larger {}\n",
+               result.frames, o.output == "-" ? "the output" : o.output, o.speed ? "--speed" : "--step");
+    return 1;
+  }
   return 0;
 }
 
@@ -232,10 +305,13 @@ Run add_trace_command(CLI::App& app) {
       "--to. A summary, and a warning per map with invalid texels (repaired) or stretched out of proportion\n"
       "to its region, go to standard error.");
   auto* src = app.add_option_group("texture", "What to trace across (exactly one)");
-  src->add_option("--scene", o->scene_file, "Scene file (TOML); the stroke defaults to the first region");
+  src->add_option("--scene", o->scene_file, "Scene file (TOML); the stroke defaults to the first region")
+      ->check(non_empty_path());
   src->add_option("--target", o->target, "One of the 24 targets by name (e.g. bump-gaussian-h1-r200), exact fields");
-  src->add_option("--normal-map", o->normal_map, "Normal map image (PNG, TIFF, EXR); region at (0,0), image size");
-  src->add_option("--depth-map", o->depth_map, "Depth map image (one channel); with --normal-map too, both are used");
+  src->add_option("--normal-map", o->normal_map, "Normal map image (PNG, TIFF, EXR); region at (0,0), image size")
+      ->check(non_empty_path());
+  src->add_option("--depth-map", o->depth_map, "Depth map image (one channel); with --normal-map too, both are used")
+      ->check(non_empty_path());
   add_map_flags(app, o->maps);
   std::vector<std::string> methods;
   const MethodRegistry registry = builtin_methods();
@@ -257,8 +333,12 @@ Run add_trace_command(CLI::App& app) {
   add_number_tuple(app, "--to", o->to, "X,Y", "End of the stroke (default: right edge, middle height)");
   app.add_option("--step", o->step, "Motor travel per frame, px at C/D 1 (default 1)");
   app.add_option("--speed", o->speed, "Hand speed, px/s at C/D 1; the step is speed / rate");
-  app.add_option("--rate", o->rate, "Frames per second with --speed")->capture_default_str();
-  app.add_option("-o,--output", o->output, "CSV file, - for standard output")->capture_default_str();
+  app.add_option("--rate", o->rate, "Frames per second with --speed")
+      ->each([o](const std::string&) { o->rate_given = true; })
+      ->capture_default_str();
+  app.add_option("-o,--output", o->output, "CSV file, - for standard output")
+      ->check(non_empty_path())
+      ->capture_default_str();
   return [o] { return run_trace(*o); };
 }
 

@@ -69,18 +69,25 @@ int main(int argc, char** argv) {
       ph::tools::add_status_command);
   add("cursor", "Print the running daemon's cursor model, or move it with --set X,Y", ph::tools::add_cursor_command);
 
-  // CLI11 answers a misspelt command with only "A subcommand is required": name it and list the commands.
-  if (argc > 1 && argv[1][0] != '-') {
-    bool known = false;
-    std::string names;
-    for (const CLI::App* sub : app.get_subcommands({})) {
-      known = known || sub->get_name() == argv[1];
-      names += (names.empty() ? "" : ", ") + sub->get_name();
+  // CLI11 answers a misspelt command, no command, or an option before the command with only "A subcommand is
+  // required": say which, and list the commands.
+  std::string names;
+  bool known = false;
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    known = known || (argc > 1 && sub->get_name() == argv[1]);
+    names += (names.empty() ? "" : ", ") + sub->get_name();
+  }
+  const std::string_view first = argc > 1 ? argv[1] : "";
+  if (!known && first != "-h" && first != "--help" && first != "--version") {
+    if (first.empty()) {
+      fmt::print(stderr, "pseudohaptic: give a command: {} (--help explains each)\n", names);
+    } else if (first.front() == '-') {
+      fmt::print(stderr, "pseudohaptic: unknown option '{}' before the command (commands: {}; --help explains each)\n",
+                 first, names);
+    } else {
+      fmt::print(stderr, "pseudohaptic: unknown command '{}' (commands: {}; --help explains each)\n", first, names);
     }
-    if (!known) {
-      fmt::print(stderr, "pseudohaptic: unknown command '{}' (commands: {}; --help explains each)\n", argv[1], names);
-      return 2;
-    }
+    return 2;
   }
   try {
     app.parse(argc, argv);

@@ -26,4 +26,13 @@ inline bool same_path(const std::string& a, const std::string& b) {
   return std::filesystem::weakly_canonical(a, ignored) == std::filesystem::weakly_canonical(b, ignored);
 }
 
+// Whether standard input is the file at `path` (a recording redirected in with `< FILE`): writing `path` would
+// replace what is being read.
+inline bool is_standard_input(const std::string& path) {
+  if (path == "-") return false;
+  struct stat in {};
+  struct stat at {};
+  return ::fstat(0, &in) == 0 && S_ISREG(in.st_mode) && ::stat(path.c_str(), &at) == 0 && same_file(in, at);
+}
+
 }  // namespace ph::tools
