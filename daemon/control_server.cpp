@@ -150,21 +150,24 @@ std::string ControlServer::answer(int fd, const std::string& line, ControlHandle
   }
   if (std::holds_alternative<control::CursorRequest>(request)) return control::format_cursor(handler.cursor());
   if (const auto* p = std::get_if<control::PositionRequest>(&request)) {
-    handler.position(p->position, fd == helper_fd_);
+    handler.position(p->position, fd == helpers_.latest());
     return control::format_ok();
   }
   if (const auto* l = std::get_if<control::LayoutRequest>(&request)) {
-    layout_fd_ = fd;
+    clients_.at(fd)->layout = l->desktop;
+    layouts_.sent(fd);
     handler.layout(l->desktop);
     return control::format_ok();
   }
   if (const auto* p = std::get_if<control::PassthroughRequest>(&request)) {
+    clients_.at(fd)->passthrough = p->on;
+    passthroughs_.sent(fd);
     handler.passthrough(p->on);
     return control::format_ok();
   }
   const auto& h = std::get<control::HelperRequest>(request);
   const bool had = has_helper();
-  helper_fd_ = fd;  // the newest helper wins: a restarted session replaces the old one
+  helpers_.sent(fd);  // the newest helper wins: a restarted session replaces the old one
   log_.info("control socket: session helper '{}' connected (uid {})", h.backend, clients_.at(fd)->uid);
   if (!had) handler.helper_changed(true);
   return control::format_ok();
@@ -178,20 +181,39 @@ bool ControlServer::send_line(int fd, const std::string& line) {
 }
 
 void ControlServer::query_helper() {
-  if (helper_fd_ < 0) return;
-  if (!send_line(helper_fd_, "query")) log_.debug("control socket: the session helper did not take a query");
+  if (!has_helper()) return;
+  if (!send_line(helpers_.latest(), "query")) log_.debug("control socket: the session helper did not take a query");
 }
 
+// What the closed connection had set gives way to what the latest one still open set before it, or, where none is
+// left, to the daemon's own state: no helper, a layout nothing keeps up to date, no pass-through.
 void ControlServer::drop(int fd, ControlHandler& handler) {
   ::epoll_ctl(epoll_, EPOLL_CTL_DEL, fd, nullptr);
-  if (fd == helper_fd_) {
-    helper_fd_ = -1;
-    log_.info("control socket: the session helper went away");
-    handler.helper_changed(false);
+  if (helpers_.closed(fd)) {
+    if (has_helper()) {
+      log_.info(
+          "control socket: the session helper went away; the one connected before it (uid {}) is the helper "
+          "again",
+          clients_.at(helpers_.latest())->uid);
+      query_helper();  // the cursor may be anywhere on that session's desktop
+    } else {
+      log_.info("control socket: the session helper went away");
+      handler.helper_changed(false);
+    }
   }
-  if (fd == layout_fd_) {
-    layout_fd_ = -1;
-    handler.layout_source_gone();
+  if (layouts_.closed(fd)) {
+    if (const int before = layouts_.latest(); before >= 0) {
+      handler.layout(*clients_.at(before)->layout);
+    } else {
+      handler.layout_source_gone();
+    }
+  }
+  if (passthroughs_.closed(fd)) {
+    const int before = passthroughs_.latest();
+    const bool on = before >= 0 && clients_.at(before)->passthrough;
+    if (clients_.at(fd)->passthrough && !on)
+      log_.info("control socket: the connection that asked for pass-through has closed");
+    handler.passthrough(on);
   }
   clients_.erase(fd);
 }

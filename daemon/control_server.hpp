@@ -6,8 +6,10 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "control/protocol.hpp"
 #include "daemon/control_access.hpp"
@@ -30,8 +32,29 @@ class ControlHandler {
   virtual void layout_source_gone() = 0;
   virtual void helper_changed(bool present) = 0;
   // An application that reads raw relative motion (a game holding a pointer grab) has the focus: the
-  // mice's frames go unchanged through relative devices until it is off again.
+  // mice's frames go unchanged through relative devices until it is off again, or until the connection that
+  // asked for it closes (the session ended with the game in focus).
   virtual void passthrough(bool on) = 0;
+};
+
+// The open connections that sent one kind of request, the latest last: the daemon follows the latest, and when
+// that one closes, the latest of those still open (a second session's helper gone, the first one's is still there).
+class LatestSenders {
+ public:
+  void sent(int fd) {
+    std::erase(fds_, fd);
+    fds_.push_back(fd);
+  }
+  int latest() const { return fds_.empty() ? -1 : fds_.back(); }
+  // Forgets `fd`; true when it was the latest.
+  bool closed(int fd) {
+    const bool was_latest = latest() == fd;
+    std::erase(fds_, fd);
+    return was_latest;
+  }
+
+ private:
+  std::vector<int> fds_;
 };
 
 // Another process (another pseudohapticd) accepts connections on the control socket's path.
@@ -53,7 +76,7 @@ class ControlServer {
 
   bool owns(int fd) const { return fd == listener_.get() || clients_.contains(fd); }
   void on_readable(int fd, ControlHandler& handler);
-  bool has_helper() const { return helper_fd_ >= 0; }
+  bool has_helper() const { return helpers_.latest() >= 0; }
   // Asks the session helper where the real cursor is; it answers with `position X Y` later.
   void query_helper();
   const std::string& path() const { return path_; }
@@ -63,6 +86,8 @@ class ControlServer {
     UniqueFd fd;
     control::LineBuffer lines;
     uid_t uid = 0;
+    std::optional<Rect> layout;  // the last layout it sent
+    bool passthrough = false;    // what its last passthrough request asked
   };
   static constexpr std::size_t kMaxClients = 16;
 
@@ -78,8 +103,9 @@ class ControlServer {
   const Logger& log_;
   UniqueFd listener_;
   std::map<int, std::unique_ptr<Client>> clients_;
-  int helper_fd_ = -1;
-  int layout_fd_ = -1;  // the connection that sent the last layout (a helper, or a layout-only one)
+  LatestSenders helpers_;       // the connections that said `helper`: the latest is the session helper
+  LatestSenders layouts_;       // the connections that sent a layout (a helper, or a layout-only one)
+  LatestSenders passthroughs_;  // the connections that sent `passthrough on` or `off`
 };
 
 // The socket's path: `--control` if given, else $RUNTIME_DIRECTORY/control under systemd, else

@@ -518,12 +518,13 @@ bool Daemon::make_passthrough_sink(const std::string& node, Mouse& mouse) {
 }
 
 void Daemon::passthrough(bool on) {
+  passthrough_asked_ = on;
+  set_passthrough(on && config_.pipeline.mode == OutputMode::absolute);  // relative motion already reaches such
+}  // applications as motion
+
+void Daemon::set_passthrough(bool on) {
   if (on == passthrough_wanted_) return;
   passthrough_wanted_ = on;
-  if (on && config_.pipeline.mode == OutputMode::relative) {
-    passthrough_wanted_ = false;  // relative output already reaches such applications as motion
-    return;
-  }
   log_.info(
       "pass-through {}: {}", on ? "on" : "off",
       on ? "the mice's motion goes unchanged to the application that holds the pointer" : "the textures are back");
@@ -653,15 +654,17 @@ void Daemon::position(Vec2 position, bool from_helper) {
   if (from_helper) release_held();
 }
 
+// Kept even while the scene file sets the desktop: a reload to desktop = "auto" then takes it (the helper sends a
+// layout only when it changes).
 void Daemon::layout(Rect desktop) {
+  helper_desktop_ = desktop;
+  helper_desktop_kept_up_ = true;
   if (config_.settings.desktop) {
     if (desktop != config_.pipeline.desktop)
       log_.notice("the session helper says the desktop is {}x{}+{}+{}; keeping the scene file's desktop", desktop.w,
                   desktop.h, desktop.x, desktop.y);
     return;
   }
-  helper_desktop_ = desktop;
-  helper_desktop_kept_up_ = true;
   change_desktop(desktop, "from the session helper");
 }
 
@@ -734,7 +737,13 @@ void Daemon::restart_devices(std::string_view why) {
 // SIGHUP: the scene is loaded on the reloader's thread while frames go on through the old one
 // (docs/SERVICE.md, "Reloads"); on_reload_ended swaps it in.
 void Daemon::reload() {
-  const std::string what = choice_.file ? choice_.file->string() : config_.source;
+  // What the load reads (daemon/configuration.cpp), which need not be what was loaded last: the default file may
+  // have been made or removed since.
+  const std::string what =
+      choice_.file ? choice_.file->string()
+      : choice_.default_scene
+          ? std::string("the embedded default scene")
+          : fmt::format("{} (the embedded default scene where it does not exist)", choice_.default_file.string());
   if (!reloader_.request()) {
     log_.info("SIGHUP received during a reload; {} will be read again once the load under way ends", what);
     return;
@@ -768,7 +777,13 @@ void Daemon::on_reload_ended() {
 // Between two frames: the loop runs one handler at a time, and a frame's events wait in its assembler
 // until SYN_REPORT, so every frame goes through one scene.
 void Daemon::apply(Configuration next) {
-  if (helper_desktop_ && !next.settings.desktop) next.pipeline.desktop = *helper_desktop_;
+  // The helper's layout, where it is kept up to date or was in use: one left from a helper that has gone while the
+  // scene file set the desktop may be out of date, with no display change seen meanwhile to say so.
+  if (helper_desktop_ && !next.settings.desktop && (helper_desktop_kept_up_ || !config_.settings.desktop)) {
+    next.pipeline.desktop = *helper_desktop_;
+  } else if (!next.settings.desktop) {
+    helper_desktop_.reset();
+  }
   if (next.embedded && !default_scene_laid_out_for(*next.scene, next.pipeline.desktop)) {
     next.scene = std::make_shared<const Scene>(default_scene(next.pipeline.desktop));
     next.notes.push_back("the embedded default scene laid out again for the session helper's desktop: " +
@@ -783,6 +798,11 @@ void Daemon::apply(Configuration next) {
     // New [daemon] settings: new virtual devices, and the mice chosen again; the cursor stays put.
     log_.info("the [daemon] settings changed; taking the mice again");
     config_ = std::move(next);
+    // Pass-through as asked, with the new output: none with relative output, back with absolute.
+    const bool passing = passthrough_asked_ && config_.pipeline.mode == OutputMode::absolute;
+    if (passing != passthrough_wanted_)
+      log_.info("pass-through {} with {} output", passing ? "on again" : "off", passing ? "absolute" : "relative");
+    passthrough_wanted_ = passing;
     restart_devices("settings changed");
   }
   reloader_.dispose(std::move(replaced));  // the last reference: freed off the event loop

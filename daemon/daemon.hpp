@@ -83,6 +83,7 @@ class Daemon final : private ControlHandler {
   void on_displays_changed();
   void change_desktop(Rect desktop, std::string_view why);
   void passthrough(bool on) override;
+  void set_passthrough(bool on);
   void route(Mouse& mouse, const InputEvent& event);
   bool make_passthrough_sink(const std::string& node, Mouse& mouse);
 
@@ -143,7 +144,8 @@ class Daemon final : private ControlHandler {
   SteadyTime last_query_{};
   SteadyTime last_untaken_motion_{};
   bool settle_query_due_ = false;
-  bool passthrough_wanted_ = false;
+  bool passthrough_asked_ = false;   // what the control socket asks for
+  bool passthrough_wanted_ = false;  // what is done: as asked, with absolute output only
   // Motion after a pause waits for the helper's answer (at most kHoldForHelperNs): events by node.
   bool holding_ = false;
   std::vector<std::pair<std::string, InputEvent>> held_events_;

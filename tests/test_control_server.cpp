@@ -164,7 +164,8 @@ TEST(ControlServer, AnswersEveryRequestAndQueriesTheHelper) {
 }
 
 // The daemon keeps a session helper's layout over the connected displays only while the connection that sent it
-// is open: it is told when that connection closes, and only for the connection whose layout is the latest.
+// is open: when the connection whose layout is the latest closes, it is given the layout of the latest one still
+// open, and told that the layout's source has gone where none is.
 TEST(ControlServer, SaysWhenTheConnectionThatGaveTheLayoutCloses) {
   const ScratchDir dir("control");
   const std::string path = (dir.path() / "control").string();
@@ -185,17 +186,87 @@ TEST(ControlServer, SaysWhenTheConnectionThatGaveTheLayoutCloses) {
     EXPECT_TRUE(tool.request("status").ok);
   }
   EXPECT_EQ(wait_for_gone(1), 1);
-  control::Client first(path);
-  ASSERT_TRUE(first.request("helper test").ok);
-  ASSERT_TRUE(first.request("layout 0 0 1280 800").ok);
   {
-    control::Client second(path);  // a restarted session's helper: its layout is the latest
-    ASSERT_TRUE(second.request("layout 0 0 1920 1080").ok);
-    EXPECT_EQ(server.handler.desktop(), (Rect{0, 0, 1920, 1080}));
+    control::Client first(path);
+    ASSERT_TRUE(first.request("helper test").ok);
+    ASSERT_TRUE(first.request("layout 0 0 1280 800").ok);
+    {
+      control::Client second(path);  // another session's helper: its layout is the latest
+      ASSERT_TRUE(second.request("layout 0 0 1920 1080").ok);
+      EXPECT_EQ(server.handler.desktop(), (Rect{0, 0, 1920, 1080}));
+    }
+    // The older layout's connection is still open: its layout is the one again, and nothing is gone.
+    for (int i = 0; i < 200 && server.handler.desktop() != Rect{0, 0, 1280, 800}; ++i)
+      std::this_thread::sleep_for(10ms);
+    EXPECT_EQ(server.handler.desktop(), (Rect{0, 0, 1280, 800}));
+    EXPECT_EQ(server.handler.layout_sources_gone_, 1);
   }
   EXPECT_EQ(wait_for_gone(2), 2);
+}
+
+// Pass-through lasts while the connection that asked for it is open: a session that ends with a game in focus
+// must not leave every later session without textures. Where another open connection asked before, its wish holds.
+TEST(ControlServer, PassThroughEndsWithTheConnectionThatAskedForIt) {
+  const ScratchDir dir("control");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  ServerLoop server(path, sessions);
+  const auto wait_for = [&](bool on) {
+    for (int i = 0; i < 200 && server.handler.passthrough_ != on; ++i) std::this_thread::sleep_for(10ms);
+    return server.handler.passthrough_.load();
+  };
+  {
+    control::Client helper(path);
+    ASSERT_TRUE(helper.request("helper test").ok);
+    ASSERT_TRUE(helper.request("passthrough on").ok);
+    EXPECT_TRUE(server.handler.passthrough_);
+  }
+  EXPECT_FALSE(wait_for(false));  // the session ended with the game in focus
+  control::Client first(path);
+  ASSERT_TRUE(first.request("passthrough on").ok);
+  {
+    control::Client second(path);
+    ASSERT_TRUE(second.request("passthrough off").ok);
+    EXPECT_FALSE(server.handler.passthrough_);
+  }
+  EXPECT_TRUE(wait_for(true));  // the first connection, still open, asked for it
+  {
+    control::Client tool(path);  // a connection that never asked changes nothing when it closes
+    EXPECT_TRUE(tool.request("status").ok);
+  }
   std::this_thread::sleep_for(50ms);
-  EXPECT_EQ(server.handler.layout_sources_gone_, 2);  // the older layout's connection is still open, and not told of
+  EXPECT_TRUE(server.handler.passthrough_);
+}
+
+// With two sessions' helpers connected (a fast user switch), the latest is the helper; when it goes, the one before
+// it is the helper again, with its layout, and is asked where the cursor is.
+TEST(ControlServer, AnEarlierHelperTakesOverWhenTheLatestGoes) {
+  const ScratchDir dir("control");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  ServerLoop server(path, sessions);
+  control::Client first(path);
+  ASSERT_TRUE(first.request("helper x11").ok);
+  ASSERT_TRUE(first.request("layout 0 0 1280 800").ok);
+  {
+    control::Client second(path);
+    ASSERT_TRUE(second.request("helper x11").ok);
+    ASSERT_TRUE(second.request("layout 0 0 3840 1080").ok);
+    EXPECT_EQ(server.handler.desktop(), (Rect{0, 0, 3840, 1080}));
+    ASSERT_TRUE(second.request("position 7 8").ok);
+    EXPECT_EQ(server.handler.helper_positions(), 1);
+    ASSERT_TRUE(first.request("position 9 10").ok);  // no longer the helper: a user's --set
+    EXPECT_EQ(server.handler.helper_positions(), 1);
+  }
+  EXPECT_EQ(first.read_line(2s), "query");  // the helper again: where is the cursor on its desktop?
+  for (int i = 0; i < 200 && server.handler.desktop() != Rect{0, 0, 1280, 800}; ++i) std::this_thread::sleep_for(10ms);
+  EXPECT_EQ(server.handler.desktop(), (Rect{0, 0, 1280, 800}));
+  EXPECT_TRUE(server.handler.helper_present_);
+  EXPECT_EQ(server.handler.layout_sources_gone_, 0);
+  control::Client tool(path);
+  EXPECT_TRUE(control::parse_status(tool.request("status").text)->helper);
+  ASSERT_TRUE(first.request("position 11 12").ok);
+  EXPECT_EQ(server.handler.helper_positions(), 2);
 }
 
 // A second daemon started beside a running one (`sudo pseudohapticd` while the service runs) must not take the

@@ -582,16 +582,21 @@ int follow_cases(const Options& options, XServer& x, TestMouse& mouse, TestMouse
                   std::chrono::duration<double>(Clock::now() - case_start).count());
     failed += !problems.empty();
   }
-  {  // [h] a listed application has the focus: the mouse's motion reaches X unchanged through the
-     // pass-through device, not through the absolute one, and the textures come back when it loses it
-    const auto case_start = Clock::now();
-    std::vector<std::string> problems, notes;
+  // A window of the application the helper was given with --passthrough, made the active one.
+  const auto focus_game = [&] {
     const Window game = XCreateSimpleWindow(x.get(), x.root(), 0, 0, 64, 64, 0, 0, 0);
     XClassHint hint{const_cast<char*>("ph-game"), const_cast<char*>("Ph-game")};
     XSetClassHint(x.get(), game, &hint);
     x.set_active_window(game);
     XSync(x.get(), False);
-    const auto passing = [&] { return control.request("status").find("passthrough=on") != std::string::npos; };
+    return game;
+  };
+  const auto passing = [&] { return control.request("status").find("passthrough=on") != std::string::npos; };
+  {  // [h] a listed application has the focus: the mouse's motion reaches X unchanged through the
+     // pass-through device, not through the absolute one, and the textures come back when it loses it
+    const auto case_start = Clock::now();
+    std::vector<std::string> problems, notes;
+    const Window game = focus_game();
     if (!wait_until(passing, 10s, nullptr, 50ms)) daemon.fatal("the daemon did not switch to pass-through");
     const std::optional<int> relative = x.wait_for_pointer(std::string(kVirtualName) + " (pass-through)", 30s);
     if (!relative) daemon.fatal("X did not add the pass-through device");
@@ -644,8 +649,41 @@ int follow_cases(const Options& options, XServer& x, TestMouse& mouse, TestMouse
                   problems, notes, std::chrono::duration<double>(Clock::now() - case_start).count());
     failed += !problems.empty();
   }
-  helper.signal(SIGTERM);
-  helper.wait_exit(5s);
+  {  // [i] the session ends (the helper stops) while a listed application has the focus: pass-through ends with
+     // the helper's connection, and the mouse's frames come out of the absolute device again
+    const auto case_start = Clock::now();
+    std::vector<std::string> problems, notes;
+    const Window game = focus_game();
+    if (!wait_until(passing, 10s, nullptr, 50ms)) daemon.fatal("the daemon did not switch to pass-through again");
+    EventReader through(find_input_node(std::string(kVirtualName) + " (pass-through)"));
+    EventReader positions(find_input_node(kVirtualName));
+    helper.signal(SIGTERM);
+    helper.wait_exit(5s);
+    const auto stopped = Clock::now();
+    if (!wait_until([&] { return !passing(); }, 5s, nullptr, 10ms))
+      problems.push_back("pass-through stayed on after the helper that asked for it had gone");
+    const double ended_ms = std::chrono::duration<double, std::milli>(Clock::now() - stopped).count();
+    through.read_now();
+    positions.read_now();
+    const Frame in = make_frame({rel(ev::kRelX, 6), rel(ev::kRelY, -2)});
+    mouse.send(in);
+    const std::optional<Frame> got = positions.next_frame(kFrameTimeout);
+    if (!got) problems.push_back("nothing came out of the absolute device after pass-through ended");
+    std::this_thread::sleep_for(100ms);
+    const std::size_t from_through = through.read_now().size();
+    if (from_through != 0)
+      problems.push_back(fmt::format("the pass-through device emitted {} events after it ended", from_through));
+    notes.push_back(
+        fmt::format("the helper stopped with the application in focus; status said passthrough=off "
+                    "{:.0f} ms later; the next frame came out of the absolute device{}",
+                    ended_ms, got ? " (" + describe(*got) + ")" : std::string(" (none)")));
+    x.set_active_window(None);
+    XDestroyWindow(x.get(), game);
+    XSync(x.get(), False);
+    print_verdict("[i] the session ends with that application in focus: pass-through ends with the helper", problems,
+                  notes, std::chrono::duration<double>(Clock::now() - case_start).count());
+    failed += !problems.empty();
+  }
   std::vector<std::string> problems;
   daemon.stop(x, problems);
   for (const std::string& p : problems) std::printf("FAIL [d, g] %s\n", p.c_str());
