@@ -88,9 +88,13 @@ std::vector<std::string> invalid_texel_notes(const FieldSources& sources, const 
   auto note = [&](const char* what, const std::optional<std::filesystem::path>& path, const DecodeReport& r,
                   const char* why) {
     if (r.invalid_texels == 0) return;
-    notes.push_back(std::string(what) + " " + (path ? path->string() : std::string("(none)")) + ": " +
-                    std::to_string(r.invalid_texels) + " of " + std::to_string(r.texels) + " texels invalid (" + why +
-                    "), each given the nearest valid texel's value");
+    const std::string map = std::string(what) + " " + (path ? path->string() : std::string("(none)")) + ": ";
+    if (r.invalid_texels >= r.texels) {  // nothing to take a value from (core/engine/decode.cpp)
+      notes.push_back(map + "every texel invalid (" + why + "), so the map reads as flat");
+      return;
+    }
+    notes.push_back(map + std::to_string(r.invalid_texels) + " of " + std::to_string(r.texels) + " texels invalid (" +
+                    why + "), each given the nearest valid texel's value");
   };
   note("normal map", sources.normal_map, report.normals, "length < 0.5, n_z <= 0 or not finite");
   note("depth map", sources.depth_map, report.depth, "not finite");

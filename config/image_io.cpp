@@ -1,13 +1,17 @@
 #include "config/image_io.hpp"
 
 #include <dlfcn.h>
+#include <fcntl.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -104,6 +108,13 @@ const image_backend::Table& backend(const fs::path& image) {
   }
 }
 
+// OpenImageIO says only "Could not open file" where the file cannot be made: the file system's reason, first.
+void check_writable(const fs::path& path) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0666);
+  if (fd < 0) throw image_file_error(path, std::string("cannot write: ") + std::strerror(errno));
+  ::close(fd);
+}
+
 // Code of a value in [0, 1] for the largest code `code_max`; a non-finite value writes 0.
 std::uint16_t unorm_code(double v, double code_max) {
   if (!std::isfinite(v)) v = 0.0;
@@ -121,10 +132,12 @@ void write_unorm(const fs::path& path, std::int32_t width, std::int32_t height, 
     std::vector<std::uint8_t> codes(values.size());
     std::transform(values.begin(), values.end(), codes.begin(),
                    [](double v) { return static_cast<std::uint8_t>(unorm_code(v, 255.0)); });
+    check_writable(path);
     backend(path).write_image(path, format, width, height, channels, image_backend::PixelType::uint8, codes.data());
   } else {
     std::vector<std::uint16_t> codes(values.size());
     std::transform(values.begin(), values.end(), codes.begin(), [](double v) { return unorm_code(v, 65535.0); });
+    check_writable(path);
     backend(path).write_image(path, format, width, height, channels, image_backend::PixelType::uint16, codes.data());
   }
 }
@@ -143,18 +156,38 @@ void check_before_decoding(const fs::path& path, const ImageLimits& limits) {
   if (lowercase_extension(path) == ".exr") check_exr_header(path, limits);
 }
 
-// A file named .png is read with libpng here (config/image_png.hpp), without loading the module.
-bool read_here(const fs::path& path) { return lowercase_extension(path) == ".png"; }
+// Whether the file begins with the PNG signature, whatever its name says.
+bool starts_as_png(const fs::path& path) {
+  constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  unsigned char head[sizeof kSignature] = {};
+  const ssize_t n = ::read(fd, head, sizeof head);
+  ::close(fd);
+  return n == static_cast<ssize_t>(sizeof head) && std::memcmp(head, kSignature, sizeof head) == 0;
+}
+
+// A file named .png, or one that is a PNG under another name (a map saved without its extension), is read with
+// libpng here (config/image_png.hpp), without loading the module.
+bool read_here(const fs::path& path) { return lowercase_extension(path) == ".png" || starts_as_png(path); }
+
+// A folder named as an image is said as such, not as a format no reader knows or a file that is not a PNG.
+void check_not_a_folder(const fs::path& path) {
+  std::error_code ignored;
+  if (fs::is_directory(path, ignored)) throw image_file_error(path, "is a folder, not an image file");
+}
 
 }  // namespace
 
 ImageSize read_image_size(const fs::path& path, const ImageLimits& limits) {
+  check_not_a_folder(path);
   if (read_here(path)) return read_png_size(path, limits);
   check_before_decoding(path, limits);
   return backend(path).read_image_size(path, limits);
 }
 
 RawImage read_image(const fs::path& path, const ImageLimits& limits) {
+  check_not_a_folder(path);
   if (read_here(path)) return read_png(path, limits);
   return read_image_with_openimageio(path, limits);
 }
@@ -190,6 +223,7 @@ void write_gray_png16(const std::filesystem::path& path, const Grid<float>& valu
 }
 
 void write_float_exr(const std::filesystem::path& path, const Grid<float>& values) {
+  check_writable(path);
   backend(path).write_image(path, "openexr", values.width, values.height, 1, image_backend::PixelType::float32,
                             values.values.data());
 }
@@ -198,6 +232,7 @@ void write_rgb_png8(const std::filesystem::path& path, std::int32_t width, std::
                     const std::vector<std::uint8_t>& rgb) {
   if (rgb.size() != static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0)) * 3)
     throw image_file_error(path, "cannot write: pixel count does not match the size");
+  check_writable(path);
   backend(path).write_image(path, "png", width, height, 3, image_backend::PixelType::uint8, rgb.data());
 }
 

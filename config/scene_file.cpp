@@ -442,8 +442,9 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   r.sources.depth_options.relief_px = get_number(rep, t, "relief_px", where, 100.0);
   if (!std::isfinite(r.sources.depth_options.depth_zero))
     rep.fail(t.get("depth_zero"), where + "depth_zero", "must be finite");
-  if (!std::isfinite(r.sources.depth_options.relief_px))
-    rep.fail(t.get("relief_px"), where + "relief_px", "must be finite");
+  if (!(std::abs(r.sources.depth_options.relief_px) <= kMaxReliefPx))  // (NaN fails)
+    rep.fail(t.get("relief_px"), where + "relief_px",
+             fmt::format("must be a finite number from -{0:g} to {0:g}", kMaxReliefPx));
 
   if (!r.sources.normal_map && !r.sources.depth_map)
     rep.fail(&t, where + "normal_map", "a region needs a normal_map or a depth_map");
@@ -667,10 +668,18 @@ SceneSpec parse_scene_file(const std::filesystem::path& file, MethodRegistry met
   std::error_code ignored;
   if (std::filesystem::is_directory(file, ignored))
     throw ConfigError(fmt::format("{}: is a folder, not a scene file", file.string()));
-  std::ostringstream text;
-  text << in.rdbuf();
+  // Read up to a bound: /dev/zero or a huge file named by mistake must not take all the memory there is.
+  std::string text;
+  std::array<char, 1 << 16> chunk{};
+  while (in.read(chunk.data(), chunk.size()) || in.gcount() > 0) {
+    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxSceneFileBytes) {
+      throw ConfigError(fmt::format("{}: longer than {} MiB, which no scene file is: is it the file meant?",
+                                    file.string(), kMaxSceneFileBytes >> 20));
+    }
+  }
   if (in.bad()) throw ConfigError(fmt::format("{}: cannot read the scene file", file.string()));
-  return parse_scene_text(text.str(), file, std::move(methods));
+  return parse_scene_text(text, file, std::move(methods));
 }
 
 MethodPtr make_method(const RegionSpec& region, const MethodRegistry& methods) {

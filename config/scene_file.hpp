@@ -4,6 +4,7 @@
 #pragma once
 
 #include <any>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -29,6 +30,8 @@ inline constexpr std::string_view kDefaultSceneFile = "/etc/pseudohaptic/scene.t
 
 // A region's width and height in px are at most this (a 16384 x 16384 curvature region holds 2 GiB of fields).
 inline constexpr std::int32_t kMaxRegionSide = 1 << 14;
+// The longest scene file read: thousands of regions take a few hundred KiB.
+inline constexpr std::size_t kMaxSceneFileBytes = std::size_t{4} << 20;
 
 class ConfigError : public std::runtime_error {
  public:

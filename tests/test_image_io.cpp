@@ -139,6 +139,47 @@ TEST(ImageIo, WritingToAMissingDirectoryNamesThePath) {
       path, [&] { write_normal_png16(path, NormalImage(2, 2)); }, "cannot write");
 }
 
+// What the file system refuses is said with its reason (OpenImageIO says only "Could not open file").
+TEST(ImageIo, AWriteTheFileSystemRefusesSaysWhy) {
+  const ScratchDir dir;
+  const fs::path folder = dir / "taken.png";
+  fs::create_directories(folder);  // a folder where the image would go
+  expect_error_names(
+      folder, [&] { write_gray_png16(folder, Grid<float>(2, 2)); }, "cannot write: Is a directory");
+  expect_error_names(
+      folder,
+      [&] {
+        write_rgb_png8(folder, 1, 1, {1, 2, 3});
+      },
+      "cannot write: Is a directory");
+  expect_error_names(
+      dir / "no" / "k.exr", [&] { write_float_exr(dir / "no" / "k.exr", Grid<float>(2, 2)); },
+      "cannot write: No such file or directory");
+}
+
+// A map saved without its extension, or under another one, that is a PNG is read as one; a folder named as an image
+// is said to be a folder.
+TEST(ImageIo, APngIsReadWhateverItsNameAndAFolderIsNamedAsOne) {
+  const ScratchDir dir;
+  const NormalImage normals = dome(9, 7);
+  write_normal_png16(dir / "dome.png", normals);
+  const RawImage named = read_image(dir / "dome.png");
+  for (const char* other : {"dome", "dome.tif", "dome.PNG.bak"}) {
+    fs::copy_file(dir / "dome.png", dir / other);
+    const RawImage image = read_image(dir / other);
+    EXPECT_EQ(image.pixels, named.pixels) << other;
+    EXPECT_EQ(read_image_size(dir / other).width, 9) << other;
+  }
+  fs::create_directories(dir / "maps.png");
+  for (const fs::path& folder : {dir / "maps.png", dir / "maps.tif", dir.path()}) {
+    fs::create_directories(folder);
+    expect_error_names(
+        folder, [&] { read_image(folder); }, "is a folder, not an image file");
+    expect_error_names(
+        folder, [&] { read_image_size(folder); }, "is a folder, not an image file");
+  }
+}
+
 TEST(ImageIo, RgbaPngKeepsColourWhereAlphaIsLow) {
   // OpenImageIO premultiplies PNG colour by alpha unless told not to; a normal map must come back as stored.
   const ScratchDir dir;
@@ -667,6 +708,17 @@ TEST(FieldLoader, InvalidTexelsAreCountedAndDescribedPerMap) {
   write_normal_png16(clean, NormalImage(4, 4));
   load_region_fields(maps(clean), 4, 4, gradient_only, report);
   EXPECT_TRUE(invalid_texel_notes(maps(clean), report).empty());
+  // A map with no valid texel has none to take a value from: it reads as flat, and the note says so.
+  Grid<float> none_valid(3, 3, std::numeric_limits<float>::infinity());
+  const fs::path void_path = dir / "void.exr";
+  write_float_exr(void_path, none_valid);
+  const FieldSources void_depth = maps(normal_path, void_path);
+  const RegionFields flat = load_region_fields(void_depth, 4, 4, gradient_and_depth, report);
+  const std::vector<std::string> void_notes = invalid_texel_notes(void_depth, report);
+  ASSERT_EQ(void_notes.size(), 2u);
+  EXPECT_EQ(void_notes[1].rfind("depth map " + void_path.string() + ": every texel invalid (", 0), 0u) << void_notes[1];
+  EXPECT_NE(void_notes[1].find("so the map reads as flat"), std::string::npos) << void_notes[1];
+  for (const float h : flat.depth->values) EXPECT_EQ(h, flat.depth->values.front());
 }
 
 }  // namespace

@@ -315,6 +315,9 @@ TEST(SceneFileErrors, NonFiniteDepthOptions) {
   const std::string head = "[[region]]\nwidth = 2\nheight = 2\ndepth_map = \"d.png\"\n";
   expect_error(head + "depth_zero = inf\n", 5, "region[0].depth_zero", {"finite"});
   expect_error(head + "relief_px = nan\n", 5, "region[0].relief_px", {"finite"});
+  // Beyond a million px per unit the heights of a unorm map overflow a float, and every texel reads as invalid.
+  expect_error(head + "relief_px = 1e308\n", 5, "region[0].relief_px", {"from -1e+06 to 1e+06"});
+  expect_error(head + "relief_px = -2e6\n", 5, "region[0].relief_px", {"from -1e+06 to 1e+06"});
 }
 
 // Two regions, the bad limits on line 12, in the second region's [region.curvature] table (line 10).
@@ -425,6 +428,25 @@ TEST(SceneFileErrors, AnEffectsParameterOutOfRangeNamesItsLine) {
   // The key is `tolerance` in the file, whatever the field is called in the code.
   expect_error(region + "[region.wells]\nradius_px = 16\ncos_alpha = 0.9\ntolerance = -1\n", 8, "region[0].wells",
                {"wells isophote tolerance must be a finite number >= 0"});
+}
+
+// /dev/zero, or a huge file given by mistake, is refused once past the longest scene file, not read into memory.
+TEST(SceneFileErrors, AFileLongerThanAnySceneIsRefused) {
+  for (const std::string file : {"/dev/zero"}) {
+    try {
+      parse_scene_file(file);
+      ADD_FAILURE() << "expected an error";
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(std::string(e.what()), file + ": longer than 4 MiB, which no scene file is: is it the file meant?");
+    }
+  }
+  const ScratchDir dir("scene-long");
+  std::string text = "# a comment\n";
+  text.resize(kMaxSceneFileBytes, ' ');
+  std::ofstream(dir / "just.toml", std::ios::binary) << text;
+  EXPECT_TRUE(parse_scene_file(dir / "just.toml").regions.empty());  // at the bound: read
+  std::ofstream(dir / "over.toml", std::ios::binary) << text << ' ';
+  EXPECT_THROW(parse_scene_file(dir / "over.toml"), ConfigError);
 }
 
 TEST(SceneFileErrors, MissingSceneFileIsNamed) {

@@ -1,5 +1,6 @@
 #include "tools/map_flags.hpp"
 
+#include "core/engine/decode.hpp"
 #include "tools/finite_check.hpp"
 
 namespace ph::tools {
@@ -18,6 +19,7 @@ void add_map_flags(CLI::App& app, MapFlags& flags) {
           ->capture_default_str(),
       app.add_option("--relief-px", flags.relief_px, "Screen px of height per unit of depth map value")
           ->check(finite_number())
+          ->check(CLI::Range(-kMaxReliefPx, kMaxReliefPx))
           ->capture_default_str(),
   };
 }

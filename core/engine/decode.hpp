@@ -36,9 +36,13 @@ struct NormalDecodeOptions {
   NormalEncoding encoding = NormalEncoding::automatic;
 };
 
+// The largest |relief_px|: a million screen px of height per unit of value is far beyond any screen's relief, and
+// beyond it the heights of a unorm map no longer fit in a float.
+inline constexpr double kMaxReliefPx = 1e6;
+
 struct DepthDecodeOptions {
   double depth_zero = 0.0;   // stored value that means height 0
-  double relief_px = 100.0;  // screen px of height per unit of stored value
+  double relief_px = 100.0;  // screen px of height per unit of stored value, |relief_px| <= kMaxReliefPx
 };
 
 // What decoding found; invalid texels were repaired.
