@@ -318,7 +318,9 @@ Run add_trace_command(CLI::App& app) {
   for (const auto& entry : registry.entries()) {
     if (entry->name != FlatMethod::kName) methods.push_back(entry->name);  // a flat trace shows nothing
   }
-  app.add_option("--method", o->method, "C/D method for every region (default: the scene's, else curvature)")
+  app.add_option(
+         "--method", o->method,
+         "C/D method for every region (default: the scene's; for maps, curvature, or depth for a depth map alone)")
       ->check(CLI::IsMember(methods));
   app.add_option("--kmax-prime", o->kmax_prime, "Curvature: k'max, largest C/D when delta-beta = 0 (default 4)");
   app.add_option("--kmin-prime", o->kmin_prime, "Curvature: k'min, 1 / smallest C/D when delta-beta = 0 (default 1.5)");
