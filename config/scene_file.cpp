@@ -9,6 +9,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -612,8 +613,11 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
 namespace {
 
 // Said after a file the service could not open where its sandbox hides the folder: to the service the folder is
-// there but cannot be entered (Permission denied), or empty.
+// there but cannot be entered (Permission denied), or empty. Only in a process systemd started (it sets
+// INVOCATION_ID for each unit it runs): elsewhere nothing hides the folder, the file is missing or unreadable
+// there too, and the hint would send the user after the wrong cause.
 std::string service_hint(const std::filesystem::path& path) {
+  if (std::getenv("INVOCATION_ID") == nullptr) return "";
   const std::optional<HiddenFolder> hidden = hidden_from_the_service(path);
   if (!hidden) return "";
   return fmt::format(

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
 
@@ -12,7 +13,7 @@
 
 namespace ph::control {
 
-Client::Client(const std::string& path) {
+Client::Client(const std::string& path) : path_(path) {
   sockaddr_un address{};
   address.sun_family = AF_UNIX;
   if (path.size() >= sizeof address.sun_path) throw ControlError(fmt::format("{}: path too long", path));
@@ -23,6 +24,15 @@ Client::Client(const std::string& path) {
     const int error = errno;
     ::close(fd_);
     fd_ = -1;
+    // A path that is there but is no socket (a folder, a file) refuses the connection too: not the daemon's
+    // being down.
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0 && !S_ISSOCK(st.st_mode)) {
+      throw ControlError(
+          fmt::format("cannot connect to {}: {}, not a socket (the daemon's is {} unless its --control "
+                      "says otherwise)",
+                      path, S_ISDIR(st.st_mode) ? "a folder" : "a file", kDefaultSocket));
+    }
     const char* advice = error == ENOENT || error == ECONNREFUSED
                              ? " (is pseudohapticd running? `systemctl status pseudohapticd`)"
                          : error == EACCES ? " (only root and the user of the active local session may use it)"
@@ -75,7 +85,7 @@ Reply Client::request(std::string_view line, std::chrono::milliseconds timeout) 
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     const std::optional<std::string> got = read_line(std::max(left, std::chrono::milliseconds(0)));
-    if (!got) throw ControlError("pseudohapticd did not answer in time");
+    if (!got) throw ControlError(fmt::format("pseudohapticd at {} did not answer in time", path_));
     if (auto reply = parse_reply(*got)) return *reply;
   }
 }

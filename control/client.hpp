@@ -36,6 +36,7 @@ class Client {
   int fd() const { return fd_; }
 
  private:
+  std::string path_;  // for the messages
   int fd_ = -1;
   LineBuffer lines_;
 };

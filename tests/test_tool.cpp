@@ -311,6 +311,14 @@ TEST(Tool, StatusAndCursorNameTheSocketTheyCouldNotReach) {
     expect_clean_failure(run_tool(std::string(command) + quote(socket), dir),
                          {"cannot connect to " + socket, "is pseudohapticd running?"});
   }
+  // A path that is there but is no socket is said to be what it is, not a daemon that is down.
+  fs::create_directories(dir / "a-folder");
+  std::ofstream(dir / "a-file") << "not a socket\n";
+  for (const auto& [name, what] : {std::pair{"a-folder", "a folder"}, std::pair{"a-file", "a file"}}) {
+    const ToolResult r = run_tool("status --socket " + quote(dir / name), dir);
+    expect_clean_failure(r, {"cannot connect to " + (dir / name).string() + ": " + what + ", not a socket"});
+    EXPECT_FALSE(contains(r.err, "is pseudohapticd running?")) << r.err;
+  }
 }
 
 TEST(Tool, TraceTargetCurvature) {
