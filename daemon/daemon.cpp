@@ -1,6 +1,7 @@
 #include "daemon/daemon.hpp"
 
 #include <fcntl.h>
+#include <poll.h>
 #include <sys/epoll.h>
 #include <sys/eventfd.h>
 #include <sys/signalfd.h>
@@ -327,6 +328,14 @@ bool Daemon::on_released_elsewhere(int fd) {
   if (it == mice_.end()) return false;
   const std::string node = it->first;  // try_take may let go of the mouse, and its entry with it
   Mouse& mouse = *it->second;
+  // Unplugged while the other program held it: the node hangs up (evdev's poll says POLLHUP once the device is
+  // gone), which is no release; nothing to take, and no virtual device to make for it.
+  pollfd hangup{fd, POLLIN, 0};
+  if (::poll(&hangup, 1, 0) == 1 && (hangup.revents & (POLLHUP | POLLERR)) != 0) {
+    log_.info("{} {}: unplugged while another program held it", node, quoted_name(*mouse.device));
+    let_go(node, "");
+    return true;
+  }
   ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, fd, nullptr);
   mouse.held_elsewhere = false;
   log_.info("{} {}: the other program let go of it", node, quoted_name(*mouse.device));

@@ -1137,6 +1137,39 @@ void flat_part(Report& report, const Options& options, Latency& latency, Latency
 
 // ---- part 3: the embedded default scene --------------------------------------------------------------------
 
+// A new test mouse named `name`, grabbed by the test before the daemon takes it (the daemon waits for udev's
+// event, the test only for the node), and the grab's descriptor. Should the daemon be first all the same, a fresh
+// mouse is tried.
+struct HeldMouse {
+  std::unique_ptr<TestMouse> mouse;
+  Fd holder;
+};
+HeldMouse hold_new_mouse(const std::string& name, const UeventMonitor& uevents) {
+  HeldMouse held;
+  for (int attempt = 1; attempt <= 3 && !held.holder; ++attempt) {
+    held.mouse.reset();
+    if (attempt > 1 && !wait_for_device_gone("pseudohaptic " + name, kDeviceTimeout, uevents)) break;
+    held.mouse = std::make_unique<TestMouse>(name);
+    Fd fd(::open(held.mouse->node().c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC));
+    if (fd && ::ioctl(fd.get(), EVIOCGRAB, 1) == 0) held.holder = std::move(fd);
+  }
+  if (!held.holder) throw Fatal("the daemon grabbed a new test mouse before the test could, three times");
+  return held;
+}
+
+// Whether the daemon logs, after `log_before` bytes of its log, that another program holds `node`; `said`: what it
+// logged meanwhile.
+bool daemon_says_held_elsewhere(const ChildProcess& daemon, std::size_t log_before, const std::string& node,
+                                std::string& said) {
+  const std::string expected = node + ": another program has grabbed it; taking it once that program lets go";
+  return wait_until(
+      [&] {
+        said = daemon.log().substr(std::min(log_before, daemon.log().size()));
+        return said.find(expected) != std::string::npos;
+      },
+      kDeviceTimeout);
+}
+
 void default_scene_part(Report& report, const Options& options, Latency& latency) {
   Session session(report, "daemon with the embedded default scene (--default-scene)");
   const UeventMonitor uevents;
@@ -1380,27 +1413,10 @@ void default_scene_part(Report& report, const Options& options, Latency& latency
   session.run("[6] a mouse another program holds: left to it, taken once it lets go", [&](Check& check) {
     const std::string name = "ph-e2e held elsewhere", virtual_name = "pseudohaptic " + name;
     const std::size_t log_before = daemon->log().size();
-    // Grab the new mouse before the daemon does: the daemon waits for udev's event, the test only for the
-    // node. Should the daemon be first all the same, a fresh mouse is tried.
-    std::optional<TestMouse> held;
-    Fd holder;
-    for (int attempt = 1; attempt <= 3 && !holder; ++attempt) {
-      held.reset();
-      if (attempt > 1 && !wait_for_device_gone(virtual_name, kDeviceTimeout, uevents)) break;
-      held.emplace(name);
-      Fd fd(::open(held->node().c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC));
-      if (fd && ::ioctl(fd.get(), EVIOCGRAB, 1) == 0) holder = std::move(fd);
-    }
-    if (!holder) throw Fatal("the daemon grabbed a new test mouse before the test could, three times");
+    auto [held, holder] = hold_new_mouse(name, uevents);
     std::string said;
-    const std::string expected = held->node() + ": another program has grabbed it; taking it once that program lets go";
-    const bool logged = wait_until(
-        [&] {
-          said = daemon->log().substr(std::min(log_before, daemon->log().size()));
-          return said.find(expected) != std::string::npos;
-        },
-        kDeviceTimeout);
-    check.expect(logged, "expected '" + expected + "' in the daemon's log, got: " + said);
+    const bool logged = daemon_says_held_elsewhere(*daemon, log_before, held->node(), said);
+    check.expect(logged, "expected the daemon to log that another program holds " + held->node() + ", got: " + said);
     check.expect(find_input_node(virtual_name).empty(), "a virtual device stayed for the mouse held elsewhere");
     const auto status_now = [&] {
       const ph::control::Reply reply = control->request("status", 10s);
@@ -1469,6 +1485,38 @@ void default_scene_part(Report& report, const Options& options, Latency& latency
     check.expect(wait_for_device_gone(virtual_name, kDeviceTimeout, uevents),
                  "the virtual device stayed after the mouse went away");
   });
+
+  session.run("[6] a mouse another program holds, unplugged while held: said so, no virtual device made",
+              [&](Check& check) {
+                const std::string name = "ph-e2e unplugged while held", virtual_name = "pseudohaptic " + name;
+                const std::size_t log_before = daemon->log().size();
+                auto [held, holder] = hold_new_mouse(name, uevents);
+                std::string said;
+                if (!daemon_says_held_elsewhere(*daemon, log_before, held->node(), said))
+                  throw Fatal("the daemon did not log that another program holds " + held->node() + ": " + said);
+                const std::string node = held->node();
+                held.reset();  // unplugged, the other program's grab still on
+                const std::string unplugged = node + " \"" + name + "\": unplugged while another program held it";
+                const std::string removed = node + " removed";  // udev's remove event came first: let go without a word
+                const bool gone = wait_until(
+                    [&] {
+                      said = daemon->log().substr(std::min(log_before, daemon->log().size()));
+                      const std::optional<ph::control::Status> status =
+                          ph::control::parse_status(control->request("status").text);
+                      return status && status->held_elsewhere == 0;
+                    },
+                    kDeviceTimeout);
+                check.expect(gone, "the daemon still counted a mouse held elsewhere after it was unplugged");
+                std::this_thread::sleep_for(300ms);
+                said = daemon->log().substr(std::min(log_before, daemon->log().size()));
+                check.expect(said.find("the other program let go of it") == std::string::npos,
+                             "the unplug was taken for a release: " + said);
+                check.expect(said.find("took " + node) == std::string::npos && find_input_node(virtual_name).empty(),
+                             "a virtual device was made for the unplugged mouse: " + said);
+                check.note(said.find(unplugged) != std::string::npos
+                               ? "the node hung up first: the daemon logged \"" + unplugged + "\""
+                               : "udev's remove event came first (\"" + removed + "\" at debug level): let go of it");
+              });
 
   session.run("[9] SYN_DROPPED: the daemon survives an overflow, no button stays stuck", [&](Check& check) {
     follower->through(check, *mouse, *out, make_frame({key(ev::kBtnLeft, 1)}), "press before the flood");
