@@ -128,7 +128,11 @@ std::unique_ptr<CursorSource> cursor_source_from_environment() {
     struct stat st {};
     if (::stat(path.c_str(), &st) == 0 && S_ISSOCK(st.st_mode)) return std::make_unique<HyprlandCursor>(path);
   }
-  if (!env("WAYFIRE_SOCKET").empty()) return std::make_unique<WayfireCursor>(std::string(env("WAYFIRE_SOCKET")));
+  // Where the variable names no socket (left in the user manager by a Wayfire session that has ended), none.
+  const std::string wayfire(env("WAYFIRE_SOCKET"));
+  struct stat st {};
+  if (!wayfire.empty() && ::stat(wayfire.c_str(), &st) == 0 && S_ISSOCK(st.st_mode))
+    return std::make_unique<WayfireCursor>(wayfire);
   return nullptr;
 }
 

@@ -132,7 +132,11 @@ class Helper {
       }
       return;
     }
+    // The failures in a row go on until the daemon takes a request: one that accepts the connection and then
+    // refuses the helper (a session in the background, too many clients) is tried again ever more slowly.
+    const int failures = link_.failures;
     link_ = Link{};
+    link_.failures = failures;
     link_.connection = std::move(connection);
     log_.info(fmt::format("connected to pseudohapticd at {}", control_));
     // A desktop that cannot say where the pointer is reports the layout only: as the daemon's helper it
@@ -144,10 +148,16 @@ class Helper {
   }
 
   void drop(const std::string& why) {
-    log_.notice(fmt::format("{}; reconnecting", why));
     link_.connection.reset();
-    link_.failures = 1;
-    link_.next_attempt = Clock::now() + reconnect_delay(link_.failures);
+    ++link_.failures;
+    const std::chrono::milliseconds delay = reconnect_delay(link_.failures);
+    const std::string message = fmt::format("{}; reconnecting in {} ms", why, delay.count());
+    if (link_.failures == 1) {
+      log_.notice(message);
+    } else {
+      log_.debug(message);
+    }
+    link_.next_attempt = Clock::now() + delay;
   }
 
   bool send(const std::string& line) {
@@ -192,6 +202,7 @@ class Helper {
     const bool in_bounds = link_.lines.append(received.data);
     while (const std::optional<std::string> line = link_.lines.next_line()) {
       const Conversation::Reaction reaction = link_.conversation.on_line(*line);
+      if (reaction.accepted) link_.failures = 0;
       if (!reaction.complaint.empty()) log_.error(reaction.complaint);
       if (reaction.send_position) send_position();
       if (!link_.connection) return;
@@ -237,16 +248,19 @@ std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::str
 #endif
 #ifdef PH_SESSION_WAYLAND
   if (backend == "wayland") {
-    std::unique_ptr<CursorSource> cursor = cursor_source_from_environment();
+    // A compositor that does not answer now (Wayfire without its ipc-rules plugin, a variable left from another
+    // session) would leave every question of the daemon's unanswered, and the daemon waiting: not used.
+    const auto answering = [&log](std::unique_ptr<CursorSource> cursor) {
+      if (cursor && !cursor->position()) {
+        log.notice(fmt::format("{} did not say where the pointer is ({}){}", cursor->name(), cursor->socket(),
+                               cursor->name() == "wayfire" ? "; is its ipc-rules plugin enabled?" : ""));
+        cursor.reset();
+      }
+      return cursor;
+    };
+    std::unique_ptr<CursorSource> cursor = answering(cursor_source_from_environment());
     const bool kwin = !cursor && kde_session(env("KDE_SESSION_VERSION"), env("XDG_CURRENT_DESKTOP"));
-    if (kwin) cursor = start_kwin(log);
-    // A compositor that does not answer now (Wayfire without its ipc-rules plugin) would leave every
-    // question of the daemon's unanswered, and the daemon waiting: report the layout only instead.
-    if (cursor && !cursor->position()) {
-      log.notice(fmt::format("{} did not say where the pointer is ({}){}", cursor->name(), cursor->socket(),
-                             cursor->name() == "wayfire" ? "; is its ipc-rules plugin enabled?" : ""));
-      cursor.reset();
-    }
+    if (kwin) cursor = answering(start_kwin(log));
     auto desktop = std::make_unique<WaylandDesktop>(wayland_display, std::move(cursor));
     if (!desktop->has_xdg_output())
       log.notice("the compositor has no xdg-output: the layout is each wl_output's mode divided by its scale");

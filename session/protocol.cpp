@@ -89,6 +89,7 @@ Conversation::Reaction Conversation::on_line(std::string_view line) {
     request = std::move(awaiting_.front());
     awaiting_.pop_front();
   }
+  reaction.accepted = reply->ok;
   if (!reply->ok) reaction.complaint = fmt::format("the daemon refused '{}': {}", request, reply->text);
   return reaction;
 }

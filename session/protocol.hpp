@@ -47,6 +47,7 @@ class Conversation {
   // What the helper does about one line from the daemon.
   struct Reaction {
     bool send_position = false;  // "query": answer with the real cursor's position
+    bool accepted = false;       // an `ok` reply: the daemon takes this helper's requests
     std::string complaint;       // non-empty: a line to log (an error reply, or a line not understood)
   };
 

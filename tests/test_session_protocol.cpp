@@ -97,11 +97,15 @@ TEST(SessionConversation, AnswersQueriesAndPairsRepliesWithRequests) {
   const Conversation::Reaction query = c.on_line("query");
   EXPECT_TRUE(query.send_position);
   EXPECT_TRUE(query.complaint.empty());
+  EXPECT_FALSE(query.accepted);
   EXPECT_EQ(c.awaiting(), 3u);
 
-  EXPECT_TRUE(c.on_line("ok").complaint.empty());
+  const Conversation::Reaction ok = c.on_line("ok");
+  EXPECT_TRUE(ok.complaint.empty());
+  EXPECT_TRUE(ok.accepted);  // the daemon takes this helper: the reconnect back-off starts over
   const Conversation::Reaction refused = c.on_line("error layout: width must be > 0");
   EXPECT_FALSE(refused.send_position);
+  EXPECT_FALSE(refused.accepted);
   EXPECT_EQ(refused.complaint, "the daemon refused 'layout 0 0 1920 1080': layout: width must be > 0");
   EXPECT_TRUE(c.on_line("ok extra words").complaint.empty());
   EXPECT_EQ(c.awaiting(), 0u);

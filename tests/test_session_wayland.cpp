@@ -294,11 +294,17 @@ TEST(CursorSourceFromEnvironment, FindsHyprlandsSocketOrWayfiresOrNone) {
   }
   ScopedEnv signature("HYPRLAND_INSTANCE_SIGNATURE", "");
   EXPECT_EQ(cursor_source_from_environment(), nullptr);
-  ScopedEnv wayfire_set("WAYFIRE_SOCKET", "/run/user/1000/wayfire-wayland-1-.socket");
+  // A variable that names no socket (left in the user manager by a Wayfire session that has ended): none, so that
+  // another source (KWin) is tried.
+  const std::string wayfire_path = (dir / "wayfire-wayland-1-.socket").string();
+  ScopedEnv wayfire_set("WAYFIRE_SOCKET", wayfire_path);
+  EXPECT_EQ(cursor_source_from_environment(), nullptr);
+  FakeServer wayfire_server(wayfire_path, [](int) {});  // says nothing: position() has no answer
   const std::unique_ptr<CursorSource> source = cursor_source_from_environment();
   ASSERT_NE(source, nullptr);
   EXPECT_EQ(source->name(), "wayfire");
-  EXPECT_EQ(source->socket(), "/run/user/1000/wayfire-wayland-1-.socket");
+  EXPECT_EQ(source->socket(), wayfire_path);
+  EXPECT_EQ(source->position(), std::nullopt);
 }
 
 }  // namespace

@@ -56,6 +56,9 @@ class ControlStub {
     }
   }
 
+  // As the daemon closing one client's connection (after refusing it): the socket stays.
+  void drop_client() { client_.reset(); }
+
   // As the daemon going away: the connection and the socket close. restart() listens again.
   void stop() {
     client_.reset();

@@ -218,6 +218,35 @@ bool layout_only_case(const Options& options, const fs::path& runtime) {
   return c.verdict(&helper);
 }
 
+// A daemon that takes the connection and then refuses the helper (its session is in the background, or the socket has
+// too many clients) and closes it: the helper tries again ever more slowly (250 ms, 0.5, 1, 2, 4 s), not every 250 ms.
+bool refused_case(const Options& options, const fs::path& runtime) {
+  Case c{"weston: a daemon that refuses the helper: it tries again ever more slowly", {}};
+  ControlStub stub((options.scratch / "control").string());
+  ChildProcess helper({options.session, "--control", stub.path(), "-v"}, session_environment(runtime, ""),
+                      (options.scratch / "session-refused.log").string());
+  try {
+    if (!stub.accept(20s)) throw Fatal("the helper did not connect within 20 s");
+    const auto first = Clock::now();
+    std::vector<double> at;
+    do {
+      at.push_back(std::chrono::duration<double>(Clock::now() - first).count());
+      stub.next_line(2s);  // its first request (the layout)
+      stub.send("error permission denied: uid 1000 is neither root nor the user of an active local session");
+      stub.drop_client();
+    } while (Clock::now() - first < 5s && stub.accept(first + 5s - Clock::now()));
+    // 0, 0.25, 0.75, 1.75 and 3.75 s, give or take the helper's own time; every 250 ms would be about 20.
+    if (at.size() > 6 || at.size() < 3)
+      c.problems.push_back(fmt::format("{} connections in 5 s, at [{:.2f}] s", at.size(), fmt::join(at, ", ")));
+    std::printf("    %zu connections in 5 s, at [%s] s\n", at.size(),
+                fmt::format("{:.2f}", fmt::join(at, ", ")).c_str());
+    check_sigterm(helper, c);
+  } catch (const Fatal& e) {
+    c.problems.push_back(e.what());
+  }
+  return c.verdict(&helper);
+}
+
 bool hyprland_case(const Options& options, const fs::path& runtime) {
   Case c{"weston's layout with a stand-in Hyprland socket: helper, layout, position, query", {}};
   const std::string signature = "ph_fake_hyprland";
@@ -421,10 +450,11 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
     int failed = 0;
     failed += !layout_only_case(options, runtime);
+    failed += !refused_case(options, runtime);
     failed += !hyprland_case(options, runtime);
     failed += !wayfire_case(options, runtime);
     failed += !kwin_case(options, runtime);
-    const int cases = options.daemon.empty() ? 5 : 6;
+    const int cases = options.daemon.empty() ? 6 : 7;
     if (!options.daemon.empty()) failed += !daemon_case(options, runtime);
     failed += !compositor_gone_case(options, runtime, weston);
     if (failed != 0) std::printf("weston's log:\n%s", weston.log().c_str());
