@@ -1,11 +1,11 @@
 // `pseudohaptic trace`: the data behind the paper's Fig. 5, one CSV row per texel step.
 #include <fmt/core.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
 #include <optional>
-#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -42,6 +42,31 @@ struct TraceOptions {
   std::string output = "-";
 };
 
+// A method's flags on the command line and what was given with each ("" where not given): the messages of its
+// validate() name the scene file's keys, and the user typed flags.
+using GivenFlags = std::vector<std::pair<const char*, std::string>>;
+std::string text_of(const std::optional<double>& v) { return v ? fmt::format("{:g}", *v) : ""; }
+std::string text_of(const std::vector<double>& v) { return v.empty() ? "" : fmt::format("{:g}", fmt::join(v, ",")); }
+GivenFlags curvature_flags(const TraceOptions& o) {
+  return {{"--kmax-prime", text_of(o.kmax_prime)},
+          {"--kmin-prime", text_of(o.kmin_prime)},
+          {"--kmax-limits", text_of(o.kmax_limits)},
+          {"--kmin-limits", text_of(o.kmin_limits)},
+          {"--delta-beta-sign", text_of(o.delta_beta_sign)}};
+}
+GivenFlags depth_flags(const TraceOptions& o) {
+  return {
+      {"--gain", text_of(o.gain)}, {"--depth-kmax", text_of(o.depth_kmax)}, {"--depth-kmin", text_of(o.depth_kmin)}};
+}
+// " (given: --depth-kmax 0.5)", or "" where none of them was given.
+std::string given_flags(const GivenFlags& flags) {
+  std::string given;
+  for (const auto& [flag, value] : flags) {
+    if (!value.empty()) given += fmt::format("{}{} {}", given.empty() ? "" : ", ", flag, value);
+  }
+  return given.empty() ? "" : " (given: " + given + ")";
+}
+
 // The options that change a region's method, applied to every region of the traced scene.
 void apply_overrides(const TraceOptions& o, RegionSpec& r) {
   if (!o.method.empty()) r.method = o.method;
@@ -57,8 +82,10 @@ void apply_overrides(const TraceOptions& o, RegionSpec& r) {
   if (o.gain) depth.gain = *o.gain;
   if (o.depth_kmax) depth.kmax = *o.depth_kmax;
   if (o.depth_kmin) depth.kmin = *o.depth_kmin;
-  if (auto e = validate(curvature); !e.empty()) throw std::invalid_argument("curvature method: " + e);
-  if (auto e = validate(depth); !e.empty()) throw std::invalid_argument("depth method: " + e);
+  if (auto e = validate(curvature); !e.empty())
+    throw std::invalid_argument("curvature method: " + e + given_flags(curvature_flags(o)));
+  if (auto e = validate(depth); !e.empty())
+    throw std::invalid_argument("depth method: " + e + given_flags(depth_flags(o)));
 }
 
 // A one-region scene at (0, 0) covering the given image(s) at their own size. Loaded here rather than through a
@@ -162,20 +189,11 @@ void check_method_options_are_used(const TraceOptions& o, const Scene& scene) {
     if (std::find(used.begin(), used.end(), name) == used.end()) used.push_back(name);
   }
   const auto uses = [&](std::string_view method) { return std::find(used.begin(), used.end(), method) != used.end(); };
-  const std::pair<const char*, bool> curvature_options[] = {{"--kmax-prime", o.kmax_prime.has_value()},
-                                                            {"--kmin-prime", o.kmin_prime.has_value()},
-                                                            {"--kmax-limits", !o.kmax_limits.empty()},
-                                                            {"--kmin-limits", !o.kmin_limits.empty()},
-                                                            {"--delta-beta-sign", o.delta_beta_sign.has_value()}};
-  const std::pair<const char*, bool> depth_options[] = {{"--gain", o.gain.has_value()},
-                                                        {"--depth-kmax", o.depth_kmax.has_value()},
-                                                        {"--depth-kmin", o.depth_kmin.has_value()}};
-  for (const auto& [method, options] : {std::pair<std::string_view, std::span<const std::pair<const char*, bool>>>{
-                                            CurvatureMethod::kName, curvature_options},
-                                        {DepthMethod::kName, depth_options}}) {
+  for (const auto& [method, flags] :
+       {std::pair{CurvatureMethod::kName, curvature_flags(o)}, std::pair{DepthMethod::kName, depth_flags(o)}}) {
     if (uses(method)) continue;
-    for (const auto& [flag, given] : options) {
-      if (!given) continue;
+    for (const auto& [flag, value] : flags) {
+      if (value.empty()) continue;
       std::string methods;
       for (const std::string& name : used) methods += (methods.empty() ? "" : ", ") + name;
       throw std::invalid_argument(fmt::format(
