@@ -36,6 +36,9 @@ struct DaemonSettings {
 };
 
 inline constexpr double kMaxPointerSpeed = 100.0;
+// The least: a hundred counts of motion for one screen px. Below it a mouse barely moves the cursor, and at 1e-300
+// (which "greater than 0" let through) every mouse the daemon takes stopped moving it at all.
+inline constexpr double kMinPointerSpeed = 0.01;
 
 // The pointer acceleration the daemon applies: the relative output's default is flat at speed 0, the
 // identity, because the desktop accelerates relative motion itself.

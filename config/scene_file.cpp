@@ -96,8 +96,6 @@ void check_key(const Reporter& rep, const toml::table& t, std::string_view key, 
   if (t.get(key) != nullptr && !ok()) rep.fail(t.get(key), fmt::format("{}{}", where, key), allowed);
 }
 
-bool positive_finite(double v) { return std::isfinite(v) && v > 0.0; }
-
 // A method's [region.NAME] table as its parser reads it (core/engine/method_registry.hpp).
 class TomlParamReader final : public ParamReader {
  public:
@@ -158,6 +156,20 @@ std::size_t find_key(std::string_view text, std::string_view name) {
     if (starts && ends) return at;
   }
   return std::string_view::npos;
+}
+
+// Whether UTF-8 `text` holds a character that would split or shift a log line, status line or CSV cell: a C0 control
+// (a line break, a tab), DEL, a C1 control (U+0080-U+009F, NEL among them) or U+2028/U+2029 (line and paragraph
+// separators).
+bool has_control_characters(std::string_view text) {
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c < 0x20 || c == 0x7f) return true;
+    const auto next = [&](std::size_t k) { return i + k < text.size() ? static_cast<unsigned char>(text[i + k]) : 0; };
+    if (c == 0xc2 && next(1) >= 0x80 && next(1) <= 0x9f) return true;                       // U+0080-U+009F
+    if (c == 0xe2 && next(1) == 0x80 && (next(2) == 0xa8 || next(2) == 0xa9)) return true;  // U+2028, U+2029
+  }
+  return false;
 }
 
 // The node of `t` (or of a table in it, as "table.key") that a validate() message names first, so that the error
@@ -399,9 +411,10 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   r.name = get_string(rep, t, "name", where).value_or(fmt::format("region {}", index));
   // A name is written into log lines, status and CSV cells: a line break or a tab there would split or shift them.
   if (r.name.empty()) rep.fail(t.get("name"), where + "name", "must not be empty (leave it out for 'region N')");
-  if (std::any_of(r.name.begin(), r.name.end(),
-                  [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; }))
+  if (has_control_characters(r.name))
     rep.fail(t.get("name"), where + "name", "must not hold control characters (a line break, a tab)");
+  if (r.name.find_first_not_of(' ') == std::string::npos)
+    rep.fail(t.get("name"), where + "name", "must hold more than spaces");
   r.rect.x = get_int(rep, t, "x", where, 0, -kMaxCoordinate, kMaxCoordinate);
   r.rect.y = get_int(rep, t, "y", where, 0, -kMaxCoordinate, kMaxCoordinate);
   r.rect.w = get_int(rep, t, "width", where, std::nullopt, 1, kMaxRegionSide);
@@ -460,13 +473,17 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
     const bool needs_depth = r.materials->source == ClassSource::depth;
     const bool needs_normals = r.materials->source == ClassSource::normals;
     if ((needs_depth && !r.sources.depth_map) || (needs_normals && !r.sources.normal_map && !r.sources.depth_map)) {
-      rep.fail(m, where + "materials.source", "the region has no map to compute the classes from");
+      const toml::node* source = m->get("source");
+      rep.fail(source != nullptr ? source : m, where + "materials.source",
+               needs_depth ? "source = \"depth\" needs a depth_map, which the region has not"
+                           : "the region has no map to compute the classes from");
     }
   }
   if (const toml::table* w = get_table(rep, t, "wells", where)) {
     r.wells = parse_wells(rep, *w, where + "wells.");
     if (r.wells->pattern == WellPattern::contours && !r.sources.depth_map) {
-      rep.fail(w, where + "wells.pattern", "contour wells need a depth_map (heights)");
+      const toml::node* pattern = w->get("pattern");
+      rep.fail(pattern != nullptr ? pattern : w, where + "wells.pattern", "contour wells need a depth_map (heights)");
     }
   }
   return r;
@@ -568,8 +585,8 @@ DaemonSettings parse_daemon(const Reporter& rep, const toml::table& t) {
   d.pointer_speed = get_number(rep, t, "pointer_speed", where, d.pointer_speed);
   check_key(
       rep, t, "pointer_speed", where,
-      [&] { return positive_finite(d.pointer_speed) && d.pointer_speed <= kMaxPointerSpeed; },
-      fmt::format("must be a finite number > 0 and at most {} (screen px per device count at C/D 1)",
+      [&] { return d.pointer_speed >= kMinPointerSpeed && d.pointer_speed <= kMaxPointerSpeed; },  // (NaN fails)
+      fmt::format("must be a finite number from {} to {} (screen px per device count at C/D 1)", kMinPointerSpeed,
                   kMaxPointerSpeed));
   return d;
 }

@@ -231,10 +231,11 @@ TEST(DaemonTableErrors, Desktop) {
 }
 
 TEST(DaemonTableErrors, PointerSpeed) {
-  for (std::string_view bad : {"0", "-1", "100.5", "inf", "nan"}) {
+  for (std::string_view bad : {"0", "-1", "1e-300", "0.0099", "100.5", "inf", "nan"}) {
     expect_error("[daemon]\n\npointer_speed = " + std::string(bad) + "\n", 3, "daemon.pointer_speed",
-                 {"finite number > 0", "at most 100"});
+                 {"finite number from 0.01 to 100"});
   }
+  EXPECT_DOUBLE_EQ(parse_scene_text("[daemon]\npointer_speed = 0.01\n", kOrigin).daemon.pointer_speed, 0.01);
   expect_error("[daemon]\npointer_speed = \"fast\"\n", 2, "daemon.pointer_speed", {"must be a number"});
 }
 

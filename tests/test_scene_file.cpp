@@ -301,6 +301,13 @@ TEST(SceneFileErrors, RegionNames) {
   expect_error("[[region]]\nname = \"\"\n" + tail, 2, "region[0].name", {"must not be empty"});
   expect_error("[[region]]\nname = \"two\\nlines\"\n" + tail, 2, "region[0].name", {"control characters"});
   expect_error("[[region]]\nname = \"a\\tb\"\n" + tail, 2, "region[0].name", {"control characters"});
+  // C1 controls (NEL) and the Unicode line and paragraph separators break lines too; a name of spaces names nothing.
+  for (const char* name : {"a\\u0085b", "a\\u2028b", "a\\u2029b", "a\\u009fb"})
+    expect_error("[[region]]\nname = \"" + std::string(name) + "\"\n" + tail, 2, "region[0].name",
+                 {"control characters"});
+  expect_error("[[region]]\nname = \"   \"\n" + tail, 2, "region[0].name", {"must hold more than spaces"});
+  EXPECT_EQ(parse_scene_text("[[region]]\nname = \"h\u00f6he \u2013 bump\"\n" + tail, kOrigin).regions.at(0).name,
+            "h\u00f6he \u2013 bump");  // other non-ASCII letters and dashes are kept
   EXPECT_EQ(parse_scene_text("[[region]]\nname = 'bump, \"big\"'\n" + tail, kOrigin).regions.at(0).name,
             "bump, \"big\"");
   // Two regions of one name could not be told apart in the logs or in trace's CSV; nor a name that is another
@@ -726,8 +733,12 @@ TEST(SceneFileInterrogation, MistakesNameTheKeyAndWhatIsAllowed) {
   expect_error(head + "[region.wells]\npattern = \"contours\"\nlevels = \"many\"\n", 9, "region[0].wells.levels",
                {"count", "list"});
   expect_error(head + "[region.wells]\nradius_px = 0\n", 8, "region[0].wells", {"radius_px"});
-  expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n[region.wells]\npattern = \"contours\"\n", 5,
-               "region[0].wells.pattern", {"depth_map"});
+  expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n[region.wells]\npattern = \"contours\"\n", 6,
+               "region[0].wells.pattern", {"depth_map"});  // at the pattern's line
+  expect_error(
+      "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n[region.materials]\nplanar = \"friction\"\n"
+      "source = \"depth\"\n",
+      7, "region[0].materials.source", {"source = \"depth\" needs a depth_map"});
 }
 
 TEST(SceneFileInterrogation, LoadingBuildsTheEffectsAndKeepsOnlyWhatTheMethodWalks) {

@@ -1049,6 +1049,9 @@ TEST(Tool, CheckConfig) {
     EXPECT_TRUE(contains(halved.out, "scale: the normal map's slopes are 2 times the depth map's")) << halved.out;
     // (101: the generator's 8-bit normals read the dome's slopes a little apart from its heights' differences.)
     EXPECT_TRUE(contains(halved.out, "relief_px = 101 (now 50) makes them agree")) << halved.out;
+    EXPECT_TRUE(contains(halved.err, "warning: " + (dir / "halved.toml").string() +
+                                         ":1: region 'dome': the normal map's slopes are 2 times"))
+        << halved.err;  // and as a warning, as the daemon logs it
     // trace warns of it as the daemon does, from the scene file or from the maps given by hand.
     const ToolResult traced =
         run_tool("trace --scene " + quote(dir / "halved.toml") + " -o " + quote(dir / "t.csv"), dir);

@@ -422,6 +422,18 @@ TEST(ReplayTool, DesktopIsRefusedWhereASceneFileRefusesIt) {
   EXPECT_TRUE(contains(read_text(dir / "x.evemu"), "A: 00 -2097152 -1 0 0 0")) << read_text(dir / "x.evemu");
 }
 
+// --gain is the scene file's pointer_speed: refused outside the same range (at 1e-300 the cursor never moved).
+TEST(ReplayTool, GainIsRefusedWherePointerSpeedIs) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir);
+  for (const std::string gain : {"1e-300", "0", "100.5"}) {
+    expect_clean_failure(run_tool("replay --gain " + gain + " " + quote(in) + " " + quote(dir / "out.evemu"), dir),
+                         {"--gain must be a finite number from 0.01 to 100"});
+  }
+  EXPECT_FALSE(fs::exists(dir / "out.evemu"));
+  EXPECT_EQ(run_tool("replay --gain 0.01 " + quote(in) + " " + quote(dir / "out.evemu"), dir).rc, 0);
+}
+
 TEST(ReplayTool, RelativeAndAbsoluteOutputModes) {
   ScratchDir dir;
   const fs::path in = stroke_file(dir, "in.evemu", 400, -3, 2);

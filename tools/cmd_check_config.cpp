@@ -184,8 +184,7 @@ int run_check_config(const CheckConfigOptions& o) {
   const Scene scene = load_scene(spec, &report);
   if (o.quiet) return 0;
   // What the daemon logs as warnings at load, before the summary.
-  std::vector<std::string> warnings = map_warnings(spec, report);
-  for (std::string& w : effect_warnings(spec, scene)) warnings.push_back(std::move(w));
+  std::vector<std::string> warnings = load_warnings(spec, report, scene);
   for (std::string& w : desktop_warnings(spec)) warnings.push_back(std::move(w));
   for (std::string& w : service_path_warnings(spec)) warnings.push_back(std::move(w));
   for (const std::string& w : warnings) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);

@@ -278,7 +278,9 @@ int run_replay(const ReplayOptions& o) {
   ReplayScene loaded = load_replay_scene(o.scene_file, o.method);
   RecordingInfo info;
   const Recording input = read_recording_file(o.input, o.device_given ? o.device : kFirstPointerDevice, &info);
-  if (!(o.gain > 0.0) || !std::isfinite(o.gain)) throw std::invalid_argument("--gain must be a finite number > 0");
+  if (!(o.gain >= kMinPointerSpeed && o.gain <= kMaxPointerSpeed))  // the scene file's pointer_speed's range
+    throw std::invalid_argument(
+        fmt::format("--gain must be a finite number from {} to {}", kMinPointerSpeed, kMaxPointerSpeed));
   const PipelineConfig config = replay_config(o, loaded.daemon);
   // As a scene file's desktop: larger ones overflowed absolute output's axis ranges.
   if (!is_valid_desktop(config.desktop))
