@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <new>
 #include <set>
 #include <sstream>
 #include <system_error>
@@ -755,6 +756,12 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
       throw ConfigError(fmt::format("{}:{}: region '{}': {}{}", spec.file.string(), r.line, r.name, e.what(), hint));
     } catch (const std::invalid_argument& e) {
       throw ConfigError(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, e.what()));
+    } catch (const std::bad_alloc&) {
+      // Said with the region, as any other load error: "std::bad_alloc" alone names nothing to change.
+      throw ConfigError(fmt::format("{}:{}: region '{}': not enough memory for its fields ({}x{} px, about {} MiB "
+                                    "a field of 8 bytes a texel): make it smaller, or give the process more memory",
+                                    spec.file.string(), r.line, r.name, r.rect.w, r.rect.h,
+                                    static_cast<std::int64_t>(r.rect.w) * r.rect.h * 8 / (1 << 20)));
     }
     if (!method_needs.gradient) region.fields.gradient.reset();
     if (!method_needs.reads_depth(true)) region.fields.depth.reset();

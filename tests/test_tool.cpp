@@ -464,6 +464,25 @@ TEST(Tool, TraceErrors) {
   }
 }
 
+// A region too large for the memory the process may have is said with the region and its size, as any load error,
+// not as "std::bad_alloc" alone.
+TEST(Tool, ARegionTooLargeForTheMemoryIsNamed) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer reserves more address space than the limit this test sets";
+#endif
+  ScratchDir dir;
+  write_normal_png16(dir / "n.png", NormalImage(8, 8));
+  std::ofstream(dir / "huge.toml")
+      << "[[region]]\nname = \"huge\"\nwidth = 16384\nheight = 16384\nnormal_map = \"n.png\"\n";
+  // 1 GB of address space: the region's fields need 2 GiB each.
+  const std::string limited =
+      "ulimit -v 1000000 && exec " + quote(std::string(PH_TOOL_PATH)) + " check-config " + quote(dir / "huge.toml");
+  const ToolResult r = run_program("/bin/sh", "-c " + quote(limited), dir);
+  expect_clean_failure(r, {(dir / "huge.toml").string() + ":1: region 'huge': not enough memory for its fields "
+                                                          "(16384x16384 px, about 2048 MiB a field"});
+  EXPECT_FALSE(contains(r.err, "bad_alloc")) << r.err;
+}
+
 // An option that would change nothing in the trace asked for is refused, naming it and what would use it.
 TEST(Tool, TraceRefusesAnOptionNoTracedMethodReads) {
   ScratchDir dir;
