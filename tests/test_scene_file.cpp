@@ -345,6 +345,9 @@ TEST(SceneFileErrors, LimitsNotAPair) {
 TEST(SceneFileErrors, LimitsLowerAboveUpper) {
   expect_error(limits_scene("kmax_limits = [5, 2]"), 12, "region[1].curvature.kmax_limits", {"1 <= lower <= upper"});
   expect_error(limits_scene("kmin_limits = [3.5, 3]"), 12, "region[1].curvature.kmin_limits", {"1 <= lower <= upper"});
+  // A C/D of 1e300 is a wall the hand never crosses: at most 100 either way.
+  expect_error(limits_scene("kmax_limits = [1, 1e300]"), 12, "region[1].curvature.kmax_limits", {"upper <= 100"});
+  expect_error(limits_scene("kmin_limits = [1, 101]"), 12, "region[1].curvature.kmin_limits", {"upper <= 100"});
 }
 
 TEST(SceneFileErrors, LimitsBelowOne) {
@@ -359,8 +362,9 @@ TEST(SceneFileErrors, BadMethodParameters) {
   expect_error(head + "[region.curvature]\ndelta_beta_sign = 0.5\n", 6, "region[0].curvature.delta_beta_sign",
                {"1 or -1"});
   expect_error(head + "[region.curvature]\nkmax_prime = -1\n", 6, "region[0].curvature.kmax_prime", {"> 0"});
-  expect_error(head + "[region.depth]\nkmin = 0.5\n", 6, "region[0].depth.kmin", {">= 1"});
-  expect_error(head + "depth = { kmax = 0.9 }\n", 5, "region[0].depth.kmax", {">= 1"});
+  expect_error(head + "[region.depth]\nkmin = 0.5\n", 6, "region[0].depth.kmin", {"from 1 to 100"});
+  expect_error(head + "depth = { kmax = 0.9 }\n", 5, "region[0].depth.kmax", {"from 1 to 100"});
+  expect_error(head + "[region.depth]\nkmin = 1e300\n", 6, "region[0].depth.kmin", {"from 1 to 100"});
 }
 
 TEST(SceneFileErrors, DepthMethodWithoutDepthMap) {

@@ -875,10 +875,11 @@ TEST(Tool, TraceCurvatureOptions) {
   EXPECT_TRUE(kmax_at_2);
   EXPECT_TRUE(kmin_at_125);
   expect_clean_failure(run_tool("trace --target " + kBump + " --kmax-limits 5,2", dir),
-                       {"kmax limits must be finite with 1 <= lower <= upper (given: --kmax-limits 5,2)"});
+                       {"kmax limits must be finite with 1 <= lower <= upper <= 100 (given: --kmax-limits 5,2)"});
   // The message names the flags typed, with their values, not only the scene file's keys.
-  expect_clean_failure(run_tool("trace --target " + kBump + " --method depth --gain 2 --depth-kmax 0.5", dir),
-                       {"depth method: kmax must be a finite number >= 1 (given: --gain 2, --depth-kmax 0.5)"});
+  expect_clean_failure(
+      run_tool("trace --target " + kBump + " --method depth --gain 2 --depth-kmax 0.5", dir),
+      {"depth method: kmax must be a finite number from 1 to 100 (given: --gain 2, --depth-kmax 0.5)"});
 }
 
 // `targets` writes the 24 targets' files; `demo` reads them (as the daemon would) and prints one row per target.

@@ -10,6 +10,11 @@
 
 namespace ph {
 
+// The largest C/D factor a method's parameters may set, either way (kmax, and kmin for 1 / the smallest C/D): a
+// hundredfold slowdown already stops the cursor like a wall, and beyond it a misplaced exponent (1e300) made the
+// cursor never cross a region, or jump across the screen on one count.
+inline constexpr double kMaxCdFactor = 100.0;
+
 // What a method reads from one texel for one motion direction; the meaning of the numbers is private to
 // the method (curvature: a = n''_x and the slope angle, here and 1 px behind; depth: the height, and its change
 // per px along the motion). Six, so that a method reading normals and heights together keeps both methods'

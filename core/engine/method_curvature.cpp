@@ -19,8 +19,8 @@ namespace {
 bool positive_finite(double v) { return std::isfinite(v) && v > 0.0; }
 
 std::string check_limits(const char* name, double lo, double hi) {
-  if (!std::isfinite(lo) || !std::isfinite(hi) || lo < 1.0 || hi < lo) {
-    return std::string(name) + " limits must be finite with 1 <= lower <= upper";
+  if (!std::isfinite(lo) || !std::isfinite(hi) || lo < 1.0 || hi < lo || hi > kMaxCdFactor) {
+    return std::string(name) + " limits must be finite with 1 <= lower <= upper <= 100";
   }
   return {};
 }
@@ -54,7 +54,7 @@ CurvatureParams CurvatureMethod::parse_params(const ParamReader& reader) {
   };
   number("kmax_prime", p.kmax_prime, positive_finite, "must be a finite number > 0");
   number("kmin_prime", p.kmin_prime, positive_finite, "must be a finite number > 0");
-  const char* limits = "must be [lower, upper] with 1 <= lower <= upper (Eq. 2 needs k >= 1)";
+  const char* limits = "must be [lower, upper] with 1 <= lower <= upper <= 100 (Eq. 2 needs k >= 1)";
   if (const auto v = reader.pair("kmax_limits")) {
     std::tie(p.kmax_lo, p.kmax_hi) = *v;
     if (!check_limits("kmax", p.kmax_lo, p.kmax_hi).empty()) reader.reject("kmax_limits", limits);

@@ -7,10 +7,16 @@
 
 namespace ph {
 
+namespace {
+
+bool in_cd_range(double v) { return v >= 1.0 && v <= kMaxCdFactor; }  // (NaN fails)
+
+}  // namespace
+
 std::string validate(const DepthParams& p) {
   if (!std::isfinite(p.gain)) return "gain must be a finite number";
-  if (!std::isfinite(p.kmax) || p.kmax < 1.0) return "kmax must be a finite number >= 1";
-  if (!std::isfinite(p.kmin) || p.kmin < 1.0) return "kmin must be a finite number >= 1";
+  if (!in_cd_range(p.kmax)) return "kmax must be a finite number from 1 to 100";
+  if (!in_cd_range(p.kmin)) return "kmin must be a finite number from 1 to 100";
   return {};
 }
 
@@ -22,10 +28,8 @@ DepthParams DepthMethod::parse_params(const ParamReader& reader) {
   };
   number(
       "gain", p.gain, [](double v) { return static_cast<bool>(std::isfinite(v)); }, "must be a finite number");
-  number(
-      "kmax", p.kmax, [](double v) { return std::isfinite(v) && v >= 1.0; }, "must be a finite number >= 1");
-  number(
-      "kmin", p.kmin, [](double v) { return std::isfinite(v) && v >= 1.0; }, "must be a finite number >= 1");
+  number("kmax", p.kmax, in_cd_range, "must be a finite number from 1 to 100");
+  number("kmin", p.kmin, in_cd_range, "must be a finite number from 1 to 100");
   if (auto error = validate(p); !error.empty()) reader.reject("", error);
   return p;
 }
