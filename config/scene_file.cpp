@@ -377,7 +377,17 @@ void parse_region_engine(const Reporter& rep, const toml::table& t, const std::s
     }
     e.sampling = Sampling::nearest;
   }
-  if (const std::string problem = validate(e); !problem.empty()) rep.fail(&t, where + "traversal", problem);
+  // Set in the region for a traversal that has no direction table, the count would change nothing: said, as
+  // accuracy_px without "auto" is.
+  if (t.get("lut_directions") != nullptr && !r.engine_auto && e.traversal != Traversal::direction_lut) {
+    rep.fail(t.get("lut_directions"), where + "lut_directions",
+             "applies to traversal = \"direction_lut\" (or \"auto\") only");
+  }
+  if (const std::string problem = validate(e); !problem.empty()) {
+    const toml::node* traversal = t.get("traversal");
+    rep.fail(traversal != nullptr ? traversal : &t, where + "traversal",
+             problem + (t.get("sampling") == nullptr ? " (the sampling is the [daemon] table's)" : ""));
+  }
   r.engine = e;
 }
 
@@ -758,10 +768,11 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
       throw ConfigError(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, e.what()));
     } catch (const std::bad_alloc&) {
       // Said with the region, as any other load error: "std::bad_alloc" alone names nothing to change.
-      throw ConfigError(fmt::format("{}:{}: region '{}': not enough memory for its fields ({}x{} px, about {} MiB "
-                                    "a field of 8 bytes a texel): make it smaller, or give the process more memory",
-                                    spec.file.string(), r.line, r.name, r.rect.w, r.rect.h,
-                                    static_cast<std::int64_t>(r.rect.w) * r.rect.h * 8 / (1 << 20)));
+      throw ConfigError(
+          fmt::format("{}:{}: region '{}': not enough memory for its fields ({}x{} px, about {} MiB "
+                      "a field of 8 bytes a texel): make it smaller, or give the process more memory",
+                      spec.file.string(), r.line, r.name, r.rect.w, r.rect.h,
+                      static_cast<std::int64_t>(r.rect.w) * r.rect.h * 8 / (1 << 20)));
     }
     if (!method_needs.gradient) region.fields.gradient.reset();
     if (!method_needs.reads_depth(true)) region.fields.depth.reset();

@@ -204,6 +204,23 @@ TEST(RegionOptions, SceneFileRejectsWhatAutoCannotUse) {
   EXPECT_NE(error_of("traversal = \"auto\"\nsampling = \"bilinear\"\n").find("nearest sampling"), std::string::npos);
   EXPECT_NE(error_of("traversal = \"fast\"\n").find("unknown 'fast'"), std::string::npos);
   EXPECT_NE(error_of("lut_directions = 12\n").find("must be 8 or 16"), std::string::npos);
+  // A count for a traversal without a direction table changes nothing: said, as accuracy_px without "auto" is.
+  EXPECT_NE(error_of("lut_directions = 8\n")
+                .find(":5: region[0].lut_directions: applies to traversal = "
+                      "\"direction_lut\" (or \"auto\") only"),
+            std::string::npos)
+      << error_of("lut_directions = 8\n");
+  EXPECT_EQ(error_of("traversal = \"direction_lut\"\nlut_directions = 8\n"), "no error");
+  EXPECT_EQ(error_of("traversal = \"auto\"\nlut_directions = 8\n"), "no error");
+  // A sampling the direction table cannot take, from the [daemon] table, is said at the region's traversal.
+  const std::string daemon_bilinear = "[daemon]\nsampling = \"bilinear\"\n";
+  try {
+    parse_scene_file(write_scene(dir.path(), daemon_bilinear + region + "traversal = \"direction_lut\"\n"));
+    ADD_FAILURE() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(":7: region[0].traversal: "), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("(the sampling is the [daemon] table's)"), std::string::npos) << e.what();
+  }
   EXPECT_NE(error_of("traversal = \"direction_lut\"\nsampling = \"bilinear\"\n"), "no error");
 }
 
