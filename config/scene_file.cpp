@@ -276,6 +276,10 @@ WellsParams parse_wells(const Reporter& rep, const toml::table& t, std::string_v
   const bool isophotes = w.pattern == WellPattern::isophotes;
   const PatternRule rule =
       get_choice(rep, t, "rule", where, PatternRule::crossing, parse_pattern_rule, "crossing, band");
+  // The crossing rule's line is one texel thin whatever the tolerance: a tolerance there would change nothing.
+  if (rule == PatternRule::crossing && t.get("tolerance") != nullptr)
+    rep.fail(t.get("tolerance"), std::string(where) + "tolerance",
+             "is for rule = \"band\" (the crossing rule has none)");
   if (isophotes) {
     w.isophotes.rule = rule;
     get_number_into(rep, t, "tolerance", where, w.isophotes.tol);
@@ -301,6 +305,9 @@ WellsParams parse_wells(const Reporter& rep, const toml::table& t, std::string_v
         }
         w.contours.count = static_cast<std::int32_t>(*count);
       } else if (const toml::array* a = levels->as_array()) {
+        // An empty list would read as "not given": the default count of evenly spaced levels, not none.
+        if (a->empty())
+          rep.fail(levels, std::string(where) + "levels", "is an empty list: give heights, or a count (0 for none)");
         for (const toml::node& level : *a) {
           const auto v = level.value<double>();
           if (!v || !std::isfinite(*v))

@@ -438,8 +438,16 @@ TEST(SceneFileErrors, AnEffectsParameterOutOfRangeNamesItsLine) {
                9, "region[0].materials", {"friction.stuck_cd = 50 is outside [1, 20]"});
   expect_error(region + "[region.wells]\nradius_px = 16\nmax_gain = 9\n", 7, "region[0].wells", {"max_gain"});
   // The key is `tolerance` in the file, whatever the field is called in the code.
-  expect_error(region + "[region.wells]\nradius_px = 16\ncos_alpha = 0.9\ntolerance = -1\n", 8, "region[0].wells",
+  expect_error(region + "[region.wells]\nradius_px = 16\nrule = \"band\"\ntolerance = -1\n", 8, "region[0].wells",
                {"wells isophote tolerance must be a finite number >= 0"});
+  // A tolerance for the crossing rule (the default), which has none, and an empty list of levels, which would read
+  // as the default count, are said rather than ignored.
+  expect_error(region + "[region.wells]\nradius_px = 16\ntolerance = 0.1\n", 7, "region[0].wells.tolerance",
+               {"is for rule = \"band\""});
+  expect_error(
+      "[[region]]\nwidth = 2\nheight = 2\ndepth_map = \"d.png\"\n[region.wells]\npattern = \"contours\"\n"
+      "levels = []\n",
+      7, "region[0].wells.levels", {"is an empty list"});
 }
 
 // /dev/zero, or a huge file given by mistake, is refused once past the longest scene file, not read into memory.
