@@ -825,6 +825,20 @@ std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadRep
   std::vector<std::string> out = map_warnings(spec, report);
   for (std::string& w : relief_scale_warnings(spec, scene)) out.push_back(std::move(w));
   for (std::string& w : effect_warnings(spec, scene)) out.push_back(std::move(w));
+  for (std::string& w : method_warnings(spec)) out.push_back(std::move(w));
+  return out;
+}
+
+std::vector<std::string> method_warnings(const SceneSpec& spec) {
+  std::vector<std::string> out;
+  for (const RegionSpec& r : spec.regions) {
+    if (r.method == DepthMethod::kName && method_params<DepthMethod>(r).gain == 0.0) {
+      out.push_back(
+          fmt::format("{}:{}: region '{}': depth.gain = 0 makes the depth method's C/D 1 everywhere: the "
+                      "region feels flat",
+                      spec.file.string(), r.line, r.name));
+    }
+  }
   return out;
 }
 

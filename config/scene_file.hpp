@@ -124,8 +124,13 @@ std::vector<std::string> relief_scale_warnings(const SceneSpec& spec, const Scen
 // normal meets), "FILE:LINE: region 'NAME': wells: ..." and what to check: such wells do nothing. None otherwise.
 std::vector<std::string> effect_warnings(const SceneSpec& spec, const Scene& scene);
 
-// What loading the scene found to warn of, in this order: map_warnings, relief_scale_warnings and effect_warnings. What
-// the daemon logs at load (with desktop_warnings), and what the tools that load a scene file print.
+// One line per region whose method's settings make it feel flat, "FILE:LINE: region 'NAME': " and which: a depth
+// region with gain = 0 (C/D 1 everywhere), as relief_px = 0 is warned of among the map notes. None otherwise.
+std::vector<std::string> method_warnings(const SceneSpec& spec);
+
+// What loading the scene found to warn of, in this order: map_warnings, relief_scale_warnings, effect_warnings and
+// method_warnings. What the daemon logs at load (with desktop_warnings), and what the tools that load a scene file
+// print.
 std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadReport& report, const Scene& scene);
 
 // Where a region of `rect` lies wholly or partly off `desktop`: "at X,Y (WxH px) lies outside the desktop X,Y WxH px:

@@ -2,6 +2,7 @@
 // file, the line and the key and says what is allowed, and loading the regions' images.
 #include "config/scene_file.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -365,6 +366,23 @@ TEST(SceneFileErrors, BadMethodParameters) {
   expect_error(head + "[region.depth]\nkmin = 0.5\n", 6, "region[0].depth.kmin", {"from 1 to 100"});
   expect_error(head + "depth = { kmax = 0.9 }\n", 5, "region[0].depth.kmax", {"from 1 to 100"});
   expect_error(head + "[region.depth]\nkmin = 1e300\n", 6, "region[0].depth.kmin", {"from 1 to 100"});
+}
+
+// A depth region whose gain is 0 feels flat: warned of, as relief_px = 0 is; a curvature region with the same table
+// (which trace --method depth would use) is not.
+TEST(SceneFileWarnings, ADepthGainOfZeroIsWarnedOf) {
+  const std::string region =
+      "[[region]]\nname = \"{}\"\nwidth = 2\nheight = 2\ndepth_map = \"d.png\"\n"
+      "method = \"{}\"\n[region.depth]\ngain = {}\n";
+  const SceneSpec spec = parse_scene_text(fmt::format(fmt::runtime(region), "still", "depth", 0) +
+                                              fmt::format(fmt::runtime(region), "sloped", "depth", 3) +
+                                              fmt::format(fmt::runtime(region), "other", "curvature", 0),
+                                          kOrigin);
+  const std::vector<std::string> warnings = method_warnings(spec);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], kOrigin.string() +
+                             ":1: region 'still': depth.gain = 0 makes the depth method's C/D 1 everywhere: the "
+                             "region feels flat");
 }
 
 TEST(SceneFileErrors, DepthMethodWithoutDepthMap) {
