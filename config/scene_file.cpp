@@ -472,8 +472,9 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   }
   r.sources.depth_options.depth_zero = get_number(rep, t, "depth_zero", where, 0.0);
   r.sources.depth_options.relief_px = get_number(rep, t, "relief_px", where, 100.0);
-  if (!std::isfinite(r.sources.depth_options.depth_zero))
-    rep.fail(t.get("depth_zero"), where + "depth_zero", "must be finite");
+  if (!(std::abs(r.sources.depth_options.depth_zero) <= kMaxDepthZero))  // (NaN fails)
+    rep.fail(t.get("depth_zero"), where + "depth_zero",
+             fmt::format("must be a finite number from -{0:g} to {0:g}", kMaxDepthZero));
   if (!(std::abs(r.sources.depth_options.relief_px) <= kMaxReliefPx))  // (NaN fails)
     rep.fail(t.get("relief_px"), where + "relief_px",
              fmt::format("must be a finite number from -{0:g} to {0:g}", kMaxReliefPx));

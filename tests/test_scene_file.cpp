@@ -327,6 +327,10 @@ TEST(SceneFileErrors, NonFiniteDepthOptions) {
   // Beyond a million px per unit the heights of a unorm map overflow a float, and every texel reads as invalid.
   expect_error(head + "relief_px = 1e308\n", 5, "region[0].relief_px", {"from -1e+06 to 1e+06"});
   expect_error(head + "relief_px = -2e6\n", 5, "region[0].relief_px", {"from -1e+06 to 1e+06"});
+  // Beyond a million, v - depth_zero keeps none of v: every height the same, or infinite.
+  expect_error(head + "depth_zero = 1e38\n", 5, "region[0].depth_zero", {"from -1e+06 to 1e+06"});
+  EXPECT_EQ(parse_scene_text(head + "depth_zero = 4000.0\n", kOrigin).regions.at(0).sources.depth_options.depth_zero,
+            4000.0);  // an elevation map's sea level, in metres
 }
 
 // Two regions, the bad limits on line 12, in the second region's [region.curvature] table (line 10).

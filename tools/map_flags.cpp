@@ -16,6 +16,7 @@ void add_map_flags(CLI::App& app, MapFlags& flags) {
           ->capture_default_str(),
       app.add_option("--depth-zero", flags.depth_zero, "Depth map value of height 0")
           ->check(finite_number())
+          ->check(CLI::Range(-kMaxDepthZero, kMaxDepthZero))
           ->capture_default_str(),
       app.add_option("--relief-px", flags.relief_px, "Screen px of height per unit of depth map value")
           ->check(finite_number())

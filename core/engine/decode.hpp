@@ -39,9 +39,12 @@ struct NormalDecodeOptions {
 // The largest |relief_px|: a million screen px of height per unit of value is far beyond any screen's relief, and
 // beyond it the heights of a unorm map no longer fit in a float.
 inline constexpr double kMaxReliefPx = 1e6;
+// The largest |depth_zero|: a float map's values (elevations, say) are far below it, and beyond it the difference
+// v - depth_zero keeps none of a float's precision for v, so that every height is the same, or infinite.
+inline constexpr double kMaxDepthZero = 1e6;
 
 struct DepthDecodeOptions {
-  double depth_zero = 0.0;   // stored value that means height 0
+  double depth_zero = 0.0;   // stored value that means height 0, |depth_zero| <= kMaxDepthZero
   double relief_px = 100.0;  // screen px of height per unit of stored value, |relief_px| <= kMaxReliefPx
 };
 
