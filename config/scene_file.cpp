@@ -90,6 +90,13 @@ const toml::table* get_table(const Reporter& rep, const toml::table& t, std::str
   rep.fail(node, fmt::format("{}{}", where, key), "must be a table");
 }
 
+// The node of `key` in `t`, or `t` itself where the key is not written (its default is what is wrong): where an error
+// about that key points.
+const toml::node* key_or_table(const toml::table& t, std::string_view key) {
+  const toml::node* node = t.get(key);
+  return node != nullptr ? node : &t;
+}
+
 // Checks one parameter where it is written, so that the error names its line and key.
 template <typename Check>
 void check_key(const Reporter& rep, const toml::table& t, std::string_view key, std::string_view where, Check ok,
@@ -391,8 +398,7 @@ void parse_region_engine(const Reporter& rep, const toml::table& t, const std::s
              "applies to traversal = \"direction_lut\" (or \"auto\") only");
   }
   if (const std::string problem = validate(e); !problem.empty()) {
-    const toml::node* traversal = t.get("traversal");
-    rep.fail(traversal != nullptr ? traversal : &t, where + "traversal",
+    rep.fail(key_or_table(t, "traversal"), where + "traversal",
              problem + (t.get("sampling") == nullptr ? " (the sampling is the [daemon] table's)" : ""));
   }
   r.engine = e;
@@ -472,12 +478,13 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   }
   r.sources.depth_options.depth_zero = get_number(rep, t, "depth_zero", where, 0.0);
   r.sources.depth_options.relief_px = get_number(rep, t, "relief_px", where, 100.0);
-  if (!(std::abs(r.sources.depth_options.depth_zero) <= kMaxDepthZero))  // (NaN fails)
-    rep.fail(t.get("depth_zero"), where + "depth_zero",
-             fmt::format("must be a finite number from -{0:g} to {0:g}", kMaxDepthZero));
-  if (!(std::abs(r.sources.depth_options.relief_px) <= kMaxReliefPx))  // (NaN fails)
-    rep.fail(t.get("relief_px"), where + "relief_px",
-             fmt::format("must be a finite number from -{0:g} to {0:g}", kMaxReliefPx));
+  const auto bounded = [&](const char* key, double value, double bound) {
+    check_key(
+        rep, t, key, where, [&] { return std::abs(value) <= bound; },  // (NaN fails)
+        fmt::format("must be a finite number from -{0:g} to {0:g}", bound));
+  };
+  bounded("depth_zero", r.sources.depth_options.depth_zero, kMaxDepthZero);
+  bounded("relief_px", r.sources.depth_options.relief_px, kMaxReliefPx);
 
   if (!r.sources.normal_map && !r.sources.depth_map)
     rep.fail(&t, where + "normal_map", "a region needs a normal_map or a depth_map");
@@ -492,8 +499,7 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
     const bool needs_depth = r.materials->source == ClassSource::depth;
     const bool needs_normals = r.materials->source == ClassSource::normals;
     if ((needs_depth && !r.sources.depth_map) || (needs_normals && !r.sources.normal_map && !r.sources.depth_map)) {
-      const toml::node* source = m->get("source");
-      rep.fail(source != nullptr ? source : m, where + "materials.source",
+      rep.fail(key_or_table(*m, "source"), where + "materials.source",
                needs_depth ? "source = \"depth\" needs a depth_map, which the region has not"
                            : "the region has no map to compute the classes from");
     }
@@ -501,8 +507,7 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   if (const toml::table* w = get_table(rep, t, "wells", where)) {
     r.wells = parse_wells(rep, *w, where + "wells.");
     if (r.wells->pattern == WellPattern::contours && !r.sources.depth_map) {
-      const toml::node* pattern = w->get("pattern");
-      rep.fail(pattern != nullptr ? pattern : w, where + "wells.pattern", "contour wells need a depth_map (heights)");
+      rep.fail(key_or_table(*w, "pattern"), where + "wells.pattern", "contour wells need a depth_map (heights)");
     }
   }
   return r;

@@ -528,8 +528,8 @@ bool Daemon::make_passthrough_sink(const std::string& node, Mouse& mouse) {
 
 void Daemon::passthrough(bool on) {
   passthrough_asked_ = on;
-  set_passthrough(on && config_.pipeline.mode == OutputMode::absolute);  // relative motion already reaches such
-}  // applications as motion
+  set_passthrough(passthrough_with(config_.pipeline.mode));
+}
 
 void Daemon::set_passthrough(bool on) {
   if (on == passthrough_wanted_) return;
@@ -807,8 +807,8 @@ void Daemon::apply(Configuration next) {
     // New [daemon] settings: new virtual devices, and the mice chosen again; the cursor stays put.
     log_.info("the [daemon] settings changed; taking the mice again");
     config_ = std::move(next);
-    // Pass-through as asked, with the new output: none with relative output, back with absolute.
-    const bool passing = passthrough_asked_ && config_.pipeline.mode == OutputMode::absolute;
+    // Pass-through as asked, with the new output (the mice are taken again below, with its devices where on).
+    const bool passing = passthrough_with(config_.pipeline.mode);
     if (passing != passthrough_wanted_)
       log_.info("pass-through {} with {} output", passing ? "on again" : "off", passing ? "absolute" : "relative");
     passthrough_wanted_ = passing;

@@ -84,6 +84,8 @@ class Daemon final : private ControlHandler {
   void change_desktop(Rect desktop, std::string_view why);
   void passthrough(bool on) override;
   void set_passthrough(bool on);
+  // Pass-through as asked, with `mode`: relative output already reaches such applications as motion.
+  bool passthrough_with(OutputMode mode) const { return passthrough_asked_ && mode == OutputMode::absolute; }
   void route(Mouse& mouse, const InputEvent& event);
   bool make_passthrough_sink(const std::string& node, Mouse& mouse);
 

@@ -123,16 +123,17 @@ std::unique_ptr<CursorSource> cursor_source_from_environment() {
     const char* value = std::getenv(name);
     return value != nullptr ? value : "";
   };
+  const auto is_socket = [](const std::string& path) {
+    struct stat st {};
+    return ::stat(path.c_str(), &st) == 0 && S_ISSOCK(st.st_mode);
+  };
   for (const std::string& path :
        hyprland_socket_candidates(env("XDG_RUNTIME_DIR"), env("HYPRLAND_INSTANCE_SIGNATURE"))) {
-    struct stat st {};
-    if (::stat(path.c_str(), &st) == 0 && S_ISSOCK(st.st_mode)) return std::make_unique<HyprlandCursor>(path);
+    if (is_socket(path)) return std::make_unique<HyprlandCursor>(path);
   }
   // Where the variable names no socket (left in the user manager by a Wayfire session that has ended), none.
   const std::string wayfire(env("WAYFIRE_SOCKET"));
-  struct stat st {};
-  if (!wayfire.empty() && ::stat(wayfire.c_str(), &st) == 0 && S_ISSOCK(st.st_mode))
-    return std::make_unique<WayfireCursor>(wayfire);
+  if (!wayfire.empty() && is_socket(wayfire)) return std::make_unique<WayfireCursor>(wayfire);
   return nullptr;
 }
 
