@@ -407,6 +407,7 @@ TEST(Wells, ValidateNamesTheParameterAndItsRange) {
   EXPECT_EQ(message([](WellsParams& p) { p.snap_fraction = 0.3; }), "wells snap_fraction must be in [0, 0.25]");
   EXPECT_NE(message([](WellsParams& p) { p.isophotes.cos_alpha = 1.5; }).find("cos_alpha"), std::string::npos);
   EXPECT_NE(message([](WellsParams& p) { p.isophotes.light = {0, 0, 0}; }).find("light"), std::string::npos);
+  EXPECT_EQ(message([](WellsParams& p) { p.isophotes.light = {1e300, 1e300, 1e300}; }), "");  // finite, non-zero
   EXPECT_NE(message([](WellsParams& p) {
               p.contours.levels = {1.0, std::numeric_limits<double>::infinity()};
             }).find("levels"),

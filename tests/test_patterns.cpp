@@ -205,6 +205,21 @@ TEST(Isophotes, LightVectorPointsTowardTheLightInTheScreenFrame) {
   EXPECT_EQ(count(isophote_mask(g, p)), side * side);
 }
 
+// The light is a direction: scaled by 1e300 or 1e-300 its squares overflow or underflow, and the light was refused as
+// not finite and non-zero. The mask is the unit light's.
+TEST(Isophotes, ALightOfAnyFiniteLengthIsItsDirection) {
+  const GradientField g = sphere_gradient(48);
+  IsophoteParams p;
+  p.light = {-1.0, -1.0, 2.0};
+  const Mask unit = isophote_mask(g, p);
+  ASSERT_GT(count(unit), 0);
+  for (const double scale : {1e300, 1e-300}) {
+    SCOPED_TRACE(scale);
+    p.light = {-scale, -scale, 2.0 * scale};
+    EXPECT_EQ(isophote_mask(g, p).values, unit.values);
+  }
+}
+
 TEST(Isophotes, FlatFieldAndBadInput) {
   const GradientField flat(40, 30);
   IsophoteParams p;  // defaults: the flat desktop is not on the isophote

@@ -24,7 +24,7 @@ std::string check_range(const char* name, double v, double lo, double hi) {
 
 std::string validate_isophotes(const IsophoteParams& p) {
   const LightVector& l = p.light;
-  const double len = std::sqrt(l.x * l.x + l.y * l.y + l.z * l.z);
+  const double len = light_length(l);
   if (!(std::isfinite(len) && len > 0.0)) return "wells isophote light must be a finite, non-zero vector";
   if (auto e = check_range("isophote cos_alpha", p.cos_alpha, -1.0, 1.0); !e.empty()) return e;
   if (!(std::isfinite(p.tol) && p.tol >= 0.0)) return "wells isophote tolerance must be a finite number >= 0";

@@ -120,9 +120,11 @@ std::vector<double> contour_levels(const DepthField& depth, const ContourParams&
   return levels;
 }
 
+double light_length(const LightVector& light) { return std::hypot(light.x, light.y, light.z); }
+
 Grid<std::uint8_t> isophote_mask(const GradientField& gradient, const IsophoteParams& params) {
   const LightVector& l = params.light;
-  const double len = std::sqrt(l.x * l.x + l.y * l.y + l.z * l.z);
+  const double len = light_length(l);
   check(std::isfinite(len) && len > 0.0, "the light vector must be finite and non-zero");
   check(params.cos_alpha >= -1.0 && params.cos_alpha <= 1.0, "cos_alpha must be in [-1, 1]");
   check(std::isfinite(params.tol) && params.tol >= 0.0, "isophote tolerance must be finite and >= 0");

@@ -36,6 +36,10 @@ struct LightVector {
   double z = 1.0;
 };
 
+// The light's length, without overflow or underflow in its squares (std::hypot): a light of (1e200, 1e200, 1e200)
+// is a direction as good as (1, 1, 1). Finite and above 0 for every light a pattern can use.
+double light_length(const LightVector& light);
+
 struct IsophoteParams {
   LightVector light{-1.0, -1.0, 2.0};  // from the top left, 35.3 degrees off the view axis
   double cos_alpha = 0.95;             // c: the isophote n·l = c, in [-1, 1] (here 18.2 degrees off the light)
