@@ -435,11 +435,11 @@ TEST(Tool, TraceErrors) {
   {
     SCOPED_TRACE("bad --step, --speed, --rate, --from, --to: each named");
     expect_clean_failure(run_tool("trace --target " + kBump + " --step -1" + out, dir),
-                         {"--step must be a finite number > 0"});
+                         {"--step: must be a finite number > 0"});
     expect_clean_failure(run_tool("trace --target " + kBump + " --speed 0" + out, dir),
-                         {"--speed must be a finite number > 0"});
+                         {"--speed: must be a finite number > 0"});
     expect_clean_failure(run_tool("trace --target " + kBump + " --speed 100 --rate 0" + out, dir),
-                         {"--rate must be a finite number > 0"});
+                         {"--rate: must be a finite number > 0"});
     expect_clean_failure(run_tool("trace --target " + kBump + " --from nan,3" + out, dir),
                          {"--from: X and Y must be finite numbers"});
     expect_clean_failure(run_tool("trace --target " + kBump + " --to 3,inf" + out, dir),
@@ -498,6 +498,13 @@ TEST(Tool, TraceRefusesAnOptionNoTracedMethodReads) {
   // Where the method traced is the option's, its options are taken.
   const ToolResult both = run_tool("trace --target " + kBump + " --method depth --gain 5 --depth-kmax 3" + out, dir);
   EXPECT_EQ(both.rc, 0) << both.err;
+  // So with a map's decoding options: --relief-px with only a normal map changed nothing.
+  fs::remove(dir / "x.csv");
+  ASSERT_EQ(run_tool("surfaces --size 16 " + quote(dir / "m"), dir).rc, 0);
+  expect_clean_failure(
+      run_tool("trace --normal-map " + quote(dir / "m" / "cone.normal.png") + " --relief-px 3" + out, dir),
+      {"--relief-px says how to decode a depth map: give --depth-map, or leave it out"});
+  EXPECT_FALSE(fs::exists(dir / "x.csv"));
 }
 
 // A stroke that meets no region is traced (C/D 1 throughout) with a warning; one that would take more frames than a
@@ -540,6 +547,32 @@ TEST(Tool, EmptyPathsAndNegativeSeedsAreRefused) {
                          {"--seed: must be a whole number from 0 to 18446744073709551615, not " + seed});
   }
   EXPECT_FALSE(fs::exists(dir / "s"));
+}
+
+// CLI11 reads a whole number with a leading 0 as octal and 0x as hex: --seed 010 ran seed 8, --size 09 was "not in
+// range 8 to 8192", and --size W,H of 010,012 gave 8 x 10 texels. The tool reads them in decimal.
+TEST(Tool, WholeNumbersAreReadInDecimal) {
+  ScratchDir dir;
+  const ToolResult study = run_tool("study --small --technique none --seed 010 " + quote(dir / "s"), dir);
+  ASSERT_EQ(study.rc, 0) << study.err;
+  EXPECT_TRUE(contains(read_text(dir / "s" / "summary.md"), "seed 10,")) << read_text(dir / "s" / "summary.md");
+
+  const ToolResult surfaces = run_tool("surfaces --size 09 " + quote(dir / "m"), dir);
+  ASSERT_EQ(surfaces.rc, 0) << surfaces.err;
+  EXPECT_EQ(read_image(dir / "m" / "sphere.normal.png").width, 9);
+
+  const ToolResult inspect = run_tool("inspect --normal-map " + quote(dir / "m" / "sphere.normal.png") +
+                                          " --size 010,012 --radius 010 " + quote(dir / "i"),
+                                      dir);
+  ASSERT_EQ(inspect.rc, 0) << inspect.err;
+  EXPECT_TRUE(contains(inspect.out, "10 x 12 texels")) << inspect.out;
+  EXPECT_TRUE(contains(inspect.out, "filter radius 10")) << inspect.out;
+
+  expect_clean_failure(run_tool("study --small --participants 0x10 " + quote(dir / "p"), dir),
+                       {"--participants: must be a whole number from 2 to 100000, not 0x10"});
+  expect_clean_failure(run_tool("inspect --normal-map x.png --size 0x10,8 " + quote(dir / "p"), dir),
+                       {"--size", "expected W,H"});
+  EXPECT_FALSE(fs::exists(dir / "p"));
 }
 
 // How many times `part` occurs in `text`.
@@ -938,6 +971,15 @@ TEST(Tool, TargetsAndDemo) {
   }
   ASSERT_EQ(names.size(), 24u) << r.out;
   for (std::size_t i = 0; i < all.size(); ++i) EXPECT_EQ(names[i], all[i].name());
+
+  // A step so small that a stroke would stop part way printed that part's range as the target's, with exit 0.
+  const ToolResult tiny = run_tool("demo --targets " + quote(folder) + " --step 4e-5", dir);
+  expect_clean_failure(tiny, {"more than the 10000000 a stroke may take: give a larger --step"});
+
+  // A file the targets cannot be written to: the file system's reason.
+  fs::create_directories(dir / "blocked" / (all.front().name() + ".toml"));
+  expect_clean_failure(run_tool("targets " + quote(dir / "blocked"), dir),
+                       {all.front().name() + ".toml: cannot write: Is a directory"});
 }
 
 // Without FILE, check-config reads the daemon's default file; where there is none the daemon runs its embedded

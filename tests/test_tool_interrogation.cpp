@@ -214,14 +214,50 @@ TEST(ToolInterrogation, InspectChecksEverythingBeforeWritingAnything) {
   ASSERT_EQ(earlier.size(), 5u);  // K, H, class, isophotes, contours
 
   const ToolResult r = run_tool("inspect " + quote(out) + maps + " --size 32,32 --light 0,0,0", dir);
-  expect_clean_failure(r, {"the light vector must be finite and non-zero"});
+  expect_clean_failure(r, {"--light: must not be 0,0,0"});
   std::map<std::string, std::vector<char>> now;
   for (const auto& entry : fs::directory_iterator(out))
     now[entry.path().filename().string()] = read_file_bytes(entry.path());
   EXPECT_TRUE(now == earlier) << "a picture of the failed run was written";
 
-  expect_clean_failure(run_tool("inspect " + quote(dir / "new") + maps + " --light 0,0,0", dir), {"light vector"});
+  expect_clean_failure(run_tool("inspect " + quote(dir / "new") + maps + " --light 0,0,0", dir), {"--light"});
   EXPECT_FALSE(fs::exists(dir / "new"));
+  // Decoding options for a map not given change nothing: refused, naming the option.
+  expect_clean_failure(run_tool("inspect " + quote(dir / "new") + maps + " --normal-green directx", dir),
+                       {"--normal-green says how to decode a normal map: give --normal-map"});
+  EXPECT_FALSE(fs::exists(dir / "new"));
+}
+
+// A light of huge or tiny components is a direction like any other: its length overflowed (1e300^2) or underflowed,
+// and the light was refused as "not finite and non-zero".
+TEST(ToolInterrogation, InspectTakesALightOfAnyFiniteLength) {
+  ScratchDir dir;
+  const fs::path depth_map = dir / "saddle.depth.png";
+  write_saddle_depth_map(depth_map);
+  const std::string maps = " --depth-map " + quote(depth_map) + " --depth-zero 0.5 --relief-px 16";
+  ASSERT_EQ(run_tool("inspect " + quote(dir / "unit") + maps + " --light -1,-1,2", dir).rc, 0);
+  for (const std::string light : {"-1e300,-1e300,2e300", "-1e-300,-1e-300,2e-300"}) {
+    SCOPED_TRACE(light);
+    const ToolResult r = run_tool("inspect " + quote(dir / "scaled") + maps + " --light " + light, dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_EQ(read_file_bytes(dir / "scaled" / "isophotes.png"), read_file_bytes(dir / "unit" / "isophotes.png"));
+  }
+}
+
+// A run without a depth map writes no contours.png: one an earlier run left, of another texture, is removed rather
+// than left beside this run's pictures.
+TEST(ToolInterrogation, InspectLeavesNoContoursOfAnEarlierRun) {
+  ScratchDir dir;
+  const fs::path depth_map = dir / "saddle.depth.png";
+  write_saddle_depth_map(depth_map);
+  const fs::path out = dir / "out";
+  ASSERT_EQ(run_tool("inspect --depth-map " + quote(depth_map) + " " + quote(out), dir).rc, 0);
+  ASSERT_TRUE(fs::exists(out / "contours.png"));
+  ASSERT_EQ(run_tool("surfaces --size 32 " + quote(dir / "s"), dir).rc, 0);
+  const ToolResult r = run_tool("inspect --normal-map " + quote(dir / "s" / "cone.normal.png") + " " + quote(out), dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_FALSE(fs::exists(out / "contours.png"));
+  EXPECT_TRUE(fs::exists(out / "isophotes.png"));
 }
 
 }  // namespace

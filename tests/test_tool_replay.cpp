@@ -428,7 +428,7 @@ TEST(ReplayTool, GainIsRefusedWherePointerSpeedIs) {
   const fs::path in = stroke_file(dir);
   for (const std::string gain : {"1e-300", "0", "100.5"}) {
     expect_clean_failure(run_tool("replay --gain " + gain + " " + quote(in) + " " + quote(dir / "out.evemu"), dir),
-                         {"--gain must be a finite number from 0.01 to 100"});
+                         {"--gain: must be a finite number from 0.01 to 100, not " + gain});
   }
   EXPECT_FALSE(fs::exists(dir / "out.evemu"));
   EXPECT_EQ(run_tool("replay --gain 0.01 " + quote(in) + " " + quote(dir / "out.evemu"), dir).rc, 0);

@@ -154,5 +154,15 @@ TEST(ToolStability, ModeOptionRunsOneModeAndRejectsAnUnknownOne) {
   EXPECT_NE(bad.err.find("grating-a4"), std::string::npos) << bad.err;  // lists the modes
 }
 
+// A folder where stability.csv goes is said before the run, and modes.csv is not written beside older rows.
+TEST(ToolStability, AnOutputThatCannotBeWrittenFailsBeforeTheRun) {
+  ScratchDir dir;
+  fs::create_directories(dir / "out" / "stability.csv");
+  const ToolResult r = run_tool("stability --small --mode jump " + quote(dir / "out"), dir);
+  expect_clean_failure(r, {(dir / "out" / "stability.csv").string() + ": is a folder"});
+  EXPECT_EQ(r.err.find("stability: [1/1]"), std::string::npos) << r.err;  // nothing ran
+  EXPECT_FALSE(fs::exists(dir / "out" / "modes.csv"));
+}
+
 }  // namespace
 }  // namespace ph

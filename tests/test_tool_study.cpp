@@ -128,6 +128,22 @@ TEST(ToolStudy, WhatCannotBeUsedIsSaidBeforeTheRun) {
   EXPECT_FALSE(std::filesystem::exists(dir / "c"));
 }
 
+// --participants is kept with --small (12 was taken for "not given" and became 4); OUTDIR missing is a command-line
+// error, with CLI11's exit status, as a missing argument of any other command is.
+TEST(ToolStudy, ParticipantsAreAsGivenAndOutdirIsAnArgument) {
+  ScratchDir dir;
+  const ToolResult twelve = run_tool("study --small --technique none --participants 12 " + quote(dir / "s"), dir);
+  ASSERT_EQ(twelve.rc, 0) << twelve.err;
+  EXPECT_NE(twelve.out.find("1 technique x 12 participants"), std::string::npos) << twelve.out;
+  const ToolResult small = run_tool("study --small --technique none " + quote(dir / "t"), dir);
+  ASSERT_EQ(small.rc, 0) << small.err;
+  EXPECT_NE(small.out.find("x 4 participants"), std::string::npos) << small.out;
+
+  const ToolResult none = run_tool("study --small", dir);
+  expect_clean_failure(none, {"OUTDIR is required", "Run with --help"});
+  EXPECT_GE(none.rc, 2);
+}
+
 // One participant has no interval over participants: the summaries' would read as certainty ([4.22, 4.22]).
 TEST(ToolStudy, OneParticipantIsRefused) {
   ScratchDir dir;

@@ -20,22 +20,24 @@ inline CLI::Validator non_empty_path() {
       [](std::string& text) -> std::string { return text.empty() ? "is empty: give a path" : std::string(); }, "");
 }
 
-// A whole number from 0 to `largest`, written in decimal; says nothing in --help. Written back without leading zeros,
-// since CLI11 then reads "010" as octal.
-inline CLI::Validator whole_number(std::uint64_t largest = std::numeric_limits<std::uint64_t>::max()) {
+// A whole number from `smallest` to `largest`, written in decimal; --help shows the range where it is not every
+// unsigned 64-bit number. Written back without leading zeros, since CLI11 then reads "010" as octal: register it with
+// ->transform(), since ->check() throws the rewrite away.
+inline CLI::Validator whole_number(std::uint64_t smallest = 0,
+                                   std::uint64_t largest = std::numeric_limits<std::uint64_t>::max()) {
+  const std::string range = std::to_string(smallest) + " to " + std::to_string(largest);
+  const bool every = smallest == 0 && largest == std::numeric_limits<std::uint64_t>::max();
   return CLI::Validator(
-      [largest](std::string& text) -> std::string {
+      [smallest, largest, range](std::string& text) -> std::string {
         std::uint64_t value = 0;
         const char* end = text.data() + text.size();
         const auto [stop, error] = std::from_chars(text.data(), end, value, 10);
-        if (text.empty() || stop != end || error != std::errc() || value > largest) {
-          return "must be a whole number from 0 to " + std::to_string(largest) + ", not " +
-                 (text.empty() ? "''" : text);
-        }
+        if (text.empty() || stop != end || error != std::errc() || value < smallest || value > largest)
+          return "must be a whole number from " + range + ", not " + (text.empty() ? "''" : text);
         text = std::to_string(value);
         return {};
       },
-      "");
+      every ? "" : "in [" + std::to_string(smallest) + " - " + std::to_string(largest) + "]");
 }
 
 }  // namespace ph::tools

@@ -589,8 +589,12 @@ VariantRow measure_auto(const Workload& w, const MethodTruth& truth, const Metho
                                  chose_exact += chosen.traversal == Traversal::exact ? 1 : 0;
                                  return chosen;
                                });
-  fmt::print(stderr, "accuracy: {:<44} exact on {} of {} shapes, frame_midpoint on the rest\n", row.variant,
-             chose_exact, scenes.scenes.size());
+  const std::size_t shapes = scenes.scenes.size();
+  fmt::print(stderr, "accuracy: {:<44} {}\n", row.variant,
+             chose_exact == shapes ? fmt::format("exact on all {} shapes", shapes)
+             : chose_exact == 0
+                 ? fmt::format("frame_midpoint on all {} shapes", shapes)
+                 : fmt::format("exact on {} of {} shapes, frame_midpoint on the rest", chose_exact, shapes));
   return row;
 }
 

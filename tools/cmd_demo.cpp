@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <stdexcept>
 
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
@@ -14,13 +15,15 @@
 #include "tools/commands.hpp"
 #include "tools/finite_check.hpp"
 #include "tools/progress_line.hpp"
+#include "tools/stroke_fits.hpp"
 
 namespace ph::tools {
 
 namespace {
 
+// As the XDG base directory specification says: a relative XDG_CACHE_HOME is ignored.
 std::filesystem::path default_targets_dir() {
-  if (const char* cache = std::getenv("XDG_CACHE_HOME"); cache != nullptr && *cache != '\0') {
+  if (const char* cache = std::getenv("XDG_CACHE_HOME"); cache != nullptr && *cache == '/') {
     return std::filesystem::path(cache) / "pseudohaptic" / "targets";
   }
   if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0') {
@@ -42,7 +45,16 @@ Range stroke_range(const SceneSpec& target_scene, std::string_view method, doubl
   stroke.from = {static_cast<double>(r.x), r.y + r.h / 2.0};
   stroke.to = {static_cast<double>(r.x + r.w), r.y + r.h / 2.0};
   stroke.motor_step_px = step;
+  check_stroke_fits(stroke, "--step");
   const StrokeResult result = run_stroke(scene, stroke);
+  // Where the C/D stays high the stroke takes up to that many times as many frames: a range of part of the stroke
+  // would be said of all of it.
+  if (!result.reached) {
+    throw std::runtime_error(
+        fmt::format("{}: the {} stroke stopped after {} frames, before its end: give a larger "
+                    "--step",
+                    scene.regions().front().name, method, result.frames));
+  }
   return {result.cd_min, result.cd_max};
 }
 

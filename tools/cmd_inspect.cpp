@@ -130,6 +130,9 @@ int run_inspect(const InspectOptions& o) {
   const bool from_depth = o.from.empty() ? o.normal_map.empty() : o.from == "depth";
   if (from_depth && o.depth_map.empty()) throw std::invalid_argument("--from depth needs --depth-map");
   if (!from_depth && o.normal_map.empty()) throw std::invalid_argument("--from normal needs --normal-map");
+  check_map_flags_have_their_map(o.maps, !o.normal_map.empty(), !o.depth_map.empty());
+  if (o.light.size() == 3 && !(light_length({o.light[0], o.light[1], o.light[2]}) > 0.0))
+    throw CLI::ValidationError("--light", "must not be 0,0,0: give the direction toward the light");
 
   // Decoded as `trace` and the daemon decode them (config/field_loader).
   FieldSources sources;
@@ -146,7 +149,12 @@ int run_inspect(const InspectOptions& o) {
   const double h_scale = write_diverging(out / "H.png", p.curvature.mean);
   write_picture(out / "class.png", p.classes, [](std::uint8_t c) { return kClassColours[c & 3]; });
   write_mask(out / "isophotes.png", p.isophotes);
-  if (p.contours) write_mask(out / "contours.png", *p.contours);
+  if (p.contours) {
+    write_mask(out / "contours.png", *p.contours);
+  } else {
+    // Not one of this run's pictures: an older run's, with a depth map, would read as this texture's contours.
+    std::filesystem::remove(out / "contours.png");
+  }
 
   fmt::print("{} x {} texels, curvature from the {} map ({}-bit), filter radius {}\n", p.width, p.height,
              from_depth ? "depth" : "normal", image.code_max == 0 ? 32 : p.bits, p.filter.radius);
@@ -188,7 +196,7 @@ Run add_inspect_command(CLI::App& app) {
   app.add_option("--radius", o->radius,
                  "Derivative filter radius r, a (2r+1)^2 least-squares window (default: 3 for 16-bit normal maps, "
                  "8 for 16-bit depth maps, 16 for 8-bit maps)")
-      ->check(CLI::Range(1, 256));
+      ->transform(whole_number(1, 256));
   app.add_option("--planar-curvedness", o->planar_curvedness,
                  "Planar below this curvedness, 1/px (default 5e-5; 1e-4 for 8-bit maps)")
       ->check(finite_number())
@@ -203,7 +211,7 @@ Run add_inspect_command(CLI::App& app) {
       ->check(finite_number())
       ->check(CLI::Range(-1.0, 1.0));
   app.add_option("--contours", o->contours, "Number of evenly spaced contour levels (default 8)")
-      ->check(CLI::Range(0, 4096));
+      ->transform(whole_number(0, 4096));
   return [o] { return run_inspect(*o); };
 }
 

@@ -278,9 +278,6 @@ int run_replay(const ReplayOptions& o) {
   ReplayScene loaded = load_replay_scene(o.scene_file, o.method);
   RecordingInfo info;
   const Recording input = read_recording_file(o.input, o.device_given ? o.device : kFirstPointerDevice, &info);
-  if (!(o.gain >= kMinPointerSpeed && o.gain <= kMaxPointerSpeed))  // the scene file's pointer_speed's range
-    throw std::invalid_argument(
-        fmt::format("--gain must be a finite number from {} to {}", kMinPointerSpeed, kMaxPointerSpeed));
   const PipelineConfig config = replay_config(o, loaded.daemon);
   // As a scene file's desktop: larger ones overflowed absolute output's axis ranges.
   if (!is_valid_desktop(config.desktop))
@@ -343,7 +340,7 @@ Run add_replay_command(CLI::App& app) {
   app.add_option("--device", o->device,
                  "Device of a libinput record file to replay, from 0 (default: device 0, or the first with "
                  "REL_X/REL_Y when device 0 has none; an evemu file holds one)")
-      ->check(whole_number(65535))
+      ->transform(whole_number(0, 65535))
       ->each([o](const std::string&) { o->device_given = true; });
   app.add_option("--scene", o->scene_file, "Scene file (default: the embedded default scene, described below)")
       ->check(non_empty_path());
@@ -387,6 +384,7 @@ Run add_replay_command(CLI::App& app) {
   add_number_tuple(app, "--desktop", o->desktop, "X,Y,W,H",
                    "Desktop rectangle the cursor model is kept in (default 0,0,1920,1080)");
   app.add_option("--gain", o->gain, "Screen px per device count at C/D 1 (the base pointer speed)")
+      ->check(finite_from(kMinPointerSpeed, kMaxPointerSpeed))  // the scene file's pointer_speed's range
       ->capture_default_str()
       ->each([o](const std::string&) { o->gain_given = true; });
   app.footer(

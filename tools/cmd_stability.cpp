@@ -26,6 +26,7 @@
 #include "tools/csv_cell.hpp"
 #include "tools/csv_file.hpp"
 #include "tools/measured.hpp"
+#include "tools/output_folder.hpp"
 
 namespace ph::tools {
 
@@ -95,9 +96,8 @@ int run_stability(const StabilityOptions& o) {
       throw std::invalid_argument(fmt::format("unknown mode '{}' (modes: {})", name, all));
     }
   }
-  fs::create_directories(outdir);
+  prepare_output_folder(outdir, {"stability.csv", "modes.csv"});
   const std::vector<MethodPtr> methods = measured_methods();
-  write_modes(outdir / "modes.csv", modes);
 
   const fs::path path = outdir / "stability.csv";
   CsvFile f(path);
@@ -132,6 +132,8 @@ int run_stability(const StabilityOptions& o) {
                config.engines.size(), seconds_since(t_mode));
   }
   f.close();
+  // After the rows: a run that fails leaves both files as they were, not new modes beside old rows.
+  write_modes(outdir / "modes.csv", modes);
   fmt::print("wrote {} rows to {} in {:.1f} s; {} faults (NaN, C/D out of bounds, strokes that never ended)\n", rows,
              path.string(), seconds_since(t_start), faults);
   return faults == 0 ? 0 : 1;
@@ -150,7 +152,7 @@ Run add_stability_command(CLI::App& app) {
   app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)")
       ->required()
       ->check(non_empty_path());
-  app.add_flag("--small", o->small, "Small canvas, two severities a mode, two variants (seconds; for CI)");
+  app.add_flag("--small", o->small, "Small canvas, two severities a mode, two variants (under a second; for CI)");
   app.add_option("--mode", o->modes, "Run only this failure mode (repeatable; default: all)")
       ->allow_extra_args(false);  // one name per --mode: OUTDIR after it stays OUTDIR
   return [o] { return run_stability(*o); };

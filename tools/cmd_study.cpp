@@ -34,7 +34,7 @@ using Clock = std::chrono::steady_clock;
 
 struct StudyOptions {
   std::string outdir;
-  int participants = 12;
+  std::optional<int> participants;  // default: 12, as in the paper; 4 with --small
   std::uint64_t seed = 1;
   bool small = false;
   bool calibrate = false;
@@ -242,7 +242,7 @@ int run_calibration(StudyDesign design, const std::vector<StudyTechnique>& techn
 int run_study_command(const StudyOptions& o) {
   const Clock::time_point t0 = Clock::now();
   StudyDesign design;
-  design.participants = o.participants;
+  design.participants = o.participants.value_or(o.small ? 4 : 12);
   design.seed = o.seed;
   if (o.weber) design.observer.weber = *o.weber;
   if (o.bound) design.observer.bound = *o.bound;
@@ -265,10 +265,10 @@ int run_study_command(const StudyOptions& o) {
   write_file(outdir / "summary.csv", summary_csv(summaries, techniques));
   write_file(outdir / "summary.md", summary_md(summaries, techniques, design));
   fmt::print(
-      "{} techniques x {} participants: {} trials in {:.1f} s; wrote trials.csv, summary.csv and summary.md "
+      "{} technique{} x {} participants: {} trials in {:.1f} s; wrote trials.csv, summary.csv and summary.md "
       "to {}\n",
-      techniques.size(), design.participants, trials.size(), std::chrono::duration<double>(Clock::now() - t0).count(),
-      outdir.string());
+      techniques.size(), techniques.size() == 1 ? "" : "s", design.participants, trials.size(),
+      std::chrono::duration<double>(Clock::now() - t0).count(), outdir.string());
   return 0;
 }
 
@@ -286,8 +286,8 @@ Run add_study_command(CLI::App& app) {
   app.add_option("OUTDIR", o->outdir, "Folder for the CSV files (created if needed)")->check(non_empty_path());
   // At least 2: the summaries' confidence intervals are over participants, and of one there is none.
   app.add_option("--participants", o->participants, "Simulated participants, 2 or more (default 12, as in the paper)")
-      ->check(CLI::Range(2, 100000));
-  app.add_option("--seed", o->seed, "Seed of every random choice (default 1)")->check(whole_number());
+      ->transform(whole_number(2, 100000));
+  app.add_option("--seed", o->seed, "Seed of every random choice (default 1)")->transform(whole_number());
   app.add_flag("--small", o->small,
                "4 participants and the paper's two techniques unless --technique says otherwise (for CI)");
   app.add_option("--technique", o->techniques,
@@ -306,9 +306,9 @@ Run add_study_command(CLI::App& app) {
                "Print the Weber fraction that gives the paper's pooled error, pooled over the paper's two techniques "
                "unless --technique names others, or fail where none from 0.02 to 2 gives it; writes nothing");
   return [o] {
-    StudyOptions options = *o;
-    if (options.small && options.participants == 12) options.participants = 4;
-    if (!options.calibrate && options.outdir.empty()) throw std::invalid_argument("OUTDIR is required");
+    const StudyOptions& options = *o;
+    // A missing argument, as CLI11 says of one that is always required.
+    if (!options.calibrate && options.outdir.empty()) throw CLI::RequiredError("OUTDIR");
     // What --calibrate finds, or what it would not write, is not also taken from the command line without a word.
     if (options.calibrate && options.weber)
       throw std::invalid_argument("--calibrate finds the Weber fraction: give it or --weber, not both");

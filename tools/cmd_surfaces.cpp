@@ -33,7 +33,9 @@ Run add_surfaces_command(CLI::App& app) {
   app.add_option("OUTDIR", *outdir, "Folder to write into (created if needed); existing files are overwritten")
       ->required()
       ->check(non_empty_path());
-  app.add_option("--size", *size, "Side of each square surface, px")->check(CLI::Range(8, 8192))->capture_default_str();
+  app.add_option("--size", *size, "Side of each square surface, px")
+      ->transform(whole_number(8, 8192))
+      ->capture_default_str();
   app.footer(
       "For each surface NAME (plane, cylinder, cone, paraboloid, ellipsoid, sphere, hyperboloid, simple-saddle,\n"
       "monkey-saddle) writes NAME.normal.png (16-bit, exact analytic normals, OpenGL green), NAME.depth.png\n"

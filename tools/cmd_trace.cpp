@@ -22,9 +22,11 @@
 #include "tools/commands.hpp"
 #include "tools/csv_cell.hpp"
 #include "tools/csv_file.hpp"
+#include "tools/finite_check.hpp"
 #include "tools/map_flags.hpp"
 #include "tools/number_tuple.hpp"
 #include "tools/same_path.hpp"
+#include "tools/stroke_fits.hpp"
 
 namespace ph::tools {
 
@@ -169,7 +171,10 @@ Scene build_scene(const TraceOptions& o, std::vector<std::string>& warnings) {
         o.target.empty() ? "a scene file sets it per region" : "a target's fields are exact, with no map to decode"));
   }
   if (!o.target.empty()) return scene_from_target(o);
-  if (o.scene_file.empty()) return scene_from_maps(o, warnings);
+  if (o.scene_file.empty()) {
+    check_map_flags_have_their_map(o.maps, !o.normal_map.empty(), !o.depth_map.empty());
+    return scene_from_maps(o, warnings);
+  }
   SceneSpec spec = parse_scene_file(o.scene_file);
   if (spec.regions.empty()) throw std::invalid_argument(fmt::format("{}: the scene has no region", spec.file.string()));
   check_output_is_no_map(o.output, spec);
@@ -212,13 +217,6 @@ Vec2 point(const std::vector<double>& v, Vec2 fallback) { return v.size() == 2 ?
 // The stroke's options, each named in its error (the stroke itself would only say that it has no length).
 void check_stroke_options(const TraceOptions& o) {
   if (o.step && o.speed) throw std::invalid_argument("give --step or --speed, not both");
-  const auto positive = [](const char* name, const std::optional<double>& v) {
-    if (v && !(*v > 0.0 && std::isfinite(*v)))
-      throw std::invalid_argument(fmt::format("{} must be a finite number > 0", name));
-  };
-  positive("--step", o.step);
-  positive("--speed", o.speed);
-  if (o.speed) positive("--rate", o.rate);
   for (const auto& [name, v] : {std::pair<const char*, const std::vector<double>&>{"--from", o.from}, {"--to", o.to}}) {
     if (!std::all_of(v.begin(), v.end(), [](double c) { return std::isfinite(c); }))
       throw std::invalid_argument(fmt::format("{}: X and Y must be finite numbers", name));
@@ -242,15 +240,8 @@ StrokeSpec checked_stroke(const TraceOptions& o, const Scene& scene) {
   stroke.from = point(o.from, {static_cast<double>(first.x), mid_y});
   stroke.to = point(o.to, {static_cast<double>(first.x + first.w), mid_y});
   stroke.motor_step_px = o.step ? *o.step : o.speed ? *o.speed / o.rate : 1.0;
-  // Even at C/D 1 the stroke would take more frames than a stroke may: said before a CSV of millions of rows.
-  const double frames_at_cd_1 =
-      std::hypot(stroke.to.x - stroke.from.x, stroke.to.y - stroke.from.y) / stroke.motor_step_px;
-  if (frames_at_cd_1 > static_cast<double>(stroke.max_frames)) {
-    throw std::invalid_argument(fmt::format(
-        "the stroke would take {:.3g} frames of {:g} px at C/D 1, more than the {} a stroke may take: "
-        "give a larger {}",
-        frames_at_cd_1, stroke.motor_step_px, stroke.max_frames, o.speed ? "--speed or a smaller --rate" : "--step"));
-  }
+  // Said before a CSV of millions of rows.
+  check_stroke_fits(stroke, o.speed ? "--speed or a smaller --rate" : "--step");
   StrokeSpec no_frame = stroke;
   no_frame.max_frames = 0;
   run_stroke(scene, no_frame);
@@ -351,9 +342,10 @@ Run add_trace_command(CLI::App& app) {
   app.add_option("--depth-kmin", o->depth_kmin, "Depth: 1 / smallest C/D (default 1.5)");
   add_number_tuple(app, "--from", o->from, "X,Y", "Start of the stroke, screen px (default: left edge, middle height)");
   add_number_tuple(app, "--to", o->to, "X,Y", "End of the stroke (default: right edge, middle height)");
-  app.add_option("--step", o->step, "Motor travel per frame, px at C/D 1 (default 1)");
-  app.add_option("--speed", o->speed, "Hand speed, px/s at C/D 1; the step is speed / rate");
+  app.add_option("--step", o->step, "Motor travel per frame, px at C/D 1 (default 1)")->check(positive_number());
+  app.add_option("--speed", o->speed, "Hand speed, px/s at C/D 1; the step is speed / rate")->check(positive_number());
   app.add_option("--rate", o->rate, "Frames per second with --speed")
+      ->check(positive_number())
       ->each([o](const std::string&) { o->rate_given = true; })
       ->capture_default_str();
   app.add_option("-o,--output", o->output, "CSV file, - for standard output")

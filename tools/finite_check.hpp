@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cmath>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -26,6 +27,23 @@ inline CLI::Validator finite_check(bool above_zero, std::string description) {
 
 // Finite; says nothing in --help (the option's own range, where it has one, does).
 inline CLI::Validator finite_number() { return finite_check(false, ""); }
+
+// Finite and from `lo` to `hi`, said as such ("must be a finite number from 0.01 to 100, not 0"): CLI11's Range says
+// "Value 0 not in range 0.010000 to 100.000000".
+inline CLI::Validator finite_from(double lo, double hi) {
+  const auto g = [](double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  };
+  return CLI::Validator(
+      [lo, hi, range = g(lo) + " to " + g(hi)](std::string& text) -> std::string {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value)) return "'" + text + "' is not a number";
+        return value >= lo && value <= hi ? std::string() : "must be a finite number from " + range + ", not " + text;
+      },
+      "in [" + g(lo) + " - " + g(hi) + "]");
+}
 
 // Finite and above 0 (CLI11's PositiveNumber says of 0 that it is "not in range 0.000000 to" DBL_MAX written out).
 inline CLI::Validator positive_number() { return finite_check(true, "> 0"); }

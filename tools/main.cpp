@@ -98,6 +98,10 @@ int main(int argc, char** argv) {
     for (const auto& [sub, run] : runs) {
       if (sub->parsed()) return with_stdout_flushed(run());
     }
+  } catch (const CLI::ParseError& e) {
+    // The command line, refused by a command's own check of what CLI11 cannot say (an argument required unless
+    // another option is given): exits as CLI11's own refusals do.
+    return app.exit(e);
   } catch (const std::filesystem::filesystem_error& e) {
     // libstdc++ says "filesystem error: cannot create directories: Not a directory [out]": the path first, as the
     // tool's other errors name their file.

@@ -1,5 +1,7 @@
 #include "tools/map_flags.hpp"
 
+#include <stdexcept>
+
 #include "core/engine/decode.hpp"
 #include "tools/finite_check.hpp"
 
@@ -31,6 +33,20 @@ std::vector<std::string> given_map_flags(const MapFlags& flags) {
     if (option->count() > 0) given.push_back(option->get_name());
   }
   return given;
+}
+
+void check_map_flags_have_their_map(const MapFlags& flags, bool normal_map, bool depth_map) {
+  for (const CLI::Option* option : flags.options) {
+    if (option->count() == 0) continue;
+    const std::string name = option->get_name();
+    const bool for_normals = name == "--normal-green" || name == "--normal-encoding";
+    if (for_normals && !normal_map) {
+      throw std::invalid_argument(name + " says how to decode a normal map: give --normal-map, or leave it out");
+    }
+    if (!for_normals && !depth_map) {
+      throw std::invalid_argument(name + " says how to decode a depth map: give --depth-map, or leave it out");
+    }
+  }
 }
 
 void apply_map_flags(const MapFlags& flags, FieldSources& sources) {

@@ -24,6 +24,10 @@ void add_map_flags(CLI::App& app, MapFlags& flags);
 // The names of the flags given on the command line, e.g. "--relief-px"; empty when none was.
 std::vector<std::string> given_map_flags(const MapFlags& flags);
 
+// Throws std::invalid_argument naming the first flag given for a map that is not: --normal-green or
+// --normal-encoding without a normal map, --depth-zero or --relief-px without a depth map. They would change nothing.
+void check_map_flags_have_their_map(const MapFlags& flags, bool normal_map, bool depth_map);
+
 // `sources`' decode options as the flags say.
 void apply_map_flags(const MapFlags& flags, FieldSources& sources);
 

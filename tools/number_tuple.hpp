@@ -9,8 +9,10 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cstddef>
 #include <string>
+#include <system_error>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -37,6 +39,19 @@ inline std::string expected_form(const std::string& form, std::size_t count, boo
          (count == 2 ? "a comma" : "commas") + ")";
 }
 
+// One number of a tuple: an integer in decimal (CLI11 would read "010" as octal and "0x10" as hex), any other number
+// as CLI11 reads it.
+template <typename T>
+bool parse_tuple_number(const std::string& text, T& value) {
+  if constexpr (std::is_integral_v<T>) {
+    const char* end = text.data() + text.size();
+    const auto [stop, error] = std::from_chars(text.data(), end, value, 10);
+    return !text.empty() && stop == end && error == std::errc();
+  } else {
+    return CLI::detail::lexical_cast(text, value);
+  }
+}
+
 // The numbers of `text`, one per letter of `form`, each passed by every validator of `each` (a range, finite);
 // a CLI::ValidationError that names `name` otherwise, which the tool reports as it reports CLI11's own.
 template <typename T>
@@ -46,7 +61,7 @@ std::vector<T> parse_number_tuple(const std::string& name, const std::string& fo
   const std::vector<std::string> parts = split_at_commas(text);
   std::vector<T> values(parts.size());
   bool numbers = parts.size() == count;
-  for (std::size_t i = 0; numbers && i < parts.size(); ++i) numbers = CLI::detail::lexical_cast(parts[i], values[i]);
+  for (std::size_t i = 0; numbers && i < parts.size(); ++i) numbers = parse_tuple_number(parts[i], values[i]);
   if (!numbers) throw CLI::ValidationError(name, expected_form(form, count, std::is_integral_v<T>));
   for (const std::string& part : parts) {
     for (const CLI::Validator& validator : each) {
