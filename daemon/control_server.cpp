@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <stdexcept>
 
 namespace ph {
@@ -50,6 +51,13 @@ ControlServer::ControlServer(std::string path, int epoll, const SessionDirectory
     fail("cannot use the path", path_);
   }
   std::memcpy(address.sun_path, path_.c_str(), path_.size() + 1);
+  // Its own folder, one level: a mistyped --control deeper down still fails, naming the path. 0755 whatever the
+  // umask: every user's helper and tool must reach the socket.
+  if (const std::string folder = std::filesystem::path(path_).parent_path().string();
+      !folder.empty() && ::mkdir(folder.c_str(), 0755) == 0) {
+    ::chmod(folder.c_str(), 0755);
+    log_.info("made the control socket's folder {}", folder);
+  }
   listener_ = UniqueFd(::socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
   if (!listener_) fail("cannot create the socket", path_);
   struct stat st {};

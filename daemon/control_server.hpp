@@ -65,7 +65,9 @@ class ControlSocketInUse : public std::runtime_error {
 
 class ControlServer {
  public:
-  // Binds and listens at `path` (the directory must exist) and adds the socket to `epoll`. A socket left
+  // Binds and listens at `path` and adds the socket to `epoll`. The socket's own folder is made (0755) where it is
+  // missing, as systemd's RuntimeDirectory= makes it for the service: a daemon started by hand has its default
+  // /run/pseudohaptic/control too. The folders above it must exist. A socket left
   // there by a daemon that is gone is replaced; one that a running process still accepts on is left alone
   // (ControlSocketInUse): replacing it would cut that daemon off from its helper and from the tool, and
   // this one would remove it again when it ends. Throws std::runtime_error saying what else failed.

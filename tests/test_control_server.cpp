@@ -272,6 +272,34 @@ TEST(ControlServer, AnEarlierHelperTakesOverWhenTheLatestGoes) {
 // A second daemon started beside a running one (`sudo pseudohapticd` while the service runs) must not take the
 // running one's socket: it used to unlink it as stale, bind its own, and remove that when it ended, leaving the
 // running daemon unreachable. A socket file whose daemon is gone is still replaced.
+// A daemon started by hand has no RuntimeDirectory= to make /run/pseudohaptic: the server makes the socket's own
+// folder, and only that one (a path with a missing folder above it still fails, naming the path).
+TEST(ControlServer, MakesTheSocketsOwnFolder) {
+  const ScratchDir dir("control");
+  const std::string path = (dir.path() / "pseudohaptic" / "control").string();
+  const FakeSessions sessions(::getuid());
+  {
+    ServerLoop server(path, sessions);
+    EXPECT_EQ(std::filesystem::status(dir.path() / "pseudohaptic").permissions(),
+              std::filesystem::perms::owner_all | std::filesystem::perms::group_read |
+                  std::filesystem::perms::group_exec | std::filesystem::perms::others_read |
+                  std::filesystem::perms::others_exec);
+    control::Client tool(path);
+    EXPECT_TRUE(tool.request("status").ok);
+  }
+  const std::string deeper = (dir.path() / "a" / "b" / "control").string();
+  const UniqueFd epoll(::epoll_create1(EPOLL_CLOEXEC));
+  const Logger log(false, false, std::fopen("/dev/null", "w"));
+  try {
+    ControlServer server(deeper, epoll.get(), sessions, log);
+    ADD_FAILURE() << "bound under a folder that does not exist";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(deeper + ": cannot bind: No such file or directory"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "a"));
+}
+
 TEST(ControlServer, LeavesALiveSocketAloneAndReplacesAStaleOne) {
   const ScratchDir dir("control");
   const std::string path = (dir.path() / "control").string();
