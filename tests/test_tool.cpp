@@ -507,6 +507,28 @@ TEST(Tool, TraceRefusesAnOptionNoTracedMethodReads) {
   EXPECT_FALSE(fs::exists(dir / "x.csv"));
 }
 
+// A frame that ends exactly on a region's edge enters its first texel at the start of the next frame: that texel has
+// its row, and the stroke is not said to cross no region. Before, the row was left out, and a 1 px region's stroke
+// read "C/D range [0.8, 1]" beside "crosses no region, so its C/D is 1 throughout".
+TEST(Tool, TraceHasARowForATexelEnteredAtAFrameBoundary) {
+  ScratchDir dir;
+  ASSERT_EQ(run_tool("surfaces --size 16 " + quote(dir / "m"), dir).rc, 0);
+  std::ofstream(dir / "m" / "s.toml")
+      << "[[region]]\nname = \"cone\"\nx = 10\ny = 0\nwidth = 16\nheight = 16\nnormal_map = \"cone.normal.png\"\n";
+  for (const std::string from : {"0,8.5", "0.5,8.5"}) {
+    SCOPED_TRACE(from);
+    const ToolResult r = run_tool(
+        "trace --scene " + quote(dir / "m" / "s.toml") + " --from " + from + " --to 40,8.5 -o " + quote(dir / "t.csv"),
+        dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_FALSE(contains(r.err, "crosses no region")) << r.err;
+    const Csv csv = parse_trace_csv(read_text(dir / "t.csv"));
+    ASSERT_EQ(csv.rows.size(), 16u);  // one per texel of the row, from the first
+    EXPECT_EQ(csv.rows.front()[kTexelX], "10");
+    EXPECT_EQ(csv.rows.back()[kTexelX], "25");
+  }
+}
+
 // A stroke that meets no region is traced (C/D 1 throughout) with a warning; one that would take more frames than a
 // stroke may is refused before a row is written.
 TEST(Tool, TraceSaysWhenTheStrokeMissesEveryRegionOrIsTooLong) {

@@ -265,9 +265,15 @@ int run_trace(const TraceOptions& o) {
     file.write({out.data(), out.size()});
     out.clear();
   };
+  // One row per texel step, and for the texel the stroke starts in. A frame that ends exactly on a texel's edge
+  // enters the next texel at the start of the following frame, where the step is not marked as entered: a change of
+  // texel since the last row is a step too.
+  std::optional<Texel> last_row;
   const StrokeResult result = run_stroke(scene, stroke, [&](std::size_t frame, const StepRecord& s) {
-    if (!s.entered && frame != 0) return;  // one row per texel step (and the texel the stroke starts in)
     met_a_region = met_a_region || s.region != nullptr;
+    const bool new_texel = !last_row || last_row->x != s.texel.x || last_row->y != s.texel.y;
+    if (!s.entered && frame != 0 && !new_texel) return;
+    last_row = s.texel;
     fmt::format_to(std::back_inserter(out), "{},{:.6f},{:.6f},{},{},", frame, s.entry.x, s.entry.y, s.texel.x,
                    s.texel.y);
     for (double v : {s.detail.cos_alpha, s.detail.delta_beta_deg, s.detail.kmax, s.detail.kmin, s.detail.dh}) {
