@@ -50,8 +50,9 @@ StrokeResult run_stroke(const Scene& scene, const StrokeSpec& spec, const Stroke
     FrameResult frame = advance(scene, result.end, m * spec.motor_step_px, observer);
     if (reached(result.end)) {
       // The hand stops at `to`: the last frame's motor travel is the least that gets there (bisection; the
-      // cursor's travel grows with the motor travel), walked again from where the frame started.
-      double lo = 0.0, hi = spec.motor_step_px;
+      // cursor's travel grows with the motor travel), walked again from where the frame started. No more than the
+      // kMaxMotorPx a frame walks: from a step of 1e66 the halvings never came down to the stroke's length.
+      double lo = 0.0, hi = std::min(spec.motor_step_px, kMaxMotorPx);
       for (int i = 0; i < kMaxBisections; ++i) {
         const double mid = lo + (hi - lo) / 2.0;
         if (!(mid > lo && mid < hi)) break;
