@@ -109,10 +109,10 @@ static_assert(std::is_trivially_copyable_v<NormalDecodeOptions> && std::is_trivi
               std::is_trivially_copyable_v<ImageSize> && std::is_trivially_copyable_v<Gradient>);
 
 // What the child loads crosses member by member (encode, decode_answer, and check_finite_grids for the values): the
-// gradient, the heights and the two roundings; the discontinuity marks, the fusion's weight, the slope ratio and the
-// smoothing's counts are made after, by the method. A member added to RegionFields changes its size and stops the
+// gradient, the heights and the two roundings; the discontinuity marks, the fusion's weight, the slope comparison and
+// the smoothing's counts are made after, by the method. A member added to RegionFields changes its size and stops the
 // build here until it is carried too (or the comment says why not).
-static_assert(sizeof(RegionFields) == 184, "RegionFields changed: carry its new member on the image wire");
+static_assert(sizeof(RegionFields) == 240, "RegionFields changed: carry its new member on the image wire");
 // What a region asks for crosses flag by flag: a member added to FieldNeeds stops the build here until it crosses too
 // (depth_if_given once did not, and the daemon's hybrid regions got no depth map).
 static_assert(sizeof(FieldNeeds) == 3, "FieldNeeds changed: carry its new member on the image wire");

@@ -822,9 +822,11 @@ std::vector<std::string> map_warnings(const SceneSpec& spec, const SceneLoadRepo
 }
 
 std::optional<ReliefScale> relief_scale(const RegionSpec& region, const RegionFields& fields) {
-  if (!fields.normals_to_depth_slope_ratio || !region.sources.normal_map || !region.sources.depth_map)
-    return std::nullopt;
-  return ReliefScale{*fields.normals_to_depth_slope_ratio, region.sources.depth_options.relief_px};
+  if (!fields.slope_comparison || !region.sources.normal_map || !region.sources.depth_map) return std::nullopt;
+  const ReliefScale scale{*fields.slope_comparison, region.sources.depth_options.relief_px,
+                          region.sources.normal_options.green};
+  if (!scale.comparison.ratio && !scale.opposite_x() && !scale.opposite_y() && !scale.depth_flat()) return std::nullopt;
+  return scale;
 }
 
 std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadReport& report, const Scene& scene) {
@@ -848,12 +850,49 @@ std::vector<std::string> method_warnings(const SceneSpec& spec) {
   return out;
 }
 
+bool ReliefScale::mismatched() const {
+  const std::optional<double>& ratio = comparison.ratio;
+  return opposite_x() || opposite_y() || depth_flat() || (ratio && !(*ratio >= 0.8 && *ratio <= 1.25));
+}
+
 std::string ReliefScale::described() const {
+  const auto percent = [](const std::optional<double>& share) { return fmt::format("{:.0f} %", 100.0 * *share); };
+  const std::string flipped_sign = fmt::format("relief_px = {:.3g} (now {:.3g})", -relief_px, relief_px);
+  if (opposite_x() && opposite_y()) {
+    return fmt::format(
+        "the normal map's slopes are of the opposite sign to the depth map's ({} along x, {} along y of those both "
+        "show); if both hold the same relief, {} makes them agree",
+        percent(comparison.opposite_x), percent(comparison.opposite_y), flipped_sign);
+  }
+  if (opposite_x() || opposite_y()) {
+    const bool y = opposite_y();
+    const std::optional<double>& other = y ? comparison.opposite_x : comparison.opposite_y;
+    const std::string other_green =
+        fmt::format("normal_green = \"{}\" (now \"{}\")", green == GreenConvention::opengl ? "directx" : "opengl",
+                    green == GreenConvention::opengl ? "opengl" : "directx");
+    // Along y alone: the other green convention; along x alone: a map mirrored. Where the relief slopes along one
+    // axis only, the other says nothing, and the sign of the whole relief may be what is wrong.
+    const std::string remedy = other ? (y ? other_green + " makes them agree" : "one of the two maps is mirrored")
+                                     : (y ? other_green + " or " + flipped_sign : flipped_sign) +
+                                           " makes them agree, if both hold the same relief";
+    return fmt::format(
+        "along {} the normal map's slopes are of the opposite sign to the depth map's ({} of those both "
+        "show), along {} {}: {}",
+        y ? "y" : "x", percent(y ? comparison.opposite_y : comparison.opposite_x), y ? "x" : "y",
+        other ? "of one sign" : "too few to tell", remedy);
+  }
+  if (depth_flat()) {
+    return fmt::format(
+        "the depth map is all but flat where the normal map shows the relief sloping ({} of its slopes): relief_px "
+        "(now {:.3g}) is far too small for the normal map's relief, or the depth map holds another relief",
+        percent(comparison.depth_flat), relief_px);
+  }
+  const double ratio = *comparison.ratio;
   std::string line =
       fmt::format("the normal map's slopes are {:.2g} times the depth map's where both show the relief sloping", ratio);
   if (mismatched()) {
     line += fmt::format("; if both hold the same relief, relief_px = {:.3g} (now {:.3g}) makes them agree",
-                        matching_relief_px(), relief_px);
+                        relief_px * ratio, relief_px);
   }
   return line;
 }

@@ -100,16 +100,22 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report = nullptr, Field
 // map_notes' text; none for a clean scene.
 std::vector<std::string> map_warnings(const SceneSpec& spec, const SceneLoadReport& report);
 
-// What the hybrid method found of a region's two maps' scales (RegionFields::normals_to_depth_slope_ratio): the
-// ratio of the normal map's slopes to the depth map's, and the depth map's relief_px that would make them agree.
-// Empty where the region has no such ratio (another method, a single map, too little resolved slope).
+// What the hybrid method found of a region's two maps (RegionFields::slope_comparison): whether their slopes have one
+// sign, along each axis, and the ratio of the normal map's slopes to the depth map's, with the setting that would make
+// them agree. Empty where the region has none of that (another method, a single map, too little resolved slope).
 struct ReliefScale {
-  double ratio = 1.0;
-  double relief_px = 100.0;  // the region's
-  double matching_relief_px() const { return relief_px * ratio; }
-  bool mismatched() const { return !(ratio >= 0.8 && ratio <= 1.25); }  // off 1 by more than a quarter
-  // "the normal map's slopes are R times the depth map's ..." and, where mismatched, the relief_px that makes them
-  // agree.
+  SlopeComparison comparison;
+  double relief_px = 100.0;                         // the region's
+  GreenConvention green = GreenConvention::opengl;  // the region's normal_green
+  // Along x, along y: most slopes both maps resolve are of opposite signs.
+  bool opposite_x() const { return comparison.opposite_x.value_or(0.0) > 0.5; }
+  bool opposite_y() const { return comparison.opposite_y.value_or(0.0) > 0.5; }
+  // Most slopes the normal map resolves lie on depth map slopes it does not.
+  bool depth_flat() const { return comparison.depth_flat.value_or(0.0) > 0.5; }
+  // The ratio off 1 by more than a quarter, or any of the above.
+  bool mismatched() const;
+  // "the normal map's slopes are R times the depth map's ..." and, where mismatched, what to change to make them
+  // agree; or which of the above holds, and what to check.
   std::string described() const;
   // described() and why it matters: for a warning where it is mismatched.
   std::string warning() const { return described() + " (the hybrid method compares them to find steps and noise)"; }

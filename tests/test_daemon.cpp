@@ -360,6 +360,34 @@ TEST(DaemonConfiguration, MismatchedReliefScalesOfAHybridRegionAreWarned) {
   EXPECT_EQ(w.rfind((dir / "scene.toml").string() + ":14: region 'halved': ", 0), 0u) << w;
   EXPECT_NE(w.find("the normal map's slopes are 2 times the depth map's"), std::string::npos) << w;
   EXPECT_NE(w.find("relief_px = 100 (now 50) makes them agree"), std::string::npos) << w;
+
+  // Where the ratio said nothing: heights upside down, the other green convention, a relief_px far too small. Each
+  // made the hybrid read steps everywhere, or none, without a word.
+  std::ofstream(dir / "wrong.toml") << "[daemon]\ndesktop = [0, 0, 800, 600]\n\n"
+                                       "[[region]]\nname = \"reversed\"\nx = 0\ny = 0\nwidth = 48\nheight = 48\n"
+                                    << region << "relief_px = -100\n"
+                                    << "\n[[region]]\nname = \"green\"\nx = 100\ny = 0\nwidth = 48\nheight = 48\n"
+                                    << region << "normal_green = \"directx\"\n"
+                                    << "\n[[region]]\nname = \"flattened\"\nx = 200\ny = 0\nwidth = 48\nheight = 48\n"
+                                    << region << "relief_px = 1\n";
+  ConfigChoice wrong = choice_in(dir);
+  wrong.file = dir / "wrong.toml";
+  const Configuration c2 = load_configuration(wrong);
+  ASSERT_EQ(c2.warnings.size(), 3u);
+  EXPECT_NE(c2.warnings[0].find("region 'reversed': the normal map's slopes are of the opposite sign to the depth "
+                                "map's (100 % along x, 100 % along y"),
+            std::string::npos)
+      << c2.warnings[0];
+  EXPECT_NE(c2.warnings[0].find("relief_px = 100 (now -100) makes them agree"), std::string::npos) << c2.warnings[0];
+  EXPECT_NE(c2.warnings[1].find("region 'green': along y the normal map's slopes are of the opposite sign to the depth "
+                                "map's (100 % of those both show), along x of one sign: normal_green = \"opengl\" "
+                                "(now \"directx\") makes them agree"),
+            std::string::npos)
+      << c2.warnings[1];
+  EXPECT_NE(c2.warnings[2].find("region 'flattened': the depth map is all but flat where the normal map shows the "
+                                "relief sloping"),
+            std::string::npos)
+      << c2.warnings[2];
 }
 
 // A datagram socket standing in for systemd's notification socket.

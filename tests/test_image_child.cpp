@@ -130,7 +130,7 @@ TEST(ImageChild, AHybridRegionIsPreparedAsInProcess) {
     ASSERT_EQ(a.depth->values[i], b.depth->values[i]) << i;
     ASSERT_EQ(a.discontinuity->values[i], b.discontinuity->values[i]) << i;
   }
-  EXPECT_EQ(a.normals_to_depth_slope_ratio, b.normals_to_depth_slope_ratio);
+  EXPECT_EQ(a.slope_comparison, b.slope_comparison);
 }
 
 // PNG, TIFF and OpenEXR, 8-bit, 16-bit and float, as normal and depth maps: the sandboxed reader reads

@@ -615,7 +615,7 @@ TEST(HybridMethod, LeavesACleanNormalMapAsTheNormalMapAloneWouldBe) { expect_not
 TEST(HybridMethod, ReadsTheRatioOfTheNormalsSlopesToTheDepthMaps) {
   const auto ratio_of = [](RegionFields fields) {
     prepare_hybrid_fields(HybridParams{}, fields);
-    return fields.normals_to_depth_slope_ratio;
+    return fields.slope_comparison ? fields.slope_comparison->ratio : std::nullopt;
   };
   const std::optional<double> same = ratio_of(hill_fields());
   ASSERT_TRUE(same);
@@ -658,6 +658,53 @@ RegionFields generated_rough_maps(double scale, std::uint32_t depth_codes) {
   fields.gradient = gradient_from_normals(stored_normals(sobel_normals(*fields.depth), 255, &normals_report));
   fields.gradient_rounding = gradient_rounding_of_normals(normals_report.value_step);
   return fields;
+}
+
+// What the comparison says of maps that disagree in sign or hold far different scales, where the ratio alone said
+// nothing (too few slopes of one sign, or none the depth map resolves): the hill's heights upside down, its normals'
+// y slopes flipped (the other green convention), its heights at a 64th (a relief_px far too small) and at 100 times
+// (every texel a step: the ratio is read over the marked slopes). The hill itself and a generator's 8-bit normals of
+// an 8-bit height image show none of it.
+TEST(HybridMethod, ComparesTheSignsAndTheFlatnessOfTheSlopes) {
+  const auto compared = [](RegionFields fields) {
+    prepare_hybrid_fields(HybridParams{}, fields);
+    EXPECT_TRUE(fields.slope_comparison);
+    return fields.slope_comparison.value_or(SlopeComparison{});
+  };
+  const auto changed = [](auto change) {
+    RegionFields fields = hill_fields();
+    change(fields);
+    return fields;
+  };
+  for (const RegionFields& agreeing : {hill_fields(), generated_rough_maps(4.0, 255)}) {
+    const SlopeComparison c = compared(agreeing);
+    ASSERT_TRUE(c.opposite_y && c.depth_flat);  // (the rough maps' x slopes are too few to tell: none)
+    EXPECT_LT(c.opposite_x.value_or(0.0), 0.05);
+    EXPECT_LT(*c.opposite_y, 0.05);
+    EXPECT_LT(*c.depth_flat, 0.1);
+  }
+  const SlopeComparison upside_down = compared(changed([](RegionFields& f) {
+    for (float& h : f.depth->values) h = -h;
+  }));
+  ASSERT_TRUE(upside_down.opposite_x && upside_down.opposite_y);
+  EXPECT_GT(*upside_down.opposite_x, 0.95);
+  EXPECT_GT(*upside_down.opposite_y, 0.95);
+  const SlopeComparison green = compared(changed([](RegionFields& f) {
+    for (Gradient& g : f.gradient->values) g.y = -g.y;
+  }));
+  ASSERT_TRUE(green.opposite_x && green.opposite_y);
+  EXPECT_LT(*green.opposite_x, 0.05);
+  EXPECT_GT(*green.opposite_y, 0.95);
+  const SlopeComparison flat = compared(changed([](RegionFields& f) {
+    for (float& h : f.depth->values) h /= 64.0f;
+  }));
+  ASSERT_TRUE(flat.depth_flat);
+  EXPECT_GT(*flat.depth_flat, 0.9);
+  const SlopeComparison steep = compared(changed([](RegionFields& f) {
+    for (float& h : f.depth->values) h *= 100.0f;
+  }));
+  ASSERT_TRUE(steep.ratio);
+  EXPECT_NEAR(*steep.ratio, 0.01, 0.001);
 }
 
 // The generator's normals of an 8-bit height image 16 px high: the heights are stored coarser than the normals

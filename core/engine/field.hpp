@@ -87,6 +87,20 @@ constexpr FieldNeeds joined(FieldNeeds a, FieldNeeds b) {
 using DiscontinuityField = Grid<std::uint8_t>;
 
 // The fields of one region, each present only when the region's method needs it.
+// How a normal map's slopes compare with a depth map's, each figure empty where too few slopes were read to tell.
+struct SlopeComparison {
+  // The normals' slopes over the depth map's where both show the relief sloping: 1 where the two maps hold it at
+  // one scale.
+  std::optional<double> ratio;
+  // Of the slopes along x (along y) that both maps resolve, the share whose signs differ: near 0 where the maps
+  // agree, near 1 where one of them is the other's relief upside down (along y alone: the other green convention).
+  std::optional<double> opposite_x, opposite_y;
+  // Of the slopes the normal map resolves, the share where the depth map's lie below what it resolves: near 1 where
+  // the depth map is all but flat beside the normals (a relief_px far too small).
+  std::optional<double> depth_flat;
+  bool operator==(const SlopeComparison&) const = default;
+};
+
 struct RegionFields {
   std::optional<GradientField> gradient;
   std::optional<DepthField> depth;
@@ -100,10 +114,9 @@ struct RegionFields {
   // Where the hybrid method's preparation pulled the normals toward the depth map's slopes, the normals' weight in
   // that mean (core/engine/method_hybrid.cpp); empty where it did not (and for every other method).
   std::optional<double> fused_normals_weight;
-  // Where the hybrid method's preparation compared the normals with a depth map, the normals' slopes over the depth
-  // map's where both show the relief sloping (slope_ratio_to_depth in core/engine/method_hybrid.hpp): 1 where the two
-  // maps hold it at one scale; empty where there was too little slope to tell (and for every other method).
-  std::optional<double> normals_to_depth_slope_ratio;
+  // Where the hybrid method's preparation compared the normals with a depth map, how their slopes compare
+  // (compare_slopes_with_depth in core/engine/method_hybrid.hpp); empty for every other method.
+  std::optional<SlopeComparison> slope_comparison;
   // How many texels the hybrid method's preparation smoothed within the rounding of the map's storage, and at how
   // many of those it took the smoothing's flattening off again (core/engine/method_hybrid.cpp); 0 for every other
   // method.

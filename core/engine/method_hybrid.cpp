@@ -592,35 +592,66 @@ bool resolved_slope(float before, float s, float after, double floor) {
 
 }  // namespace
 
-std::optional<double> slope_ratio_to_depth(const GradientField& g, const GradientField& from_depth,
-                                           const DiscontinuityField& marks, double floor) {
+SlopeComparison compare_slopes_with_depth(const GradientField& g, const GradientField& from_depth,
+                                          const DiscontinuityField& marks, double floor) {
   const auto w = static_cast<std::size_t>(g.width), h = static_cast<std::size_t>(g.height);
-  if (w < 3 || h < 3) return std::nullopt;
+  if (w < 3 || h < 3) return {};
   // Whole rows, every k-th, about as many texels as a region's other figures read: a row and its neighbours are read in
   // order (a full-HD region's preparation takes 5-8 ms more for it, about twice that with single texels strewn over
   // the region; bench_load, ad hoc).
   const std::size_t row_stride = std::max<std::size_t>(1, w * h / kDecisionTexels);
-  std::vector<double> ratios;
+  std::vector<double> unmarked, all;  // ratios of one sign
+  std::array<std::size_t, 2> both{}, opposite{};
+  std::size_t normals_resolved = 0, depth_flat = 0;
+  // One axis of texel i, its neighbours `step` apart.
+  const auto read = [&](std::size_t i, std::size_t step, auto axis, int a) {
+    const double n = axis(g.values[i]), d = axis(from_depth.values[i]);
+    const bool n_resolved =
+        resolved_slope(axis(g.values[i - step]), static_cast<float>(n), axis(g.values[i + step]), floor);
+    if (!n_resolved) return;
+    ++normals_resolved;
+    if (!resolved_slope(axis(from_depth.values[i - step]), static_cast<float>(d), axis(from_depth.values[i + step]),
+                        floor)) {
+      depth_flat += std::abs(d) <= floor ? 1 : 0;
+      return;
+    }
+    ++both[a];
+    if ((n > 0) != (d > 0)) {
+      ++opposite[a];
+      return;
+    }
+    all.push_back(n / d);
+    // Along the axis the difference spans the texel's neighbours: none of the three may be a step.
+    if ((marks.values[i - step] | marks.values[i] | marks.values[i + step]) == 0) unmarked.push_back(n / d);
+  };
   for (std::size_t y = 1; y + 1 < h; y += row_stride) {
     for (std::size_t x = 1; x + 1 < w; ++x) {
       const std::size_t i = y * w + x;
-      const Gradient n = g.values[i], d = from_depth.values[i];
-      // Along each axis the difference spans the texel's neighbours: none of the three may be a step (at an axis's
-      // ends the difference is one-sided, and not read).
-      if ((marks.values[i - 1] | marks.values[i] | marks.values[i + 1]) == 0 &&
-          resolved_slope(g.values[i - 1].x, n.x, g.values[i + 1].x, floor) &&
-          resolved_slope(from_depth.values[i - 1].x, d.x, from_depth.values[i + 1].x, floor) && (n.x > 0) == (d.x > 0))
-        ratios.push_back(static_cast<double>(n.x) / d.x);
-      if ((marks.values[i - w] | marks.values[i] | marks.values[i + w]) == 0 &&
-          resolved_slope(g.values[i - w].y, n.y, g.values[i + w].y, floor) &&
-          resolved_slope(from_depth.values[i - w].y, d.y, from_depth.values[i + w].y, floor) && (n.y > 0) == (d.y > 0))
-        ratios.push_back(static_cast<double>(n.y) / d.y);
+      read(
+          i, 1, [](Gradient v) { return v.x; }, 0);
+      read(
+          i, w, [](Gradient v) { return v.y; }, 1);
     }
   }
-  if (ratios.size() < 100) return std::nullopt;
-  const auto mid = ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2);
-  std::nth_element(ratios.begin(), mid, ratios.end());
-  return *mid;
+  constexpr std::size_t kEnough = 100;
+  const auto median = [](std::vector<double>& v) {
+    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    return *mid;
+  };
+  const auto share = [](std::size_t part, std::size_t of) {
+    return of >= kEnough ? std::optional<double>(static_cast<double>(part) / static_cast<double>(of)) : std::nullopt;
+  };
+  SlopeComparison c;
+  if (unmarked.size() >= kEnough) {
+    c.ratio = median(unmarked);
+  } else if (all.size() >= kEnough) {
+    c.ratio = median(all);
+  }
+  c.opposite_x = share(opposite[0], both[0]);
+  c.opposite_y = share(opposite[1], both[1]);
+  c.depth_flat = share(depth_flat, normals_resolved);
+  return c;
 }
 
 std::string validate(const HybridParams& p) {
@@ -650,9 +681,9 @@ void prepare_hybrid_fields(const HybridParams& params, RegionFields& fields) {
                                           g, *fields.depth, params.discontinuity_px)
                 : DiscontinuityField(g.width, g.height, 0);
   if (has_depth) {
-    fields.normals_to_depth_slope_ratio =
-        slope_ratio_to_depth(g, from_depth ? *from_depth : gradient_from_depth(*fields.depth), *fields.discontinuity,
-                             ratio_floor(fields.depth_rounding));
+    fields.slope_comparison =
+        compare_slopes_with_depth(g, from_depth ? *from_depth : gradient_from_depth(*fields.depth),
+                                  *fields.discontinuity, ratio_floor(fields.depth_rounding));
   }
   if (params.noise_slope <= 0.0) return;
   // Normals read again from the heights are the depth map's own reading: nothing to fuse.

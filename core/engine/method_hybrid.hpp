@@ -57,16 +57,20 @@ GradientField binomial_smoothed(const GradientField& g, unsigned threads = 0);
 DiscontinuityField find_discontinuities(const GradientField& g, const DepthField& d, double threshold,
                                         double depth_step, unsigned threads = 0);
 
-// The normals' slopes `g` over the depth map's, `from_depth` its central differences, where both show relief the
-// texels resolve: the median, over the slopes along each axis where neither the texel nor its two neighbours on that
-// axis is in `marks` (a step, where the two disagree by design), both slopes exceed `floor`, have one sign, and change
-// along the axis by a second difference within a fifth of them (no kink, no relief near the texel period), of the
-// normal's slope over the difference. 1 where the normal map and the depth map hold the relief at one scale (within a
-// few per cent; a generator's smoothing of the finest detail makes it a little less); a depth map whose `relief_px`
-// is not the normal map's scale shows as its ratio. Read on every k-th row of a region over 2^17 texels. Empty where
-// fewer than 100 such slopes are read.
-std::optional<double> slope_ratio_to_depth(const GradientField& g, const GradientField& from_depth,
-                                           const DiscontinuityField& marks, double floor);
+// How the normals' slopes `g` compare with the depth map's, `from_depth` its central differences. A slope along an
+// axis is resolved where it exceeds `floor` and changes along the axis by a second difference within a fifth of it (no
+// kink, no relief near the texel period).
+// - ratio: the median of the normal's slope over the difference, over the slopes along each axis that both resolve,
+//   of one sign, where neither the texel nor its two neighbours on that axis is in `marks` (a step, where the two
+//   disagree by design). 1 where the two maps hold the relief at one scale (within a few per cent; a generator's
+//   smoothing of the finest detail makes it a little less); a depth map whose `relief_px` is not the normal map's
+//   scale shows as its ratio. Where the marks leave fewer than 100, over the marked ones too: at a scale so far off
+//   that nearly every texel reads as a step.
+// - opposite_x, opposite_y, depth_flat: the shares SlopeComparison describes, marks or not (a sign or a scale that is
+//   wrong makes every texel a step).
+// Read on every k-th row of a region over 2^17 texels; each figure is empty where it rests on fewer than 100 slopes.
+SlopeComparison compare_slopes_with_depth(const GradientField& g, const GradientField& from_depth,
+                                          const DiscontinuityField& marks, double floor);
 
 class HybridMethod final : public Method {
  public:
