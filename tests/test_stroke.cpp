@@ -104,6 +104,13 @@ TEST(Stroke, BadStrokes) {
   spec.motor_step_px = NAN;
   EXPECT_THROW(run_stroke(scene, spec), std::invalid_argument);
   spec.motor_step_px = 0.75;
+  for (const double rate : {-1.0, double(NAN), double(INFINITY)}) {
+    spec.rate_hz = rate;
+    EXPECT_THROW(run_stroke(scene, spec), std::invalid_argument) << rate;
+  }
+  spec.rate_hz = 1e-300;  // frames far apart in time: still a stroke
+  EXPECT_EQ(run_stroke(scene, spec).frames, 3u);
+  spec.rate_hz = 0.0;
   const StrokeResult r = run_stroke(scene, spec);
   EXPECT_EQ(r.frames, 3u);  // 0.75, 0.75, then the 0.5 left
   EXPECT_NEAR(r.end.position.x, 5.0, 1e-8);

@@ -725,6 +725,29 @@ TEST(Tool, TraceSpeedAndRate) {
   }
 }
 
+// With --speed and --rate the frames are timed, so a material's damping reads the hand's speed: 600 px/s at k 0.002
+// is C/D 2.2 at any rate. Before, trace frames had no time and damping took its 8 ms fallback interval: at 1000 Hz
+// the 0.6 px frames read as 75 px/s (C/D 1.15).
+TEST(Tool, TraceTimesItsFramesForDamping) {
+  ScratchDir dir;
+  ASSERT_EQ(run_tool("surfaces --size 32 " + quote(dir / "m"), dir).rc, 0);
+  std::ofstream(dir / "m" / "damped.toml")
+      << "[[region]]\nname = \"damped\"\nwidth = 32\nheight = 32\nmethod = \"none\"\n"
+         "depth_map = \"sphere.depth.png\"\ndepth_zero = 0.5\nrelief_px = 4\n"
+         "[region.materials]\nplanar_curvedness = 0\nparabolic_ratio = 1\nelliptic = \"damping\"\n"
+         "hyperbolic = \"damping\"\nparabolic = \"damping\"\nplanar = \"damping\"\n"
+         "[region.materials.damping]\nk = 0.002\ncd_max = 20\n";
+  for (const std::string rate : {"125", "1000"}) {
+    SCOPED_TRACE(rate);
+    const ToolResult r =
+        run_tool("trace --scene " + quote(dir / "m" / "damped.toml") +
+                     " --from 0,16.5 --to 32,16.5 --speed 600 --rate " + rate + " -o " + quote(dir / "t.csv"),
+                 dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(contains(r.err, ", 2.2]")) << r.err;  // the C/D range's top: every whole frame's
+  }
+}
+
 // --from and --to set the stroke: its texels, in order, and where the cursor stops.
 TEST(Tool, TraceFromTo) {
   ScratchDir dir;

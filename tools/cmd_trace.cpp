@@ -240,6 +240,7 @@ StrokeSpec checked_stroke(const TraceOptions& o, const Scene& scene) {
   stroke.from = point(o.from, {static_cast<double>(first.x), mid_y});
   stroke.to = point(o.to, {static_cast<double>(first.x + first.w), mid_y});
   stroke.motor_step_px = o.step ? *o.step : o.speed ? *o.speed / o.rate : 1.0;
+  if (o.speed) stroke.rate_hz = o.rate;  // the frames' times, for a material's damping
   // Said before a CSV of millions of rows.
   check_stroke_fits(stroke, o.speed ? "--speed or a smaller --rate" : "--step");
   StrokeSpec no_frame = stroke;

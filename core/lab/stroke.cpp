@@ -29,6 +29,15 @@ StrokeResult run_stroke(const Scene& scene, const StrokeSpec& spec, const Stroke
   if (!(spec.motor_step_px > 0.0) || !std::isfinite(spec.motor_step_px)) {
     throw std::invalid_argument("the motor step must be a finite number > 0");
   }
+  if (!(spec.rate_hz >= 0.0) || !std::isfinite(spec.rate_hz)) {
+    throw std::invalid_argument("the frame rate must be a finite number >= 0");
+  }
+  // (Held within 1e18 us, 31 700 years, at any rate: a TimeUs holds it.)
+  const auto time_of = [&spec](std::size_t frame) {
+    return spec.rate_hz > 0.0
+               ? static_cast<TimeUs>(std::llround(std::min(static_cast<double>(frame) * 1e6 / spec.rate_hz, 1e18)))
+               : kNoTime;
+  };
   const Vec2 m = span * (1.0 / length_px);
   // The end is reached within a nanometre's worth of rounding, so that a stroke ending on a texel boundary
   // stops in the texel it walked, not a hair into the next one.
@@ -47,7 +56,8 @@ StrokeResult run_stroke(const Scene& scene, const StrokeSpec& spec, const Stroke
   while (result.frames < spec.max_frames) {
     const CursorState before = result.end;
     steps.steps.clear();
-    FrameResult frame = advance(scene, result.end, m * spec.motor_step_px, observer);
+    const TimeUs time = time_of(result.frames);
+    FrameResult frame = advance(scene, result.end, m * spec.motor_step_px, time, observer);
     if (reached(result.end)) {
       // The hand stops at `to`: the last frame's motor travel is the least that gets there (bisection; the
       // cursor's travel grows with the motor travel), walked again from where the frame started. No more than the
@@ -57,12 +67,12 @@ StrokeResult run_stroke(const Scene& scene, const StrokeSpec& spec, const Stroke
         const double mid = lo + (hi - lo) / 2.0;
         if (!(mid > lo && mid < hi)) break;
         CursorState trial = before;
-        advance(scene, trial, m * mid);
+        advance(scene, trial, m * mid, time);
         (reached(trial) ? hi : lo) = mid;
       }
       result.end = before;
       steps.steps.clear();
-      frame = advance(scene, result.end, m * hi, observer);
+      frame = advance(scene, result.end, m * hi, time, observer);
       result.reached = true;
       result.motor_px += hi;
     } else {

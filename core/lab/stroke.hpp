@@ -17,6 +17,9 @@ struct StrokeSpec {
   Vec2 to;
   double motor_step_px = 1.0;           // motor travel per frame (px at C/D = 1)
   std::size_t max_frames = 10'000'000;  // a stroke that cannot finish stops here
+  // Frames per second, which times each frame (frame k at k / rate s) for the effects that read time (a material's
+  // damping reads the hand's speed); 0: frames without a time, and such effects take their fallback interval.
+  double rate_hz = 0.0;
 };
 
 struct StrokeResult {
