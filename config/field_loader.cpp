@@ -97,7 +97,8 @@ std::vector<std::string> invalid_texel_notes(const FieldSources& sources, const 
                     why + "), each given the nearest valid texel's value");
   };
   note("normal map", sources.normal_map, report.normals, "length < 0.5, n_z <= 0 or not finite");
-  note("depth map", sources.depth_map, report.depth, "not finite");
+  // A finite value can overflow a float's heights once scaled: (3e38 - depth_zero) * relief_px.
+  note("depth map", sources.depth_map, report.depth, "not finite, or a height beyond a float once scaled by relief_px");
   return notes;
 }
 

@@ -926,10 +926,13 @@ std::vector<std::string> effect_warnings(const SceneSpec& spec, const Scene& sce
     for (const EffectPtr& effect : scene.regions()[i].effects) {
       const auto* wells = dynamic_cast<const WellsEffect*>(effect.get());
       if (wells == nullptr || !pattern_is_empty(wells->field())) continue;
-      const std::string why = wells->params().pattern == WellPattern::contours
-                                  ? "no contour level lies within the region's heights (check levels against the "
-                                    "depth map's heights, (v - depth_zero) * relief_px)"
-                                  : "no texel's normal lies on the isophote (check light and cos_alpha)";
+      const WellsParams& p = wells->params();
+      const std::string why =
+          p.pattern != WellPattern::contours ? "no texel's normal lies on the isophote (check light and cos_alpha)"
+          : p.contours.levels.empty() && p.contours.count == 0
+              ? "levels = 0 asks for no contour"
+              : "no contour level lies within the region's heights (check levels against the depth map's heights, "
+                "(v - depth_zero) * relief_px)";
       out.push_back(fmt::format("{}:{}: region '{}': wells: {}, so the pattern is empty and the wells do nothing",
                                 spec.file.string(), r.line, r.name, why));
     }

@@ -257,8 +257,8 @@ TEST(DaemonConfiguration, SettingsThatFlattenAMapAreWarned) {
       << all;
 }
 
-// Gravity wells whose pattern is empty do nothing: contour levels that miss the heights (a relief_px off by ten) are
-// warned of at load; levels within them are not.
+// Gravity wells whose pattern is empty do nothing: contour levels that miss the heights (a relief_px off by ten), and
+// levels = 0, are warned of at load; levels within them are not.
 TEST(DaemonConfiguration, WellsWithAnEmptyPatternAreWarned) {
   const ScratchDir dir("daemon-config-wells");
   Grid<float> ramp(20, 20, 0.0f);
@@ -272,11 +272,16 @@ TEST(DaemonConfiguration, WellsWithAnEmptyPatternAreWarned) {
         name, x, levels);
   };
   std::ofstream(dir / "scene.toml") << "[daemon]\ndesktop = [0, 0, 800, 600]\n"
-                                    << region("missed", 0, "[50.0, 90.0]") << region("met", 40, "[4.5]");
+                                    << region("missed", 0, "[50.0, 90.0]") << region("met", 40, "[4.5]")
+                                    << region("none", 80, "0");
   const Configuration c = load_configuration(choice_in(dir));
   std::string all;
   for (const std::string& w : c.warnings) all += w + "\n";
-  ASSERT_EQ(c.warnings.size(), 1u) << all;
+  ASSERT_EQ(c.warnings.size(), 2u) << all;
+  // A count of 0 is no level at all, not levels that miss the heights.
+  EXPECT_NE(c.warnings[1].find("region 'none': wells: levels = 0 asks for no contour, so the pattern is empty"),
+            std::string::npos)
+      << all;
   EXPECT_EQ(c.warnings[0].rfind((dir / "scene.toml").string() +
                                     ":4: region 'missed': wells: no contour level lies within the region's heights",
                                 0),

@@ -687,17 +687,19 @@ TEST(FieldLoader, InvalidTexelsAreCountedAndDescribedPerMap) {
   write_normal_png16(normal_path, normals);
   Grid<float> heights(3, 3, 0.5f);
   heights.at(0, 2) = std::numeric_limits<float>::quiet_NaN();
+  heights.at(1, 0) = 3e38f;  // finite, but no float holds its height at relief_px 100
   const fs::path depth_path = dir / "holes.exr";
   write_float_exr(depth_path, heights);
   FieldLoadReport report;
   const FieldSources both = maps(normal_path, depth_path);
   const RegionFields fields = load_region_fields(both, 4, 4, gradient_and_depth, report);
   EXPECT_EQ(report.normals.invalid_texels, 2u);
-  EXPECT_EQ(report.depth.invalid_texels, 1u);
+  EXPECT_EQ(report.depth.invalid_texels, 2u);
   const std::vector<std::string> notes = invalid_texel_notes(both, report);
   ASSERT_EQ(notes.size(), 2u);
   EXPECT_EQ(notes[0].rfind("normal map " + normal_path.string() + ": 2 of 16 texels invalid (", 0), 0u) << notes[0];
-  EXPECT_EQ(notes[1].rfind("depth map " + depth_path.string() + ": 1 of 9 texels invalid (", 0), 0u) << notes[1];
+  EXPECT_EQ(notes[1].rfind("depth map " + depth_path.string() + ": 2 of 9 texels invalid (", 0), 0u) << notes[1];
+  EXPECT_NE(notes[1].find("a height beyond a float once scaled by relief_px"), std::string::npos) << notes[1];
   for (const float h : fields.depth->values) EXPECT_TRUE(std::isfinite(h));
   // Nothing to say about clean maps, or maps not read.
   load_region_fields(both, 4, 4, gradient_only, report);

@@ -243,6 +243,12 @@ TEST(Tool, NumberFlagsRefuseNanAndInfinity) {
       {"inspect " + map + out, "--relief-px"},
       {"trace " + map + "-o " + out, "--depth-zero"},
       {"trace " + map + "-o " + out, "--relief-px"},
+      {"trace --target " + kBump + " -o " + out, "--kmax-limits", true},
+      {"trace --target " + kBump + " -o " + out, "--step"},
+      {"trace --target " + kBump + " -o " + out, "--speed"},
+      {"trace --target " + kBump + " --speed 100 -o " + out, "--rate"},
+      {"replay " + quote(dir / "in.evemu") + " " + out, "--gain"},
+      {"trace --target " + kBump + " -o " + out, "--kmin-limits", true},
       {"demo --targets " + out, "--step"},
       {"cursor --socket " + quote(dir / "socket"), "--set", true},
   };

@@ -340,8 +340,10 @@ Run add_trace_command(CLI::App& app) {
       ->check(CLI::IsMember(methods));
   app.add_option("--kmax-prime", o->kmax_prime, "Curvature: k'max, largest C/D when delta-beta = 0 (default 4)");
   app.add_option("--kmin-prime", o->kmin_prime, "Curvature: k'min, 1 / smallest C/D when delta-beta = 0 (default 1.5)");
-  add_number_tuple(app, "--kmax-limits", o->kmax_limits, "LO,HI", "Curvature: limits of kmax (default 1,30)");
-  add_number_tuple(app, "--kmin-limits", o->kmin_limits, "LO,HI", "Curvature: limits of kmin (default 1,5)");
+  add_number_tuple(app, "--kmax-limits", o->kmax_limits, "LO,HI", "Curvature: limits of kmax (default 1,30)",
+                   {finite_number()});
+  add_number_tuple(app, "--kmin-limits", o->kmin_limits, "LO,HI", "Curvature: limits of kmin (default 1,5)",
+                   {finite_number()});
   app.add_option("--delta-beta-sign", o->delta_beta_sign,
                  "Curvature: 1 = Eq. 1 as printed (default), -1 = the paper's prose reading");
   app.add_option("--gain", o->gain, "Depth: C/D change per px of height change per px (default 3)");
