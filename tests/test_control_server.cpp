@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sys/epoll.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -235,6 +236,7 @@ TEST(ControlServer, PassThroughEndsWithTheConnectionThatAskedForIt) {
     EXPECT_TRUE(tool.request("status").ok);
   }
   std::this_thread::sleep_for(50ms);
+  ASSERT_TRUE(first.request("status").ok);  // the server has gone round its loop since the close
   EXPECT_TRUE(server.handler.passthrough_);
 }
 
@@ -269,17 +271,17 @@ TEST(ControlServer, AnEarlierHelperTakesOverWhenTheLatestGoes) {
   EXPECT_EQ(server.handler.helper_positions(), 2);
 }
 
-// A second daemon started beside a running one (`sudo pseudohapticd` while the service runs) must not take the
-// running one's socket: it used to unlink it as stale, bind its own, and remove that when it ended, leaving the
-// running daemon unreachable. A socket file whose daemon is gone is still replaced.
 // A daemon started by hand has no RuntimeDirectory= to make /run/pseudohaptic: the server makes the socket's own
-// folder, and only that one (a path with a missing folder above it still fails, naming the path).
+// folder, and only that one (a path with a missing folder above it still fails, naming the path). 0755 under any
+// umask (077 here): every user's helper must reach the socket.
 TEST(ControlServer, MakesTheSocketsOwnFolder) {
   const ScratchDir dir("control");
   const std::string path = (dir.path() / "pseudohaptic" / "control").string();
   const FakeSessions sessions(::getuid());
   {
+    const mode_t umask_before = ::umask(077);
     ServerLoop server(path, sessions);
+    ::umask(umask_before);
     EXPECT_EQ(std::filesystem::status(dir.path() / "pseudohaptic").permissions(),
               std::filesystem::perms::owner_all | std::filesystem::perms::group_read |
                   std::filesystem::perms::group_exec | std::filesystem::perms::others_read |
@@ -300,6 +302,9 @@ TEST(ControlServer, MakesTheSocketsOwnFolder) {
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "a"));
 }
 
+// A second daemon started beside a running one (`sudo pseudohapticd` while the service runs) must not take the
+// running one's socket: it used to unlink it as stale, bind its own, and remove that when it ended, leaving the
+// running daemon unreachable. A socket file whose daemon is gone is still replaced.
 TEST(ControlServer, LeavesALiveSocketAloneAndReplacesAStaleOne) {
   const ScratchDir dir("control");
   const std::string path = (dir.path() / "control").string();

@@ -19,6 +19,7 @@
 #include "daemon/service_notifier.hpp"
 #include "daemon/unique_fd.hpp"
 #include "tests/geometry_printers.hpp"
+#include "tests/scoped_env.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {
@@ -62,11 +63,12 @@ TEST(DaemonLog, JournalLinesCarryTheSyslogPriority) {
 }
 
 TEST(DaemonLog, StderrIsTheJournalOnlyWhenJournalStreamNamesIt) {
-  ::unsetenv("JOURNAL_STREAM");
+  {
+    const ScopedEnv none("JOURNAL_STREAM", std::nullopt);
+    EXPECT_FALSE(Logger::stderr_is_journal());
+  }
+  const ScopedEnv other("JOURNAL_STREAM", "1:2");  // some other file
   EXPECT_FALSE(Logger::stderr_is_journal());
-  ::setenv("JOURNAL_STREAM", "1:2", 1);  // some other file
-  EXPECT_FALSE(Logger::stderr_is_journal());
-  ::unsetenv("JOURNAL_STREAM");
 }
 
 ConfigChoice choice_in(const ScratchDir& dir) {
@@ -437,14 +439,15 @@ TEST(DaemonNotifier, SendsTheStatesSystemdWaitsFor) {
 }
 
 TEST(DaemonNotifier, WatchdogPingsAtHalfTheInterval) {
-  ::unsetenv("WATCHDOG_PID");
-  ::unsetenv("WATCHDOG_USEC");
-  EXPECT_FALSE(ServiceNotifier::watchdog_interval().has_value());
-  ::setenv("WATCHDOG_USEC", "10000000", 1);
+  const ScopedEnv pid("WATCHDOG_PID", std::nullopt);
+  {
+    const ScopedEnv none("WATCHDOG_USEC", std::nullopt);
+    EXPECT_FALSE(ServiceNotifier::watchdog_interval().has_value());
+  }
+  const ScopedEnv usec("WATCHDOG_USEC", "10000000");
   const auto interval = ServiceNotifier::watchdog_interval();
   ASSERT_TRUE(interval.has_value());
   EXPECT_EQ(interval->count(), 5'000'000);
-  ::unsetenv("WATCHDOG_USEC");
 }
 
 }  // namespace

@@ -130,6 +130,8 @@ TEST(ImageChild, AHybridRegionIsPreparedAsInProcess) {
     ASSERT_EQ(a.depth->values[i], b.depth->values[i]) << i;
     ASSERT_EQ(a.discontinuity->values[i], b.discontinuity->values[i]) << i;
   }
+  // (Read from the heights and normals in each process: the same figures, and not both empty.)
+  ASSERT_TRUE(b.slope_comparison && b.slope_comparison->ratio && b.slope_comparison->depth_flat);
   EXPECT_EQ(a.slope_comparison, b.slope_comparison);
 }
 

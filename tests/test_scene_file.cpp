@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -27,6 +28,7 @@
 #include "core/engine/method_hybrid.hpp"
 #include "core/engine/targets.hpp"
 #include "tests/file_bytes.hpp"
+#include "tests/scoped_env.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {
@@ -537,13 +539,14 @@ TEST(SceneFileErrors, FilesTheServiceCannotReadAreWarnedOfAndNamedWhenMissing) {
                   .empty());
   // The hint is for the service (started by systemd, which sets INVOCATION_ID): run by hand, a file missing there is
   // missing, and the hint would point at the wrong cause.
+  // (A scene file missing under /run/user: a folder the user may search, so that the error is "No such file or
+  // directory" whoever runs the test; under /root it is "Permission denied" for anyone but root.)
+  const std::string missing_scene = "/run/user/" + std::to_string(::getuid()) + "/ph-test-no-such/scene.toml";
   for (const bool under_systemd : {false, true}) {
     SCOPED_TRACE(under_systemd ? "under systemd" : "run by hand");
-    if (under_systemd) {
-      ::setenv("INVOCATION_ID", "0123456789abcdef0123456789abcdef", 1);
-    } else {
-      ::unsetenv("INVOCATION_ID");  // as where a service started the tests
-    }
+    // Unset run by hand: as where a service started the tests.
+    const ScopedEnv invocation(
+        "INVOCATION_ID", under_systemd ? std::optional<std::string>("0123456789abcdef0123456789abcdef") : std::nullopt);
     try {
       load_scene(spec);
       ADD_FAILURE() << "no ConfigError";
@@ -552,13 +555,12 @@ TEST(SceneFileErrors, FilesTheServiceCannotReadAreWarnedOfAndNamedWhenMissing) {
           << e.what();
     }
     try {
-      parse_scene_file("/root/ph-test-no-such-scene.toml");
+      parse_scene_file(missing_scene);
       ADD_FAILURE() << "no ConfigError";
     } catch (const ConfigError& e) {
       EXPECT_TRUE(contains(e.what(), "No such file or directory")) << e.what();
-      EXPECT_EQ(contains(e.what(), "(/root is hidden from pseudohapticd.service"), under_systemd) << e.what();
+      EXPECT_EQ(contains(e.what(), "(/run/user is hidden from pseudohapticd.service"), under_systemd) << e.what();
     }
-    ::unsetenv("INVOCATION_ID");
   }
   const std::vector<std::string> in_tmp = service_path_warnings(
       parse_scene_text("[[region]]\nname = \"tried\"\nwidth = 2\nheight = 2\nnormal_map = \"/tmp/targets/n.png\"\n",

@@ -19,6 +19,7 @@
 #include "session/compositor_answers.hpp"
 #include "session/compositor_cursor.hpp"
 #include "tests/geometry_printers.hpp"
+#include "tests/scoped_env.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph::session {
@@ -250,28 +251,6 @@ TEST(WayfireCursor, GivesNothingWhenTheMethodIsMissingOrTheReplyIsCut) {
     EXPECT_EQ(WayfireCursor(path, 2s).position(), std::nullopt);
   }
 }
-
-// Sets an environment variable for one scope.
-class ScopedEnv {
- public:
-  ScopedEnv(const char* name, const std::string& value) : name_(name) {
-    if (const char* old = std::getenv(name)) old_ = old;
-    ::setenv(name, value.c_str(), 1);
-  }
-  ~ScopedEnv() {
-    if (old_) {
-      ::setenv(name_, old_->c_str(), 1);
-    } else {
-      ::unsetenv(name_);
-    }
-  }
-  ScopedEnv(const ScopedEnv&) = delete;
-  ScopedEnv& operator=(const ScopedEnv&) = delete;
-
- private:
-  const char* name_;
-  std::optional<std::string> old_;
-};
 
 TEST(CursorSourceFromEnvironment, FindsHyprlandsSocketOrWayfiresOrNone) {
   ScratchDir dir("runtime");

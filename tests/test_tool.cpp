@@ -272,8 +272,6 @@ TEST(Tool, NumberFlagsRefuseNanAndInfinity) {
   }
 }
 
-// status and cursor take the socket as --socket or, as pseudohapticd and pseudohaptic-session name it, --control;
-// without a daemon there the error names the path and says what to check.
 // A full disk (/dev/full) under what a command writes: its output is lost, so it must not say success. Before, trace
 // to a file or to standard output and demo exited 0 with nothing written; and where standard error was full too,
 // the tool aborted.
@@ -309,6 +307,8 @@ TEST(Tool, AWriteThatFailsIsAnErrorNotASuccess) {
       << read_text(dir / "stderr.txt");
 }
 
+// status and cursor take the socket as --socket or, as pseudohapticd and pseudohaptic-session name it, --control;
+// without a daemon there the error names the path and says what to check.
 TEST(Tool, StatusAndCursorNameTheSocketTheyCouldNotReach) {
   ScratchDir dir;
   const std::string socket = (dir / "no-daemon").string();

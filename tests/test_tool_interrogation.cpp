@@ -208,17 +208,27 @@ TEST(ToolInterrogation, InspectChecksEverythingBeforeWritingAnything) {
   const std::string maps = " --depth-map " + quote(depth_map) + " --depth-zero 0.5 --relief-px 16";
   const fs::path out = dir / "out";
   ASSERT_EQ(run_tool("inspect " + quote(out) + maps, dir).rc, 0);
-  std::map<std::string, std::vector<char>> earlier;
-  for (const auto& entry : fs::directory_iterator(out))
-    earlier[entry.path().filename().string()] = read_file_bytes(entry.path());
+  const auto pictures = [&out] {
+    std::map<std::string, std::vector<char>> files;
+    for (const auto& entry : fs::directory_iterator(out))
+      files[entry.path().filename().string()] = read_file_bytes(entry.path());
+    return files;
+  };
+  const std::map<std::string, std::vector<char>> earlier = pictures();
   ASSERT_EQ(earlier.size(), 5u);  // K, H, class, isophotes, contours
+
+  // A map whose header reads (its size) but whose pixels do not: the computation fails, after the command line and
+  // the size were taken, and before any picture is written.
+  const std::vector<char> whole = read_file_bytes(depth_map);
+  const fs::path cut = dir / "cut.depth.png";
+  std::ofstream(cut, std::ios::binary).write(whole.data(), static_cast<std::streamsize>(whole.size() / 2));
+  expect_clean_failure(run_tool("inspect " + quote(out) + " --depth-map " + quote(cut) + " --size 32,32", dir),
+                       {cut.string()});
+  EXPECT_TRUE(pictures() == earlier) << "a picture of the failed run was written";
 
   const ToolResult r = run_tool("inspect " + quote(out) + maps + " --size 32,32 --light 0,0,0", dir);
   expect_clean_failure(r, {"--light: must not be 0,0,0"});
-  std::map<std::string, std::vector<char>> now;
-  for (const auto& entry : fs::directory_iterator(out))
-    now[entry.path().filename().string()] = read_file_bytes(entry.path());
-  EXPECT_TRUE(now == earlier) << "a picture of the failed run was written";
+  EXPECT_TRUE(pictures() == earlier) << "a picture of the failed run was written";
 
   expect_clean_failure(run_tool("inspect " + quote(dir / "new") + maps + " --light 0,0,0", dir), {"--light"});
   EXPECT_FALSE(fs::exists(dir / "new"));

@@ -827,18 +827,19 @@ TEST(ReplayTool, RefusesToWriteOverItsInputOrOneOutputOverTheOther) {
   for (const std::string& args :
        {quote(in) + " " + quote(in), quote(in) + " " + quote(dir / "." / "in.evemu"),
         quote(in) + " " + quote(dir / "link.evemu"), "--trace " + quote(in) + " " + quote(in) + " out.evemu"}) {
-    const ToolResult r = run_tool("replay " + args, dir);
+    const ToolResult r = run_tool_in_dir("replay " + args, dir);
     EXPECT_EQ(r.rc, 1) << args;
     EXPECT_NE(r.err.find("is the recording INPUT"), std::string::npos) << args << ": " << r.err;
     EXPECT_EQ(read_text(in), recorded) << args;
   }
-  const ToolResult both = run_tool("replay --trace out.evemu " + quote(in) + " out.evemu", dir);
+  // Run from the scratch folder: a relative out.evemu written by mistake would be seen in its listing.
+  const ToolResult both = run_tool_in_dir("replay --trace out.evemu " + quote(in) + " out.evemu", dir);
   EXPECT_EQ(both.rc, 1);
   EXPECT_NE(both.err.find("--trace out.evemu is OUTPUT too"), std::string::npos) << both.err;
   EXPECT_EQ(listing(dir), (std::set<std::string>{"in.evemu", "link.evemu"}));
   // The recording read from standard input (`< FILE`) is that file too.
   for (const std::string& args : {"- " + quote(in), "--trace " + quote(dir / "link.evemu") + " - out.evemu"}) {
-    const ToolResult r = run_tool("replay " + args + " < " + quote(in), dir);
+    const ToolResult r = run_tool_in_dir("replay " + args + " < " + quote(in), dir);
     EXPECT_EQ(r.rc, 1) << args;
     EXPECT_NE(r.err.find("is the file standard input reads"), std::string::npos) << args << ": " << r.err;
     EXPECT_EQ(read_text(in), recorded) << args;

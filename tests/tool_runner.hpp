@@ -37,10 +37,13 @@ struct ToolResult {
 };
 
 // Runs `program` with `args` (already quoted where needed), standard output and error into files of `dir`.
-inline ToolResult run_program(const std::filesystem::path& program, const std::string& args, const ScratchDir& dir) {
+// `in_dir`: run from the scratch folder, where relative paths among `args` then lie (and can be looked for).
+inline ToolResult run_program(const std::filesystem::path& program, const std::string& args, const ScratchDir& dir,
+                              bool in_dir = false) {
   const std::filesystem::path out = dir / "stdout.txt";
   const std::filesystem::path err = dir / "stderr.txt";
-  const std::string command = quote(program) + " " + args + " >" + quote(out) + " 2>" + quote(err);
+  const std::string command = (in_dir ? "cd " + quote(dir.path()) + " && " : std::string()) + quote(program) + " " +
+                              args + " >" + quote(out) + " 2>" + quote(err);
   const int status = std::system(command.c_str());
   ToolResult result;
   if (status != -1) result.rc = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -52,6 +55,11 @@ inline ToolResult run_program(const std::filesystem::path& program, const std::s
 // Runs the tool with `args`, as run_program.
 inline ToolResult run_tool(const std::string& args, const ScratchDir& dir) {
   return run_program(std::string(PH_TOOL_PATH), args, dir);
+}
+
+// run_tool from the scratch folder: relative paths among `args` lie in it.
+inline ToolResult run_tool_in_dir(const std::string& args, const ScratchDir& dir) {
+  return run_program(std::string(PH_TOOL_PATH), args, dir, true);
 }
 
 // A failure as a user should meet it: each of `parts` on standard error, no sign of a crash, and exit status 1
