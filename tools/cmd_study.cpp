@@ -119,10 +119,10 @@ std::string trials_csv(const std::vector<TrialRecord>& trials, const std::vector
 }
 
 std::vector<GroupSummary> all_summaries(const std::vector<TrialRecord>& trials, std::size_t techniques,
-                                        int participants) {
+                                        const StudyDesign& design) {
   std::vector<GroupSummary> out;
   for (const Grouping& g : standard_groupings()) {
-    std::vector<GroupSummary> s = summarise(trials, techniques, participants, g);
+    std::vector<GroupSummary> s = summarise(trials, techniques, design.participants, g, design.observer.time_limit_s);
     out.insert(out.end(), s.begin(), s.end());
   }
   return out;
@@ -260,7 +260,7 @@ int run_study_command(const StudyOptions& o) {
     fmt::print(stderr, "study: {}/{} participant runs ({:.0f} s)\n", done, total,
                std::chrono::duration<double>(now - t0).count());
   });
-  const std::vector<GroupSummary> summaries = all_summaries(trials, techniques.size(), design.participants);
+  const std::vector<GroupSummary> summaries = all_summaries(trials, techniques.size(), design);
   write_file(outdir / "trials.csv", trials_csv(trials, techniques));
   write_file(outdir / "summary.csv", summary_csv(summaries, techniques));
   write_file(outdir / "summary.md", summary_md(summaries, techniques, design));

@@ -1,4 +1,4 @@
-// Random numbers for the simulated study (docs/STUDY.md, "Seeds"): the same seed gives the same study on any
+// Random numbers for the simulated study (docs/STUDY.md: "the same seed gives the same files"): the same seed gives the same study on any
 // standard library. std::mt19937_64's output is fixed by the C++ standard, but std::uniform_real_distribution and
 // std::normal_distribution are not (libstdc++ and libc++ give different numbers), so the distributions are ours.
 #pragma once

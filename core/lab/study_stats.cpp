@@ -58,7 +58,7 @@ std::vector<Grouping> standard_groupings() {
 }
 
 std::vector<GroupSummary> summarise(const std::vector<TrialRecord>& trials, std::size_t techniques, int participants,
-                                    const Grouping& grouping) {
+                                    const Grouping& grouping, double time_limit_s) {
   const std::vector<TargetSpec> targets = all_targets();
   std::vector<std::string> groups;    // in order of first appearance
   std::vector<std::size_t> group_of;  // per target
@@ -104,7 +104,7 @@ std::vector<GroupSummary> summarise(const std::vector<TrialRecord>& trials, std:
         times.push_back(t.time / t.trials);
       }
       s.error_pct = mean_ci(errors, 0.0, 100.0);
-      s.time_s = mean_ci(times, 0.0);
+      s.time_s = mean_ci(times, 0.0, time_limit_s);
       s.decided_pct = s.trials > 0 ? 100.0 * decided / s.trials : 0.0;
       out.push_back(std::move(s));
     }

@@ -1,4 +1,4 @@
-// Summaries of a simulated study (docs/STUDY.md, "Outputs"): error rate and decision time per technique and
+// Summaries of a simulated study (docs/STUDY.md, its opening section): error rate and decision time per technique and
 // group of targets, as a mean over participants with a 95 % confidence interval over participants (Student's
 // t), as the paper's within-subject analysis treats participants.
 #pragma once
@@ -47,8 +47,10 @@ struct Grouping {
 // "overall", "height_radius", "profile", "shape" and "cell" (profile, height and radius: the paper's Fig. 4).
 std::vector<Grouping> standard_groupings();
 
-// One summary per technique and group, techniques in index order, groups in the order all_targets() meets them.
+// One summary per technique and group, techniques in index order, groups in the order all_targets() meets them. The
+// intervals are cut to what a rate (0-100 %) and a decision time (0 to `time_limit_s`, a trial's longest) can be.
 std::vector<GroupSummary> summarise(const std::vector<TrialRecord>& trials, std::size_t techniques, int participants,
-                                    const Grouping& grouping);
+                                    const Grouping& grouping,
+                                    double time_limit_s = std::numeric_limits<double>::infinity());
 
 }  // namespace ph
