@@ -1,6 +1,7 @@
-// Random numbers for the simulated study (docs/STUDY.md: "the same seed gives the same files"): the same seed gives the same study on any
-// standard library. std::mt19937_64's output is fixed by the C++ standard, but std::uniform_real_distribution and
-// std::normal_distribution are not (libstdc++ and libc++ give different numbers), so the distributions are ours.
+// Random numbers for the simulated study (docs/STUDY.md: "the same seed gives the same files"): the same seed gives the
+// same study on any standard library. std::mt19937_64's output is fixed by the C++ standard, but
+// std::uniform_real_distribution and std::normal_distribution are not (libstdc++ and libc++ give different numbers), so
+// the distributions are ours.
 #pragma once
 
 #include <cmath>
