@@ -38,19 +38,22 @@ bool Logger::stderr_is_journal() {
   return device == st.st_dev && inode == st.st_ino;
 }
 
-void Logger::log(LogLevel level, std::string_view message) const {
+void Logger::log(LogLevel level, std::string_view message) const noexcept {
   if (level == LogLevel::debug && !verbose_) return;
-  // A message never spans lines: a journal entry or a grep hit is one line.
-  std::string line(message);
-  for (char& c : line) {
-    if (c == '\n') c = ' ';
+  try {
+    // A message never spans lines: a journal entry or a grep hit is one line.
+    std::string line(message);
+    for (char& c : line) {
+      if (c == '\n') c = ' ';
+    }
+    if (journal_) {
+      fmt::print(out_, "<{}>{}\n", static_cast<int>(level), line);
+    } else {
+      fmt::print(out_, "pseudohapticd: {}: {}\n", level_name(level), line);
+    }
+    std::fflush(out_);
+  } catch (...) {  // (nowhere left to say it)
   }
-  if (journal_) {
-    fmt::print(out_, "<{}>{}\n", static_cast<int>(level), line);
-  } else {
-    fmt::print(out_, "pseudohapticd: {}: {}\n", level_name(level), line);
-  }
-  std::fflush(out_);
 }
 
 }  // namespace ph

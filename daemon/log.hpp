@@ -20,7 +20,10 @@ class Logger {
   // True when JOURNAL_STREAM (set by systemd) names the device and inode of our stderr.
   static bool stderr_is_journal();
 
-  void log(LogLevel level, std::string_view message) const;
+  // Never throws: a line that cannot be written (a full disk, a stalled journal's interrupted write) is lost, and
+  // the mouse reader or loop that logged it goes on. fmt's print throws there, and out of a reader thread that
+  // was std::terminate.
+  void log(LogLevel level, std::string_view message) const noexcept;
   bool verbose() const { return verbose_; }
 
   template <typename... Args>

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -60,6 +61,19 @@ TEST(DaemonLog, JournalLinesCarryTheSyslogPriority) {
   log.notice("n");
   log.debug("d");
   EXPECT_EQ(out.text(), "<3>e\n<5>n\n<7>d\n");
+}
+
+// A line that cannot be written is lost, not thrown: fmt's print throws on a failed write, and from a mouse reader
+// thread that was std::terminate, the daemon aborted.
+TEST(DaemonLog, ALineThatCannotBeWrittenIsLostNotThrown) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full here";
+  std::FILE* full = std::fopen("/dev/full", "w");
+  ASSERT_NE(full, nullptr);
+  std::setvbuf(full, nullptr, _IONBF, 0);  // as stderr: each write goes out at once, and fails at once
+  const Logger log(true, false, full);
+  EXPECT_NO_THROW(log.warning("a reader's read error on {}", "/dev/input/event3"));
+  EXPECT_NO_THROW(log.debug("and a debug line"));
+  std::fclose(full);
 }
 
 TEST(DaemonLog, StderrIsTheJournalOnlyWhenJournalStreamNamesIt) {
