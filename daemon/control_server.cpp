@@ -1,5 +1,6 @@
 #include "daemon/control_server.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <sys/epoll.h>
 #include <sys/socket.h>
@@ -75,6 +76,7 @@ ControlServer::ControlServer(std::string path, int epoll, const SessionDirectory
   // Everyone may connect; who may talk is decided per connection from its credentials.
   if (::chmod(path_.c_str(), 0666) != 0) fail("cannot set its permissions", path_);
   if (::listen(listener_.get(), 8) != 0) fail("cannot listen", path_);
+  spare_ = UniqueFd(::open("/dev/null", O_RDONLY | O_CLOEXEC));
   epoll_event event{};
   event.events = EPOLLIN;
   event.data.fd = listener_.get();
@@ -96,7 +98,21 @@ void ControlServer::on_readable(int fd, ControlHandler& handler) {
 void ControlServer::accept_client() {
   while (true) {
     UniqueFd fd(::accept4(listener_.get(), nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC));
+    if (!fd && (errno == EINTR || errno == ECONNABORTED)) continue;
+    if (!fd && (errno == EMFILE || errno == ENFILE) && spare_) {
+      // The connection waits in the backlog and the listener stays readable: the loop would spin. Take it with
+      // the spare descriptor's room and close it (the client sees its end), then hold the spare again.
+      spare_ = UniqueFd();
+      UniqueFd(::accept4(listener_.get(), nullptr, nullptr, SOCK_CLOEXEC));  // (a temporary: closed at once)
+      spare_ = UniqueFd(::open("/dev/null", O_RDONLY | O_CLOEXEC));
+      if (!told_out_of_descriptors_) {
+        log_.warning("control socket: out of file descriptors; closing connections unanswered until some are free");
+        told_out_of_descriptors_ = true;
+      }
+      continue;
+    }
     if (!fd) return;  // EAGAIN: no more waiting
+    told_out_of_descriptors_ = false;
     ucred peer{};
     socklen_t length = sizeof peer;
     if (::getsockopt(fd.get(), SOL_SOCKET, SO_PEERCRED, &peer, &length) != 0) continue;

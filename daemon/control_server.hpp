@@ -104,6 +104,10 @@ class ControlServer {
   const SessionDirectory& sessions_;
   const Logger& log_;
   UniqueFd listener_;
+  // A descriptor held in reserve: out of descriptors (EMFILE), closing it makes room to accept a waiting
+  // connection and close it at once, which the listener's readiness would otherwise report again and again.
+  UniqueFd spare_;
+  bool told_out_of_descriptors_ = false;
   std::map<int, std::unique_ptr<Client>> clients_;
   LatestSenders helpers_;       // the connections that said `helper`: the latest is the session helper
   LatestSenders layouts_;       // the connections that sent a layout (a helper, or a layout-only one)

@@ -1,18 +1,23 @@
 // The daemon's control socket over a real Unix socket: requests reach the handler, the helper gets its
 // queries, a refused peer gets a clear error, and a client that misbehaves is dropped.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <poll.h>
 #include <sys/epoll.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstring>
 #include <filesystem>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include "control/client.hpp"
 #include "daemon/control_server.hpp"
@@ -334,6 +339,57 @@ TEST(ControlServer, LeavesALiveSocketAloneAndReplacesAStaleOne) {
   }
   ASSERT_TRUE(std::filesystem::is_socket(path));
   ServerLoop next(path, sessions);
+  control::Client tool(path);
+  EXPECT_TRUE(tool.request("status").ok);
+}
+
+// Out of file descriptors, a waiting connection kept the listener readable and accept failing (EMFILE): the loop
+// spun, and the client waited for ever. It is now closed at once, and once descriptors are free again, served.
+TEST(ControlServer, OutOfDescriptorsAConnectionIsClosedNotLeftWaiting) {
+  const ScratchDir dir("control-emfile");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  ServerLoop server(path, sessions);
+  rlimit before{};
+  ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &before), 0);
+  // The limit put back however the block below ends (after the filler is closed: declared first, destroyed last).
+  struct RestoreLimit {
+    rlimit limit;
+    ~RestoreLimit() { ::setrlimit(RLIMIT_NOFILE, &limit); }
+  } restore{before};
+  std::vector<UniqueFd> filler;
+  UniqueFd client;
+  {
+    // A limit a few above what is open, then every descriptor but one taken: the client's socket gets it.
+    rlimit low = before;
+    low.rlim_cur = 0;
+    for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd")) {
+      low.rlim_cur = std::max<rlim_t>(low.rlim_cur, std::stoul(entry.path().filename().string()) + 1);
+    }
+    low.rlim_cur += 8;
+    ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &low), 0);
+    while (true) {
+      UniqueFd fd(::open("/dev/null", O_RDONLY | O_CLOEXEC));
+      if (!fd) break;
+      filler.push_back(std::move(fd));
+    }
+    filler.pop_back();
+    client = UniqueFd(::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0));
+    ASSERT_TRUE(client);
+    sockaddr_un address{};
+    address.sun_family = AF_UNIX;
+    std::memcpy(address.sun_path, path.c_str(), path.size() + 1);
+    ASSERT_EQ(::connect(client.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address), 0);
+    pollfd p{client.get(), POLLIN, 0};
+    const int ready = ::poll(&p, 1, 2000);
+    char byte = 0;
+    const ssize_t n = ready == 1 ? ::recv(client.get(), &byte, 1, MSG_DONTWAIT) : -1;
+    filler.clear();
+    client = UniqueFd();
+    ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &before), 0);
+    EXPECT_EQ(ready, 1) << "the connection was left waiting";
+    EXPECT_EQ(n, 0) << "the connection was not closed";
+  }
   control::Client tool(path);
   EXPECT_TRUE(tool.request("status").ok);
 }
