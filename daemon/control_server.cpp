@@ -103,8 +103,11 @@ void ControlServer::accept_client() {
       // The connection waits in the backlog and the listener stays readable: the loop would spin. Take it with
       // the spare descriptor's room and close it (the client sees its end), then hold the spare again.
       spare_ = UniqueFd();
-      UniqueFd(::accept4(listener_.get(), nullptr, nullptr, SOCK_CLOEXEC));  // (a temporary: closed at once)
+      const bool took = UniqueFd(::accept4(listener_.get(), nullptr, nullptr, SOCK_CLOEXEC)).get() >= 0;  // closed
       spare_ = UniqueFd(::open("/dev/null", O_RDONLY | O_CLOEXEC));
+      // accept fails with EMFILE before it looks at the backlog: once none waits, it says EMFILE still, and going
+      // round again would spin here (and take the next connection that comes while it does).
+      if (!took) return;
       if (!told_out_of_descriptors_) {
         log_.warning("control socket: out of file descriptors; closing connections unanswered until some are free");
         told_out_of_descriptors_ = true;

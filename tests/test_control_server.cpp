@@ -384,11 +384,23 @@ TEST(ControlServer, OutOfDescriptorsAConnectionIsClosedNotLeftWaiting) {
     const int ready = ::poll(&p, 1, 2000);
     char byte = 0;
     const ssize_t n = ready == 1 ? ::recv(client.get(), &byte, 1, MSG_DONTWAIT) : -1;
+    // Still out of descriptors, with nothing waiting: the server idles, not spins (accept says EMFILE then too). The
+    // process's CPU time over 200 ms of this thread's sleep is the server's: a spinning loop takes most of it.
+    const auto cpu_ms = [] {
+      rusage usage{};
+      ::getrusage(RUSAGE_SELF, &usage);
+      return (usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) * 1000.0 +
+             (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) / 1000.0;
+    };
+    const double cpu_before = cpu_ms();
+    std::this_thread::sleep_for(200ms);
+    const double busy_ms = cpu_ms() - cpu_before;
     filler.clear();
     client = UniqueFd();
     ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &before), 0);
     EXPECT_EQ(ready, 1) << "the connection was left waiting";
     EXPECT_EQ(n, 0) << "the connection was not closed";
+    EXPECT_LT(busy_ms, 50.0) << "the server spun while out of descriptors";
   }
   control::Client tool(path);
   EXPECT_TRUE(tool.request("status").ok);
