@@ -1,4 +1,5 @@
 #include "config/image_wire.hpp"
+#include "config/write_all.hpp"
 
 #include <poll.h>
 #include <unistd.h>
@@ -235,18 +236,8 @@ Answer decode_answer(const std::vector<std::byte>& bytes, const Request& request
 
 void write_message(int fd, const std::vector<std::byte>& bytes) {
   const std::uint64_t size = bytes.size();
-  auto write_all = [fd](const void* data, std::size_t n) {
-    const auto* p = static_cast<const char*>(data);
-    while (n > 0) {
-      const ssize_t done = ::write(fd, p, n);
-      if (done < 0 && errno == EINTR) continue;
-      if (done <= 0) throw WireError(std::string("cannot write to the image reader's pipe: ") + std::strerror(errno));
-      p += done;
-      n -= static_cast<std::size_t>(done);
-    }
-  };
-  write_all(&size, sizeof size);
-  write_all(bytes.data(), bytes.size());
+  if (!write_all(fd, &size, sizeof size) || !write_all(fd, bytes.data(), bytes.size()))
+    throw WireError(std::string("cannot write to the image reader's pipe: ") + std::strerror(errno));
 }
 
 bool read_message(int fd, std::vector<std::byte>& bytes,

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "config/image_io.hpp"
+#include "config/write_all.hpp"
 
 namespace ph {
 
@@ -26,16 +27,11 @@ void write_text_file(const std::filesystem::path& path, const std::string& text)
   };
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
   if (fd < 0) fail("write");
-  for (std::size_t done = 0; done < text.size();) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      const int error = errno;
-      ::close(fd);
-      errno = error;
-      fail("write");
-    }
-    done += static_cast<std::size_t>(n);
+  if (!write_all(fd, text.data(), text.size())) {
+    const int error = errno;
+    ::close(fd);
+    errno = error;
+    fail("write");
   }
   if (::close(fd) != 0) fail("write");
 }

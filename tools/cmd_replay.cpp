@@ -20,6 +20,7 @@
 
 #include "config/daemon_config.hpp"
 #include "config/scene_file.hpp"
+#include "config/write_all.hpp"
 #include "core/engine/default_scene.hpp"
 #include "core/lab/replay.hpp"
 #include "recording/evemu.hpp"
@@ -54,20 +55,8 @@ struct ReplayOptions {
   throw std::runtime_error(fmt::format("{}: {}", what, std::strerror(error)));
 }
 
-// Writes all of `text` to `fd`; false (errno set) on a failure.
-bool write_all(int fd, const std::string& text) {
-  std::size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      if (n == 0) errno = EIO;
-      return false;
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  return true;
-}
+// All of `text` to `fd` (config/write_all.hpp); false (errno set) on a failure.
+bool write_all(int fd, const std::string& text) { return ph::write_all(fd, text.data(), text.size()); }
 
 // One file the command writes: its text is complete in memory before anything is written, and it goes out
 // in one of three ways, chosen by what the path is now:

@@ -605,13 +605,10 @@ SlopeComparison compare_slopes_with_depth(const GradientField& g, const Gradient
   std::size_t normals_resolved = 0, depth_flat = 0;
   // One axis of texel i, its neighbours `step` apart.
   const auto read = [&](std::size_t i, std::size_t step, auto axis, int a) {
-    const double n = axis(g.values[i]), d = axis(from_depth.values[i]);
-    const bool n_resolved =
-        resolved_slope(axis(g.values[i - step]), static_cast<float>(n), axis(g.values[i + step]), floor);
-    if (!n_resolved) return;
+    const float n = axis(g.values[i]), d = axis(from_depth.values[i]);
+    if (!resolved_slope(axis(g.values[i - step]), n, axis(g.values[i + step]), floor)) return;
     ++normals_resolved;
-    if (!resolved_slope(axis(from_depth.values[i - step]), static_cast<float>(d), axis(from_depth.values[i + step]),
-                        floor)) {
+    if (!resolved_slope(axis(from_depth.values[i - step]), d, axis(from_depth.values[i + step]), floor)) {
       depth_flat += std::abs(d) <= floor ? 1 : 0;
       return;
     }
@@ -620,9 +617,10 @@ SlopeComparison compare_slopes_with_depth(const GradientField& g, const Gradient
       ++opposite[a];
       return;
     }
-    all.push_back(n / d);
+    const double ratio = static_cast<double>(n) / d;
+    all.push_back(ratio);
     // Along the axis the difference spans the texel's neighbours: none of the three may be a step.
-    if ((marks.values[i - step] | marks.values[i] | marks.values[i + step]) == 0) unmarked.push_back(n / d);
+    if ((marks.values[i - step] | marks.values[i] | marks.values[i + step]) == 0) unmarked.push_back(ratio);
   };
   for (std::size_t y = 1; y + 1 < h; y += row_stride) {
     for (std::size_t x = 1; x + 1 < w; ++x) {
