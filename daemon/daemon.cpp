@@ -358,10 +358,24 @@ void Daemon::let_go(const std::string& node, std::string_view why) {
   if (held_elsewhere) ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, mouse.device->fd(), nullptr);
   const bool taken = mouse.frames != nullptr;
   if (taken && !why.empty()) log_.info("let go of {} {} ({})", node, quoted_name(*mouse.device), why);
-  // Stops its reader, releases held buttons on the virtual device, destroys it, ungrabs.
-  mice_.erase(it);
+  retire_virtual_devices(mouse);
+  mice_.erase(it);  // ungrabs, closes the node
   if (taken || held_elsewhere) notifier_.status(status_line());
   update_retry_timer();
+}
+
+// Its reader stopped, a mouse's virtual devices release what they hold and go to `retired_`: one that released a
+// button stays kReleaseGrace for its readers to read the release. Here, under the state lock, either wait would stall
+// every other mouse's reader (at 8 kHz a mouse's kernel buffer overflows in 50 ms).
+void Daemon::retire_virtual_devices(Mouse& mouse) {
+  mouse.reader.reset();
+  mouse.frames.reset();
+  const SteadyTime now = std::chrono::steady_clock::now();
+  for (std::unique_ptr<UinputSink>* sink : {&mouse.sink, &mouse.passthrough_sink}) {
+    if (!*sink) continue;
+    const bool released = (*sink)->release_held();
+    retired_.keep(std::move(*sink), released ? now + UinputSink::kReleaseGrace : now);
+  }
 }
 
 void Daemon::let_go_of_all(std::string_view why) {

@@ -19,6 +19,7 @@
 #include "daemon/evdev_device.hpp"
 #include "daemon/log.hpp"
 #include "daemon/mouse_reader.hpp"
+#include "daemon/retired_devices.hpp"
 #include "daemon/scene_reloader.hpp"
 #include "daemon/service_notifier.hpp"
 #include "daemon/udev_watch.hpp"
@@ -51,9 +52,8 @@ class Daemon final : private ControlHandler {
 
  private:
   // A mouse the daemon has opened: waiting for its buttons to be released or for another program's grab to
-  // end, or taken (grabbed, with its virtual device and frame assembler). Members are destroyed in reverse:
-  // the reader thread, the assembler, then the virtual device (which releases held buttons), then the grab
-  // and the node.
+  // end, or taken (grabbed, with its virtual device and frame assembler). Let go of, its reader stops, then its
+  // virtual devices release held buttons and go (to `retired_` if they held one), then the grab and the node.
   struct Mouse {
     std::unique_ptr<EvdevDevice> device;
     std::unique_ptr<UinputSink> sink;
@@ -107,6 +107,7 @@ class Daemon final : private ControlHandler {
   bool on_released_elsewhere(int fd);
   void let_go(const std::string& node, std::string_view why);
   void let_go_of_all(std::string_view why);
+  void retire_virtual_devices(Mouse& mouse);
   void on_mouse_batch(const std::string& node, Mouse& mouse, const std::vector<InputEvent>& events, ReadStatus status,
                       const std::string& error);
   void ask_let_go(Mouse& mouse, std::string why);
@@ -151,6 +152,8 @@ class Daemon final : private ControlHandler {
   // Motion after a pause waits for the helper's answer (at most kHoldForHelperNs): events by node.
   bool holding_ = false;
   std::vector<std::pair<std::string, InputEvent>> held_events_;
+  // The virtual devices of mice let go of, destroyed off the state lock.
+  RetiredDevices<UinputSink> retired_;
   std::map<std::string, std::unique_ptr<Mouse>> mice_;  // by node
   std::map<std::string, int> unopened_;                 // node -> tries left (not yet accessible)
   std::set<std::string> passed_over_;                   // not a pointer, not matched, ours, ungrabbable

@@ -73,14 +73,19 @@ UinputSink::UinputSink(const DeviceDescription& description) {
   fd_ = libevdev_uinput_get_fd(raw);
 }
 
+// Nothing may stay pressed once the device is gone. The kernel discards what a reader has not read
+// when the device is removed, so the readers (the compositor) get a moment to read the release.
 UinputSink::~UinputSink() {
-  if (!uidev_ || !held_.any()) return;
-  // Nothing may stay pressed once the device is gone. The kernel discards what a reader has not read
-  // when the device is removed, so the readers (the compositor) get a moment to read the release.
+  if (release_held()) std::this_thread::sleep_for(kReleaseGrace);
+}
+
+bool UinputSink::release_held() {
+  if (!uidev_ || !held_.any()) return false;
   for (const InputEvent& e : held_.release_all(last_time_).events) {
     libevdev_uinput_write_event(uidev_.get(), e.type, e.code, e.value);
   }
-  std::this_thread::sleep_for(kReleaseGrace);
+  held_ = HeldKeys{};
+  return true;
 }
 
 [[gnu::hot]] void UinputSink::write(const Frame& frame) {

@@ -54,6 +54,9 @@ class UinputSink final : public EventSink {
   // The /dev/input/eventN node of the virtual device ("" when the kernel did not say).
   std::string devnode() const;
   bool holds_keys() const { return held_.any(); }
+  // Writes the release of whatever the stream still holds down; true if it wrote one. The device should then
+  // stay kReleaseGrace before it is destroyed, which whoever calls this arranges (the destructor no longer waits).
+  bool release_held();
   std::string syspath() const;
 
  private:

@@ -648,9 +648,18 @@ inline bool process_has_open(pid_t pid, const std::string& path) {
 
 // A "physical" mouse through uinput: REL_X/REL_Y, wheel and horizontal wheel with their hi-res
 // companions, left, right and middle buttons. Destroying it releases what it holds, then removes it.
+// A test mouse's device: vm_mouse's, with the horizontal and high-resolution wheels and a middle button.
+inline DeviceDescription test_mouse_description(const std::string& name) {
+  DeviceDescription d = vm::vm_mouse(name);
+  for (std::uint16_t code : {ev::kRelHWheel, ev::kRelWheelHiRes, ev::kRelHWheelHiRes}) d.enable(ev::kRel, code);
+  d.enable(ev::kKey, ev::kBtnMiddle);
+  return d;
+}
+
 class TestMouse {
  public:
-  explicit TestMouse(const std::string& name) : name_(name), sink_(description(name)), node_(sink_.devnode()) {
+  explicit TestMouse(const std::string& name)
+      : name_(name), sink_(test_mouse_description(name)), node_(sink_.devnode()) {
     if (node_.empty()) throw Fatal("the kernel gave no device node for test mouse '" + name + "'");
   }
 
@@ -659,13 +668,6 @@ class TestMouse {
   void send(const Frame& frame) { sink_.write(frame); }
 
  private:
-  static DeviceDescription description(const std::string& name) {
-    DeviceDescription d = vm::vm_mouse(name);
-    for (std::uint16_t code : {ev::kRelHWheel, ev::kRelWheelHiRes, ev::kRelHWheelHiRes}) d.enable(ev::kRel, code);
-    d.enable(ev::kKey, ev::kBtnMiddle);
-    return d;
-  }
-
   std::string name_;
   UinputSink sink_;
   std::string node_;
@@ -803,8 +805,8 @@ class FakeHelper {
 // queued before the grab: a frame sent in between goes to the mouse's other readers only. Sends a wheel
 // notch every 200 ms until one comes out of `out`, then a horizontal one and reads up to it, so that no
 // notch is left to read. The grab holds from then on. (Frames without motion leave the cursor model alone.)
-inline bool wait_taken(TestMouse& mouse, EventReader& out, Clock::duration timeout,
-                       Clock::duration frame_timeout = 5s) {
+template <class Mouse>  // TestMouse, or anything else that sends frames
+bool wait_taken(Mouse& mouse, EventReader& out, Clock::duration timeout, Clock::duration frame_timeout = 5s) {
   const auto deadline = Clock::now() + timeout;
   bool through = false;
   while (!through && Clock::now() < deadline) {

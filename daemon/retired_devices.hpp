@@ -1,0 +1,82 @@
+// The virtual devices of the mice the daemon lets go of, destroyed on a thread of their own. Destroying a uinput
+// device waits for the kernel (an RCU grace period per input handler: milliseconds, tens under emulation), and one
+// that has just written the release of a held button must stay a moment longer, because the kernel discards what
+// its readers (the compositor) have not read once it is removed. Neither may happen under the state lock that the
+// other mice's readers wait for (docs/DESIGN.md, "Grab only when nothing is held").
+#pragma once
+
+#include <pthread.h>
+
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <utility>
+#include <vector>
+
+namespace ph {
+
+template <class Device>
+class RetiredDevices {
+ public:
+  using Time = std::chrono::steady_clock::time_point;
+
+  RetiredDevices() : thread_([this] { run(); }) {
+    ::pthread_setname_np(thread_.native_handle(), "ph-device-free");  // for ps -L, top -H and /proc
+  }
+  // Returns once every device kept has been destroyed, each at its time: the daemon stopping must not cut a release
+  // short.
+  ~RetiredDevices() {
+    {
+      const std::lock_guard lock(mutex_);
+      stopping_ = true;
+    }
+    changed_.notify_one();
+    thread_.join();
+  }
+  RetiredDevices(const RetiredDevices&) = delete;
+  RetiredDevices& operator=(const RetiredDevices&) = delete;
+
+  // Hands the device over, to be destroyed at `until` (at once if that has passed). Does not wait.
+  void keep(std::unique_ptr<Device> device, Time until) {
+    if (!device) return;
+    {
+      const std::lock_guard lock(mutex_);
+      kept_.emplace_back(until, std::move(device));
+    }
+    changed_.notify_one();
+  }
+
+ private:
+  void run() {
+    std::unique_lock lock(mutex_);
+    for (;;) {
+      if (kept_.empty()) {
+        if (stopping_) return;
+        changed_.wait(lock);
+        continue;
+      }
+      const auto next =
+          std::min_element(kept_.begin(), kept_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      if (std::chrono::steady_clock::now() < next->first) {
+        changed_.wait_until(lock, next->first);  // or until another device comes, due sooner
+        continue;
+      }
+      std::unique_ptr<Device> device = std::move(next->second);
+      kept_.erase(next);
+      lock.unlock();
+      device.reset();
+      lock.lock();
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<std::pair<Time, std::unique_ptr<Device>>> kept_;
+  bool stopping_ = false;
+  std::thread thread_;  // last: starts once the members above are ready
+};
+
+}  // namespace ph
