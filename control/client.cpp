@@ -79,7 +79,18 @@ std::optional<std::string> Client::read_line(std::chrono::milliseconds timeout) 
 }
 
 Reply Client::request(std::string_view line, std::chrono::milliseconds timeout) {
-  if (!send_line(line)) throw ControlError(fmt::format("cannot send to pseudohapticd: {}", std::strerror(errno)));
+  if (!send_line(line)) {
+    const int error = errno;
+    // The daemon may have answered and closed before reading the request (a refusal, too many connections):
+    // its reason is waiting to be read.
+    try {
+      if (const std::optional<std::string> got = read_line(std::chrono::milliseconds(100))) {
+        if (auto reply = parse_reply(*got)) return *reply;
+      }
+    } catch (const ControlError&) {
+    }
+    throw ControlError(fmt::format("cannot send to pseudohapticd: {}", std::strerror(error)));
+  }
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   while (true) {
     const auto left =

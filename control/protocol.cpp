@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
+#include <string>
 #include <vector>
 
 namespace ph::control {
@@ -23,11 +24,20 @@ std::vector<std::string_view> words_of(std::string_view line) {
   return words;
 }
 
+// A finite number; one too small for a double is 0, as strtod reads it, and -0 is 0 (a coordinate has no sign
+// of zero to echo back).
 std::optional<double> number(std::string_view text) {
   double v = 0.0;
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
-  if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(v)) return std::nullopt;
-  return v;
+  if (end != text.data() + text.size()) return std::nullopt;
+  if (error == std::errc::result_out_of_range) {
+    const std::string whole(text);
+    v = std::strtod(whole.c_str(), nullptr);  // ERANGE with ±HUGE_VAL (too large) or a subnormal or 0 (too small)
+  } else if (error != std::errc()) {
+    return std::nullopt;
+  }
+  if (!std::isfinite(v)) return std::nullopt;
+  return v + 0.0;
 }
 
 std::optional<std::int32_t> integer(std::string_view text) {
@@ -66,6 +76,14 @@ std::variant<Request, std::string> parse_layout(const std::vector<std::string_vi
     return fmt::format("layout: W and H must be from 1 to {}, X and Y within ±{}", kMaxDesktopCoordinate,
                        kMaxDesktopCoordinate);
   return Request{LayoutRequest{desktop}};
+}
+
+// A path on one line: a control character in it (a newline would end the reply) shows as '?'.
+std::string printable_path(std::string path) {
+  for (char& c : path) {
+    if (std::iscntrl(static_cast<unsigned char>(c))) c = '?';
+  }
+  return path;
 }
 
 }  // namespace
@@ -112,6 +130,13 @@ std::string format_request(const Request& request) {
   return std::visit(Format{}, request);
 }
 
+std::string socket_path_problem(std::string_view path) {
+  if (path.empty()) return "is empty: give a path";
+  if (path.size() > kMaxSocketPath)
+    return fmt::format("is {} bytes long; a socket's path has at most {}", path.size(), kMaxSocketPath);
+  return "";
+}
+
 std::string format_ok(std::string_view words) { return words.empty() ? "ok" : fmt::format("ok {}", words); }
 
 std::string format_error(std::string_view reason) {
@@ -128,7 +153,7 @@ std::string format_status(const Status& s) {
                   "passthrough={} scene={}",
                   s.absolute ? "absolute" : "relative", s.mice, s.held_elsewhere, s.regions, s.desktop.x, s.desktop.y,
                   s.desktop.w, s.desktop.h, s.cursor.x, s.cursor.y, s.helper ? "yes" : "no",
-                  s.passthrough ? "on" : "off", s.scene.empty() ? "default" : s.scene));
+                  s.passthrough ? "on" : "off", printable_path(s.scene.empty() ? "default" : s.scene)));
 }
 
 std::string format_cursor(Vec2 cursor) { return format_ok(fmt::format("{} {}", cursor.x, cursor.y)); }

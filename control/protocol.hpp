@@ -15,6 +15,11 @@ namespace ph::control {
 
 inline constexpr std::size_t kMaxLine = 1024;  // bytes, without the newline
 inline constexpr std::string_view kDefaultSocket = "/run/pseudohaptic/control";
+// The longest path a Unix socket can have (sockaddr_un's sun_path, 108 bytes with its terminating zero).
+inline constexpr std::size_t kMaxSocketPath = 107;
+
+// Why `path` can never be a control socket's ("" when it can): empty, or longer than kMaxSocketPath.
+std::string socket_path_problem(std::string_view path);
 
 struct StatusRequest {};
 struct CursorRequest {};

@@ -120,7 +120,7 @@ void ControlServer::accept_client() {
     socklen_t length = sizeof peer;
     if (::getsockopt(fd.get(), SOL_SOCKET, SO_PEERCRED, &peer, &length) != 0) continue;
     if (const auto refusal = control_refusal(peer.uid, sessions_)) {
-      log_.warning("control socket: refused pid {} ({})", peer.pid, *refusal);
+      log_refusal(peer, *refusal);
       send_line(fd.get(), control::format_error("permission denied: " + *refusal));
       continue;
     }
@@ -141,6 +141,23 @@ void ControlServer::accept_client() {
   }
 }
 
+void ControlServer::log_refusal(const ucred& peer, const std::string& why) {
+  const auto now = std::chrono::steady_clock::now();
+  const auto [it, first] = refusals_.try_emplace(peer.uid);
+  Refusals& refusals = it->second;
+  if (!first && now - refusals.logged < kRefusalLogEvery) {
+    ++refusals.unlogged;
+    return;
+  }
+  const std::string left_out =
+      refusals.unlogged == 0
+          ? std::string()
+          : fmt::format("; {} more of uid {} refused since the last one logged", refusals.unlogged, peer.uid);
+  log_.warning("control socket: refused pid {} ({}){}", peer.pid, why, left_out);
+  refusals.logged = now;
+  refusals.unlogged = 0;
+}
+
 void ControlServer::read_client(int fd, ControlHandler& handler) {
   const auto it = clients_.find(fd);
   if (it == clients_.end()) return;
@@ -158,18 +175,33 @@ void ControlServer::read_client(int fd, ControlHandler& handler) {
     drop(fd, handler);
     return;
   }
-  while (auto line = client.lines.next_line()) {
-    if (!send_line(fd, answer(fd, *line, handler))) {
+  // Of a run of layouts read at once only the last is applied: each may lay out the scene again on the event loop
+  // (the embedded default scene is laid out for the desktop), and a burst would hold up the mice. Each is answered.
+  std::vector<std::variant<control::Request, std::string>> requests;
+  while (auto line = client.lines.next_line()) requests.push_back(control::parse_request(*line));
+  const auto is_layout = [](const std::variant<control::Request, std::string>& parsed) {
+    const auto* request = std::get_if<control::Request>(&parsed);
+    return request != nullptr && std::holds_alternative<control::LayoutRequest>(*request);
+  };
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    const bool superseded = i + 1 < requests.size() && is_layout(requests[i]) && is_layout(requests[i + 1]);
+    if (!send_line(fd, answer(fd, requests[i], handler, superseded))) {
       drop(fd, handler);
       return;
     }
   }
 }
 
-std::string ControlServer::answer(int fd, const std::string& line, ControlHandler& handler) {
-  const auto parsed = control::parse_request(line);
+std::string ControlServer::answer(int fd, const std::variant<control::Request, std::string>& parsed,
+                                  ControlHandler& handler, bool superseded) {
   if (const auto* error = std::get_if<std::string>(&parsed)) return control::format_error(*error);
   const control::Request& request = std::get<control::Request>(parsed);
+  if (const auto* l = std::get_if<control::LayoutRequest>(&request)) {
+    clients_.at(fd)->layout = l->desktop;
+    layouts_.sent(fd);
+    if (!superseded) handler.layout(l->desktop);
+    return control::format_ok();
+  }
   if (std::holds_alternative<control::StatusRequest>(request)) {
     control::Status status = handler.status();
     status.helper = has_helper();
@@ -178,12 +210,6 @@ std::string ControlServer::answer(int fd, const std::string& line, ControlHandle
   if (std::holds_alternative<control::CursorRequest>(request)) return control::format_cursor(handler.cursor());
   if (const auto* p = std::get_if<control::PositionRequest>(&request)) {
     handler.position(p->position, fd == helpers_.latest());
-    return control::format_ok();
-  }
-  if (const auto* l = std::get_if<control::LayoutRequest>(&request)) {
-    clients_.at(fd)->layout = l->desktop;
-    layouts_.sent(fd);
-    handler.layout(l->desktop);
     return control::format_ok();
   }
   if (const auto* p = std::get_if<control::PassthroughRequest>(&request)) {

@@ -4,11 +4,15 @@
 // cursor never waits for a client.
 #pragma once
 
+#include <sys/socket.h>
+
+#include <chrono>
 #include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "control/protocol.hpp"
@@ -92,10 +96,21 @@ class ControlServer {
     bool passthrough = false;    // what its last passthrough request asked
   };
   static constexpr std::size_t kMaxClients = 16;
+  // A refused uid's refusals are logged once in this time, with a count of those left out: any local user can
+  // connect, and a loop of connections would fill the journal (and set off journald's rate limit, which would
+  // silence the daemon's other messages with it).
+  static constexpr std::chrono::seconds kRefusalLogEvery{10};
+  struct Refusals {
+    std::chrono::steady_clock::time_point logged;
+    long unlogged = 0;
+  };
 
   void accept_client();
+  void log_refusal(const ucred& peer, const std::string& why);
   void read_client(int fd, ControlHandler& handler);
-  std::string answer(int fd, const std::string& line, ControlHandler& handler);
+  // The reply to one request; a layout that `superseded` (another follows it at once) is answered, not applied.
+  std::string answer(int fd, const std::variant<control::Request, std::string>& parsed, ControlHandler& handler,
+                     bool superseded);
   bool send_line(int fd, const std::string& line);
   void drop(int fd, ControlHandler& handler);
 
@@ -108,6 +123,7 @@ class ControlServer {
   // connection and close it at once, which the listener's readiness would otherwise report again and again.
   UniqueFd spare_;
   bool told_out_of_descriptors_ = false;
+  std::map<uid_t, Refusals> refusals_;
   std::map<int, std::unique_ptr<Client>> clients_;
   LatestSenders helpers_;       // the connections that said `helper`: the latest is the session helper
   LatestSenders layouts_;       // the connections that sent a layout (a helper, or a layout-only one)

@@ -2,12 +2,17 @@
 
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 
 #include <cerrno>
 #include <cstring>
 
+#include "control/protocol.hpp"
+
 namespace ph::session {
+
+static_assert(sizeof(sockaddr_un{}.sun_path) == control::kMaxSocketPath + 1);
 
 std::optional<ControlConnection> ControlConnection::connect(const std::string& path, std::string& why) {
   sockaddr_un addr{};
@@ -25,6 +30,10 @@ std::optional<ControlConnection> ControlConnection::connect(const std::string& p
   // connect(2) on a unix stream socket completes at once, or fails at once when nothing listens.
   if (::connect(fd.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof addr) < 0 && errno != EINPROGRESS) {
     why = std::strerror(errno);
+    // A file or a folder there refuses the connection too, and no daemon will listen there until it is gone.
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0 && !S_ISSOCK(st.st_mode))
+      why = S_ISDIR(st.st_mode) ? "a folder, not a socket" : "a file, not a socket";
     return std::nullopt;
   }
   return ControlConnection(std::move(fd));

@@ -294,7 +294,9 @@ int main(int argc, char** argv) {
   std::string backend = "auto";
   std::string display, wayland_display;
   bool verbose = false;
-  app.add_option("--control", control, "The daemon's control socket")->capture_default_str();
+  app.add_option("--control", control, "The daemon's control socket")
+      ->check(CLI::Validator([](std::string& path) { return ph::control::socket_path_problem(path); }, ""))
+      ->capture_default_str();
   app.add_option("--backend", backend,
                  "How to ask the desktop: auto (wayland when WAYLAND_DISPLAY is set, else x11 when DISPLAY is), "
                  "x11 or wayland")

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <vector>
 
@@ -166,8 +167,14 @@ WaylandDesktop::WaylandDesktop(const std::string& display, std::unique_ptr<Curso
     : state_(std::make_unique<State>()), cursor_(std::move(cursor)) {
   state_->display.reset(wl_display_connect(display.empty() ? nullptr : display.c_str()));
   if (!state_->display) {
-    throw WaylandError("cannot connect to the Wayland display " +
-                       (display.empty() ? std::string("$WAYLAND_DISPLAY") : display) + ": " + std::strerror(errno));
+    const int error = errno;
+    // libwayland reads $WAYLAND_DISPLAY itself where no name is given: name what it read.
+    const char* from_environment = std::getenv("WAYLAND_DISPLAY");
+    const std::string name = !display.empty() ? display
+                             : from_environment != nullptr && *from_environment != '\0'
+                                 ? std::string(from_environment) + " ($WAYLAND_DISPLAY)"
+                                 : std::string("wayland-0 (the default: $WAYLAND_DISPLAY is not set)");
+    throw WaylandError("cannot connect to the Wayland display " + name + ": " + std::strerror(error));
   }
   state_->registry.reset(wl_display_get_registry(state_->display.get()));
   wl_registry_add_listener(state_->registry.get(), &State::kRegistryListener, state_.get());

@@ -2,6 +2,7 @@
 // is malformed is refused with a reason (docs/SERVICE.md, "The control socket").
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include "control/protocol.hpp"
@@ -42,6 +43,13 @@ TEST(ControlProtocol, RequestsRoundTrip) {
   }
   // Extra spaces between words are harmless.
   EXPECT_EQ(std::get<PositionRequest>(parsed("position  1   2")).position, (Vec2{1, 2}));
+  // Too small for a double is 0, as strtod reads it (finite, not refused as if it were not); -0 is 0, and a
+  // cursor set there reads back without a sign.
+  EXPECT_EQ(std::get<PositionRequest>(parsed("position 1e-400 5")).position, (Vec2{0, 5}));
+  const Vec2 zero = std::get<PositionRequest>(parsed("position -0 -0.0")).position;
+  EXPECT_FALSE(std::signbit(zero.x) || std::signbit(zero.y));
+  EXPECT_EQ(format_cursor(zero), "ok 0 0");
+  EXPECT_EQ(std::get<PositionRequest>(parsed("position -1e-320 1")).position.x, -1e-320);  // subnormal: kept
 }
 
 TEST(ControlProtocol, MalformedRequestsAreRefusedWithAReason) {
@@ -53,6 +61,8 @@ TEST(ControlProtocol, MalformedRequestsAreRefusedWithAReason) {
   EXPECT_NE(refusal("position 1 inf").find("finite"), std::string::npos);
   EXPECT_NE(refusal("position 1,5 2").find("finite"), std::string::npos);
   EXPECT_NE(refusal("position 1e300 2").find("within"), std::string::npos);
+  EXPECT_NE(refusal("position 1e400 2").find("finite"), std::string::npos);  // too large: infinite
+  EXPECT_NE(refusal("position 1e400x 2").find("finite"), std::string::npos);
   EXPECT_NE(refusal("layout 0 0 0 1080").find("from 1"), std::string::npos);
   EXPECT_NE(refusal("layout 0 0 1.5 1080").find("whole"), std::string::npos);
   EXPECT_NE(refusal("layout 0 0 99999999999 1080").find("whole"), std::string::npos);
@@ -85,6 +95,11 @@ TEST(ControlProtocol, StatusAndCursorRepliesRoundTrip) {
   EXPECT_TRUE(back->helper);
   EXPECT_TRUE(back->passthrough);
   EXPECT_EQ(back->scene, s.scene);
+  // A newline in the scene's path would end the reply there: it shows as '?'.
+  s.scene = "/tmp/new\nline.toml";
+  const std::string one_line = format_status(s);
+  EXPECT_EQ(one_line.find('\n'), std::string::npos);
+  EXPECT_EQ(parse_status(parse_reply(one_line)->text)->scene, "/tmp/new?line.toml");
   EXPECT_FALSE(parse_status("mode=absolute mice=1").has_value());  // incomplete
   EXPECT_FALSE(parse_status("mode=sideways mice=1 regions=0 desktop=0,0,1,1 cursor=0,0 helper=no scene=x"));
   // A daemon of before held_elsewhere: none held.
@@ -104,6 +119,13 @@ TEST(ControlProtocol, StatusAndCursorRepliesRoundTrip) {
   EXPECT_FALSE(error->ok);
   EXPECT_EQ(error->text, "no newlines");
   EXPECT_FALSE(parse_reply("query").has_value());  // the daemon's question to a helper is not a reply
+}
+
+TEST(ControlProtocol, ASocketPathIsNotEmptyAndFitsASocketAddress) {
+  EXPECT_EQ(socket_path_problem(kDefaultSocket), "");
+  EXPECT_EQ(socket_path_problem(std::string(kMaxSocketPath, 'a')), "");
+  EXPECT_NE(socket_path_problem("").find("empty"), std::string::npos);
+  EXPECT_NE(socket_path_problem(std::string(kMaxSocketPath + 1, 'a')).find("at most 107"), std::string::npos);
 }
 
 TEST(ControlProtocol, LinesAreSplitAndBounded) {

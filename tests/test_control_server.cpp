@@ -1,6 +1,7 @@
 // The daemon's control socket over a real Unix socket: requests reach the handler, the helper gets its
 // queries, a refused peer gets a clear error, and a client that misbehaves is dropped.
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <sys/epoll.h>
@@ -13,8 +14,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -57,6 +60,7 @@ class RecordingHandler final : public ControlHandler {
   void layout(Rect d) override {
     std::lock_guard lock(mutex_);
     desktop_ = d;
+    ++layouts_;
   }
   void layout_source_gone() override { layout_sources_gone_ += 1; }
   void helper_changed(bool present) override { helper_present_ = present; }
@@ -75,6 +79,10 @@ class RecordingHandler final : public ControlHandler {
     std::lock_guard lock(mutex_);
     return helper_positions_;
   }
+  int layouts() {
+    std::lock_guard lock(mutex_);
+    return layouts_;
+  }
   std::atomic<bool> helper_present_{false};
   std::atomic<int> layout_sources_gone_{0};
 
@@ -83,13 +91,14 @@ class RecordingHandler final : public ControlHandler {
   Vec2 at_{960.5, 540.5};
   Rect desktop_;
   int helper_positions_ = 0;
+  int layouts_ = 0;
 };
 
 // The server on its own event loop, as the daemon runs it.
 class ServerLoop {
  public:
-  ServerLoop(const std::string& path, const SessionDirectory& sessions)
-      : epoll_(::epoll_create1(EPOLL_CLOEXEC)), log_(false, false, nullptr_file()) {
+  ServerLoop(const std::string& path, const SessionDirectory& sessions, std::FILE* log = nullptr_file())
+      : epoll_(::epoll_create1(EPOLL_CLOEXEC)), log_(false, false, log) {
     server_ = std::make_unique<ControlServer>(path, epoll_.get(), sessions, log_);
     thread_ = std::thread([this] { loop(); });
   }
@@ -420,6 +429,109 @@ TEST(ControlServer, DropsAClientWhoseLineNeverEnds) {
   EXPECT_THROW(flood.read_line(2s), control::ControlError);  // and the daemon hung up
   control::Client next(path);                                // others are still served
   EXPECT_TRUE(next.request("cursor").ok);
+}
+
+// A burst of layouts (a helper's, or anyone's the access rule lets in) would lay the scene out again for each on the
+// event loop: of a run read at once only the last is applied, and what follows a layout sees it applied.
+TEST(ControlServer, OfARunOfLayoutsOnlyTheLastIsApplied) {
+  const ScratchDir dir("control-layouts");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  ServerLoop server(path, sessions);
+  control::Client client(path);
+  std::string burst;
+  for (int i = 0; i < 50; ++i) burst += fmt::format("layout 0 0 {} 1080\n", 1920 + (i % 2) * 700);
+  burst += "cursor\nlayout 0 0 1234 567\n";
+  ASSERT_EQ(::send(client.fd(), burst.data(), burst.size(), MSG_NOSIGNAL), static_cast<ssize_t>(burst.size()));
+  for (int i = 0; i < 52; ++i) {
+    const std::optional<std::string> reply = client.read_line(2s);
+    ASSERT_TRUE(reply.has_value()) << "reply " << i;
+    EXPECT_TRUE(reply->starts_with("ok")) << *reply;
+  }
+  EXPECT_EQ(server.handler.layouts(), 2);  // the run's last, before `cursor`; then the one after it
+  EXPECT_EQ(server.handler.desktop(), (Rect{0, 0, 1234, 567}));
+  // One at a time, each is applied before its answer.
+  ASSERT_TRUE(client.request("layout 0 0 800 600").ok);
+  EXPECT_EQ(server.handler.desktop(), (Rect{0, 0, 800, 600}));
+}
+
+// Runs `client` as a peer the server refuses (nobody, in a child, when the test runs as root); returns its result.
+int as_refused_peer(const std::function<int()>& client) {
+  if (::getuid() != 0) return client();
+  int ends[2];
+  if (::pipe(ends) != 0) return -1;
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::close(ends[0]);
+    const int result = ::setgid(65534) == 0 && ::setuid(65534) == 0 ? client() : -1;
+    (void)!::write(ends[1], &result, sizeof result);
+    ::_exit(0);
+  }
+  ::close(ends[1]);
+  int result = -1;
+  (void)!::read(ends[0], &result, sizeof result);
+  ::close(ends[0]);
+  ::waitpid(child, nullptr, 0);
+  return result;
+}
+
+// Connects `count` times as a refused peer and reads each refusal; returns how many were refused with a reason.
+int refused_connections(const std::string& path, int count) {
+  return as_refused_peer([&] {
+    int refused = 0;
+    for (int i = 0; i < count; ++i) {
+      try {
+        control::Client client(path);
+        refused += client.read_line(2s).value_or("").starts_with("error permission denied");
+      } catch (const std::exception&) {
+      }
+    }
+    return refused;
+  });
+}
+
+// Anyone may connect: a loop of refused connections must not fill the journal.
+TEST(ControlServer, AUidsRefusalsAreLoggedOnceInTenSeconds) {
+  const ScratchDir dir("control-refusals");
+  const std::string path = (dir.path() / "control").string();
+  const bool root = ::getuid() == 0;
+  const FakeSessions sessions(root ? 12345 : ::getuid() + 1);
+  std::FILE* log = std::tmpfile();
+  ASSERT_NE(log, nullptr);
+  {
+    ServerLoop server(path, sessions, log);
+    EXPECT_EQ(refused_connections(path, 30), 30);  // each one still told why
+  }
+  std::fflush(log);
+  std::rewind(log);
+  std::string text(1 << 16, '\0');
+  text.resize(std::fread(text.data(), 1, text.size(), log));
+  std::fclose(log);
+  std::size_t lines = 0;
+  for (std::size_t at = text.find("refused pid"); at != std::string::npos; at = text.find("refused pid", at + 1))
+    ++lines;
+  EXPECT_EQ(lines, 1u) << text;
+}
+
+// The server answers a refused peer and closes before it reads the request: the client's send then fails, and what
+// it says must still be the daemon's reason, not "Broken pipe".
+TEST(ControlServer, ARefusedClientIsToldWhyEvenWhenItsRequestCannotBeSent) {
+  const ScratchDir dir("control-refused-request");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid() == 0 ? 12345 : ::getuid() + 1);
+  ServerLoop server(path, sessions);
+  const int told = as_refused_peer([&] {
+    try {
+      control::Client client(path);
+      pollfd hung_up{client.fd(), POLLRDHUP, 0};  // the server has answered and closed
+      if (::poll(&hung_up, 1, 2000) != 1) return 2;
+      const control::Reply reply = client.request("status");
+      return !reply.ok && reply.text.starts_with("permission denied") ? 1 : 3;
+    } catch (const std::exception&) {
+      return 0;
+    }
+  });
+  EXPECT_EQ(told, 1) << "0: the request threw; 2: the server did not close; 3: another reply";
 }
 
 // A peer that is neither root nor the active local user is told why and disconnected. As root the test

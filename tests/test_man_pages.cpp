@@ -140,6 +140,24 @@ TEST(ManPages, TheDaemonRefusesAnEmptySceneFilePathAsTheCommandLineErrorItIs) {
 TEST(ManPages, TheDaemonsPageNamesEveryOption) { expect_page_names_every_option(PH_DAEMON_PATH, PH_DAEMON_MAN_PAGE); }
 
 #ifdef PH_SESSION_PATH
+// pseudohaptic-session(1): a --control that can never be a socket's path (empty, as an unset variable in the unit
+// leaves it, or longer than a socket's path may be) is a command-line error, not a daemon to wait for for ever.
+TEST(ManPages, TheSessionHelperRefusesASocketPathThatCannotBeAsTheCommandLineErrorItIs) {
+  for (const std::string& path : {std::string(), "/tmp/" + std::string(110, 'a')}) {
+    FILE* pipe = ::popen(
+        fmt::format("timeout -s KILL 10 '{}' --control '{}' </dev/null 2>&1", PH_SESSION_PATH, path).c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    std::string out;
+    std::array<char, 4096> buffer{};
+    while (const std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
+    const int status = ::pclose(pipe);
+    ASSERT_TRUE(WIFEXITED(status)) << out;
+    EXPECT_GE(WEXITSTATUS(status), 100) << out;
+    EXPECT_LE(WEXITSTATUS(status), 127) << out;
+    EXPECT_NE(out.find("--control: is "), std::string::npos) << out;
+  }
+}
+
 TEST(ManPages, TheSessionHelpersPageNamesEveryOption) {
   expect_page_names_every_option(PH_SESSION_PATH, PH_SESSION_MAN_PAGE);
 }
