@@ -330,8 +330,7 @@ bool Daemon::on_released_elsewhere(int fd) {
   Mouse& mouse = *it->second;
   // Unplugged while the other program held it: the node hangs up (evdev's poll says POLLHUP once the device is
   // gone), which is no release; nothing to take, and no virtual device to make for it.
-  pollfd hangup{fd, POLLIN, 0};
-  if (::poll(&hangup, 1, 0) == 1 && (hangup.revents & (POLLHUP | POLLERR)) != 0) {
+  if (mouse.device->hung_up()) {
     log_.info("{} {}: unplugged while another program held it", node, quoted_name(*mouse.device));
     let_go(node, "");
     return true;
@@ -376,6 +375,9 @@ void Daemon::retire_virtual_devices(Mouse& mouse) {
     const bool released = (*sink)->release_held();
     retired_.keep(std::move(*sink), released ? now + UinputSink::kReleaseGrace : now);
   }
+  // An unplugged mouse's node too: closing it lets go of the grab, which waits for the kernel. (One still there is
+  // let go of here: it may be taken again at once, and a grab not yet let go of would refuse that.)
+  if (mouse.device && mouse.device->hung_up()) retired_.keep(std::move(mouse.device), now);
 }
 
 void Daemon::let_go_of_all(std::string_view why) {

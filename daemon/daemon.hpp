@@ -152,8 +152,8 @@ class Daemon final : private ControlHandler {
   // Motion after a pause waits for the helper's answer (at most kHoldForHelperNs): events by node.
   bool holding_ = false;
   std::vector<std::pair<std::string, InputEvent>> held_events_;
-  // The virtual devices of mice let go of, destroyed off the state lock.
-  RetiredDevices<UinputSink> retired_;
+  // The virtual devices of mice let go of, and the nodes of those unplugged, destroyed off the state lock.
+  RetiredDevices retired_;
   std::map<std::string, std::unique_ptr<Mouse>> mice_;  // by node
   std::map<std::string, int> unopened_;                 // node -> tries left (not yet accessible)
   std::set<std::string> passed_over_;                   // not a pointer, not matched, ours, ungrabbable

@@ -50,6 +50,11 @@ EvdevDevice::~EvdevDevice() {
   if (fd_ >= 0) ::close(fd_);
 }
 
+bool EvdevDevice::hung_up() const {
+  pollfd p{fd_, POLLIN, 0};
+  return ::poll(&p, 1, 0) == 1 && (p.revents & (POLLHUP | POLLERR)) != 0;
+}
+
 std::string EvdevDevice::name() const {
   const char* n = libevdev_get_name(dev_.get());
   return n != nullptr ? n : "";

@@ -40,6 +40,8 @@ class EvdevDevice {
 
   const std::string& node() const { return node_; }
   int fd() const { return fd_; }
+  // Whether the device has gone (unplugged): its node hangs up.
+  bool hung_up() const;
   std::string name() const;
 
   // A pointer the daemon can drive: REL_X, REL_Y and at least one mouse button.

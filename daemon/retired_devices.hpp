@@ -1,8 +1,9 @@
-// The virtual devices of the mice the daemon lets go of, destroyed on a thread of their own. Destroying a uinput
-// device waits for the kernel (an RCU grace period per input handler: milliseconds, tens under emulation), and one
-// that has just written the release of a held button must stay a moment longer, because the kernel discards what
-// its readers (the compositor) have not read once it is removed. Neither may happen under the state lock that the
-// other mice's readers wait for (docs/DESIGN.md, "Grab only when nothing is held").
+// The devices of the mice the daemon lets go of, destroyed on a thread of their own: their virtual devices, and the
+// node of one unplugged. Destroying a uinput device, or closing the node of a grabbed mouse, waits for the kernel (an
+// RCU grace period: milliseconds, tens under emulation), and a virtual device that has just written the release of a
+// held button must stay a moment longer, because the kernel discards what its readers (the compositor) have not read
+// once it is removed. Neither may happen under the state lock that the other mice's readers wait for
+// (docs/DESIGN.md, "Grab only when nothing is held").
 #pragma once
 
 #include <pthread.h>
@@ -18,7 +19,6 @@
 
 namespace ph {
 
-template <class Device>
 class RetiredDevices {
  public:
   using Time = std::chrono::steady_clock::time_point;
@@ -39,8 +39,9 @@ class RetiredDevices {
   RetiredDevices(const RetiredDevices&) = delete;
   RetiredDevices& operator=(const RetiredDevices&) = delete;
 
-  // Hands the device over, to be destroyed at `until` (at once if that has passed). Does not wait.
-  void keep(std::unique_ptr<Device> device, Time until) {
+  // Hands the device over (any type: the last owner's deleter travels with it), to be destroyed at `until` (at once
+  // if that has passed). Does not wait.
+  void keep(std::shared_ptr<void> device, Time until) {
     if (!device) return;
     {
       const std::lock_guard lock(mutex_);
@@ -64,7 +65,7 @@ class RetiredDevices {
         changed_.wait_until(lock, next->first);  // or until another device comes, due sooner
         continue;
       }
-      std::unique_ptr<Device> device = std::move(next->second);
+      std::shared_ptr<void> device = std::move(next->second);
       kept_.erase(next);
       lock.unlock();
       device.reset();
@@ -74,7 +75,7 @@ class RetiredDevices {
 
   std::mutex mutex_;
   std::condition_variable changed_;
-  std::vector<std::pair<Time, std::unique_ptr<Device>>> kept_;
+  std::vector<std::pair<Time, std::shared_ptr<void>>> kept_;
   bool stopping_ = false;
   std::thread thread_;  // last: starts once the members above are ready
 };

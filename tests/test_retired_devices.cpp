@@ -43,7 +43,7 @@ TEST(RetiredDevices, EachIsDestroyedOnTheRetiringThreadOnceItsTimeIsUp) {
   std::vector<Destruction> log;
   const Clock::time_point start = Clock::now();
   {
-    RetiredDevices<Device> retired;
+    RetiredDevices retired;
     retired.keep(std::make_unique<Device>(1, mutex, log), start + 60ms);
     retired.keep(std::make_unique<Device>(2, mutex, log), start + 20ms);
     retired.keep(std::make_unique<Device>(3, mutex, log), start);  // due at once
@@ -63,7 +63,7 @@ TEST(RetiredDevices, OneDueSoonerThanTheOneWaitedForIsNotHeldBack) {
   std::mutex mutex;
   std::vector<Destruction> log;
   const Clock::time_point start = Clock::now();
-  RetiredDevices<Device> retired;
+  RetiredDevices retired;
   retired.keep(std::make_unique<Device>(1, mutex, log), start + 1500ms);
   std::this_thread::sleep_for(10ms);  // the thread now waits for device 1's time
   retired.keep(std::make_unique<Device>(2, mutex, log), start);
@@ -92,7 +92,7 @@ class SlowDevice {
 TEST(RetiredDevices, HandingOverDoesNotWaitForTheDestruction) {
   std::promise<void> allow;
   const std::shared_future<void> allowed = allow.get_future().share();
-  RetiredDevices<SlowDevice> retired;
+  RetiredDevices retired;
   const Clock::time_point start = Clock::now();
   retired.keep(std::make_unique<SlowDevice>(allowed), start);
   retired.keep(std::make_unique<SlowDevice>(allowed), start);
