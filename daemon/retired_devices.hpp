@@ -61,8 +61,9 @@ class RetiredDevices {
       }
       const auto next =
           std::min_element(kept_.begin(), kept_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-      if (std::chrono::steady_clock::now() < next->first) {
-        changed_.wait_until(lock, next->first);  // or until another device comes, due sooner
+      if (const Time due = next->first; std::chrono::steady_clock::now() < due) {
+        // (A copy: wait_until reads the time again after it wakes, and keep() may have moved the vector meanwhile.)
+        changed_.wait_until(lock, due);  // or until another device comes, due sooner
         continue;
       }
       std::shared_ptr<void> device = std::move(next->second);
