@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -532,6 +533,49 @@ TEST(ControlServer, ARefusedClientIsToldWhyEvenWhenItsRequestCannotBeSent) {
     }
   });
   EXPECT_EQ(told, 1) << "0: the request threw; 2: the server did not close; 3: another reply";
+}
+
+// Sixteen connections that sit idle fill the server; root is still let in, to ask what the daemon does.
+TEST(ControlServer, IdleConnectionsDoNotLockOutRoot) {
+  if (::getuid() != 0) GTEST_SKIP() << "needs root: the idle connections are another user's";
+  const ScratchDir dir("control-full");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(65534);  // nobody has the active session
+  ServerLoop server(path, sessions);
+  int ends[2];
+  ASSERT_EQ(::pipe(ends), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // nobody, holding 16 connections and then one too many
+    ::close(ends[0]);
+    char verdict = 'n';
+    if (::setgid(65534) == 0 && ::setuid(65534) == 0) {
+      try {
+        std::vector<std::unique_ptr<control::Client>> idle;
+        for (int i = 0; i < 16; ++i) {
+          idle.push_back(std::make_unique<control::Client>(path));
+          if (!idle.back()->request("cursor").ok) throw std::runtime_error("not served");
+        }
+        control::Client extra(path);
+        const control::Reply reply = extra.request("cursor");
+        verdict = !reply.ok && reply.text == "too many connections" ? 'y' : 'x';
+        (void)!::write(ends[1], &verdict, 1);
+        ::pause();  // keeps the connections until killed
+      } catch (const std::exception&) {
+      }
+    }
+    (void)!::write(ends[1], &verdict, 1);
+    ::_exit(0);
+  }
+  ::close(ends[1]);
+  char verdict = '?';
+  (void)!::read(ends[0], &verdict, 1);
+  EXPECT_EQ(verdict, 'y') << "y: the 17th connection of a user was refused; n: no connections; x: another reply";
+  control::Client root(path);
+  EXPECT_TRUE(root.request("status").ok);
+  ::kill(child, SIGKILL);
+  ::waitpid(child, nullptr, 0);
+  ::close(ends[0]);
 }
 
 // A peer that is neither root nor the active local user is told why and disconnected. As root the test
