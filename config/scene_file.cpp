@@ -727,6 +727,11 @@ SceneSpec parse_scene_file(const std::filesystem::path& file, MethodRegistry met
   return parse_scene_text(text, file, std::move(methods));
 }
 
+bool scene_file_absent(const std::filesystem::path& file) {
+  std::error_code error;
+  return std::filesystem::symlink_status(file, error).type() == std::filesystem::file_type::not_found;
+}
+
 MethodPtr make_method(const RegionSpec& region, const MethodRegistry& methods) {
   const MethodEntry* entry = methods.find(region.method);
   if (entry == nullptr) {

@@ -82,6 +82,11 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
                            MethodRegistry methods = builtin_methods());
 SceneSpec parse_scene_file(const std::filesystem::path& file, MethodRegistry methods = builtin_methods());
 
+// Whether nothing is at `file` (the default scene file left out: the embedded scene runs). A folder on its path that
+// the caller may not search says nothing of the file: not absent, so that parse_scene_file says why it cannot be read
+// rather than the daemon running the embedded scene in its place.
+bool scene_file_absent(const std::filesystem::path& file);
+
 // The region's method from `methods`, with its parameters; throws ConfigError for a name not in `methods`
 // and std::invalid_argument for parameters that are not valid.
 MethodPtr make_method(const RegionSpec& region, const MethodRegistry& methods = builtin_methods());

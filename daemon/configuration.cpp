@@ -28,8 +28,7 @@ Configuration load_configuration(const ConfigChoice& choice) {
   Configuration c;
   std::optional<std::filesystem::path> file = choice.file;
   if (!choice.default_scene && !file) {
-    std::error_code ignored;
-    if (std::filesystem::exists(choice.default_file, ignored)) {
+    if (!scene_file_absent(choice.default_file)) {
       file = choice.default_file;
     } else {
       c.notes.push_back(

@@ -25,6 +25,7 @@
 
 #include "control/client.hpp"
 #include "daemon/control_server.hpp"
+#include "tests/as_nobody.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {
@@ -456,29 +457,9 @@ TEST(ControlServer, OfARunOfLayoutsOnlyTheLastIsApplied) {
   EXPECT_EQ(server.handler.desktop(), (Rect{0, 0, 800, 600}));
 }
 
-// Runs `client` as a peer the server refuses (nobody, in a child, when the test runs as root); returns its result.
-int as_refused_peer(const std::function<int()>& client) {
-  if (::getuid() != 0) return client();
-  int ends[2];
-  if (::pipe(ends) != 0) return -1;
-  const pid_t child = ::fork();
-  if (child == 0) {
-    ::close(ends[0]);
-    const int result = ::setgid(65534) == 0 && ::setuid(65534) == 0 ? client() : -1;
-    (void)!::write(ends[1], &result, sizeof result);
-    ::_exit(0);
-  }
-  ::close(ends[1]);
-  int result = -1;
-  (void)!::read(ends[0], &result, sizeof result);
-  ::close(ends[0]);
-  ::waitpid(child, nullptr, 0);
-  return result;
-}
-
 // Connects `count` times as a refused peer and reads each refusal; returns how many were refused with a reason.
 int refused_connections(const std::string& path, int count) {
-  return as_refused_peer([&] {
+  return as_nobody([&] {
     int refused = 0;
     for (int i = 0; i < count; ++i) {
       try {
@@ -521,7 +502,7 @@ TEST(ControlServer, ARefusedClientIsToldWhyEvenWhenItsRequestCannotBeSent) {
   const std::string path = (dir.path() / "control").string();
   const FakeSessions sessions(::getuid() == 0 ? 12345 : ::getuid() + 1);
   ServerLoop server(path, sessions);
-  const int told = as_refused_peer([&] {
+  const int told = as_nobody([&] {
     try {
       control::Client client(path);
       pollfd hung_up{client.fd(), POLLRDHUP, 0};  // the server has answered and closed

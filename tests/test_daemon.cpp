@@ -19,6 +19,7 @@
 #include "daemon/log.hpp"
 #include "daemon/service_notifier.hpp"
 #include "daemon/unique_fd.hpp"
+#include "tests/as_nobody.hpp"
 #include "tests/geometry_printers.hpp"
 #include "tests/scoped_env.hpp"
 #include "tests/scratch_dir.hpp"
@@ -104,6 +105,30 @@ TEST(DaemonConfiguration, MissingDefaultFileMeansTheEmbeddedScene) {
             "hole-polynomial-h1-r200 at 710,290, bump-linear-h1-r100 at 1285,290 (500x500 px each)");
   ASSERT_EQ(c.warnings.size(), 1u);  // no display found: 1920 x 1080 assumed
   EXPECT_EQ(c.pipeline.desktop, (Rect{0, 0, 1920, 1080}));
+}
+
+// A default file in a folder the service's user cannot search (made under a umask of 077) is not "no scene file": the
+// daemon must say it cannot read it, not run the embedded scene in its place.
+TEST(DaemonConfiguration, ADefaultFileItCannotReadIsAnErrorNotTheEmbeddedScene) {
+  const ScratchDir dir("daemon-config");
+  const std::filesystem::path folder = dir / "private";
+  std::filesystem::create_directory(folder);
+  std::ofstream(folder / "scene.toml") << "[daemon]\npointer_speed = 2.5\n";
+  std::filesystem::permissions(dir.path(), std::filesystem::perms::all);  // nobody reaches `private`, no further
+  std::filesystem::permissions(folder,
+                               ::getuid() == 0 ? std::filesystem::perms::owner_all : std::filesystem::perms::none);
+  ConfigChoice choice = choice_in(dir);
+  choice.default_file = folder / "scene.toml";
+  const int outcome = as_nobody([&] {
+    try {
+      load_configuration(choice);
+      return 1;  // loaded: the test cannot be refused here
+    } catch (const ConfigError& e) {
+      return std::string(e.what()).find("cannot open the scene file: Permission denied") != std::string::npos ? 0 : 2;
+    }
+  });
+  std::filesystem::permissions(folder, std::filesystem::perms::owner_all);  // for the scratch folder's removal
+  EXPECT_EQ(outcome, 0) << "1: loaded (the embedded scene, or the file); 2: another error";
 }
 
 TEST(DaemonConfiguration, TheDefaultFileIsReadWhenItExists) {

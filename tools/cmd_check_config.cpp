@@ -174,8 +174,7 @@ void write_stdout(const std::string& text) {
 }
 
 int run_check_config(const CheckConfigOptions& o) {
-  std::error_code ignored;
-  if (o.file_option->count() == 0 && !std::filesystem::exists(o.file, ignored)) {
+  if (o.file_option->count() == 0 && scene_file_absent(o.file)) {
     if (!o.quiet) write_stdout(default_scene_summary(o.file));
     return 0;
   }
