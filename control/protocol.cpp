@@ -32,7 +32,9 @@ std::optional<double> number(std::string_view text) {
   if (end != text.data() + text.size()) return std::nullopt;
   if (error == std::errc::result_out_of_range) {
     const std::string whole(text);
-    v = std::strtod(whole.c_str(), nullptr);  // ERANGE with ±HUGE_VAL (too large) or a subnormal or 0 (too small)
+    // ERANGE with ±HUGE_VAL (too large) or a subnormal or 0 (too small). strtod reads the C locale's decimal point:
+    // no program of the project sets another.
+    v = std::strtod(whole.c_str(), nullptr);
   } else if (error != std::errc()) {
     return std::nullopt;
   }

@@ -231,12 +231,17 @@ void Daemon::consider(const std::string& node) {
   if (name.starts_with(kOwnDevicePrefix)) {
     log_.debug("{} {}: a virtual device of pseudohapticd; not taken", node, quoted_name(*device));
     passed_over_.insert(node);
+    retired_.keep(std::move(device), std::chrono::steady_clock::now());  // closed off the lock
     return;
   }
   if (!device->is_pointer()) {
     log_.debug("{} {}: not a pointer (needs REL_X, REL_Y and a button); not taken", node, quoted_name(*device));
     passed_over_.insert(node);
-    if (device->moves_the_cursor()) watch_untaken(node, std::move(device));
+    if (device->moves_the_cursor()) {
+      watch_untaken(node, std::move(device));
+    } else {
+      retired_.keep(std::move(device), std::chrono::steady_clock::now());  // a keyboard plugged in: closed off the lock
+    }
     return;
   }
   const DeviceDescription description = device->description();
@@ -273,7 +278,7 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
     device.set_blocking(true);  // its reader waits in read()
   } catch (const DeviceError& e) {
     if (e.error() == EBUSY) {
-      mouse.sink.reset();
+      mouse.sink.reset();  // here, not on the retiring thread: a mouse not taken has no virtual device
       log_.warning("{}; taking it once that program lets go", e.what());
       wait_for_release_elsewhere(node, mouse);
       return;
@@ -345,6 +350,7 @@ bool Daemon::on_released_elsewhere(int fd) {
 void Daemon::let_go(const std::string& node, std::string_view why) {
   if (const auto u = untaken_.find(node); u != untaken_.end()) {
     ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, u->second->fd(), nullptr);
+    retired_.keep(std::move(u->second), std::chrono::steady_clock::now());  // not grabbed: closed off the lock
     untaken_.erase(u);
   }
   const auto it = mice_.find(node);
@@ -363,16 +369,20 @@ void Daemon::let_go(const std::string& node, std::string_view why) {
   update_retry_timer();
 }
 
-// Its reader stopped, a mouse's virtual devices release what they hold and go to `retired_`: one that released a
-// button stays kReleaseGrace for its readers to read the release. Here, under the state lock, either wait would stall
-// every other mouse's reader (at 8 kHz a mouse's kernel buffer overflows in 50 ms).
+// Its reader stopped, a mouse's virtual devices release what they hold and go to `retired_`: one that wrote a
+// button's release lately (its own, or the mouse's: the kernel releases what an unplugged mouse held) stays
+// kReleaseGrace for its readers to read it. Here, under the state lock, either wait would stall every other mouse's
+// reader (at 8 kHz a mouse's kernel buffer overflows in 50 ms).
 void Daemon::retire_virtual_devices(Mouse& mouse) {
   mouse.reader.reset();
   mouse.frames.reset();
   const SteadyTime now = std::chrono::steady_clock::now();
+  const TimeUs grace_began =
+      std::chrono::duration_cast<std::chrono::microseconds>((now - UinputSink::kReleaseGrace).time_since_epoch())
+          .count();
   for (std::unique_ptr<UinputSink>* sink : {&mouse.sink, &mouse.passthrough_sink}) {
     if (!*sink) continue;
-    const bool released = (*sink)->release_held();
+    const bool released = (*sink)->release_held() || (*sink)->wrote_a_key_since(grace_began);
     retired_.keep(std::move(*sink), released ? now + UinputSink::kReleaseGrace : now);
   }
   // An unplugged mouse's node too: closing it lets go of the grab, which waits for the kernel. (One still there is
@@ -754,6 +764,9 @@ void Daemon::helper_changed(bool present) {
 void Daemon::restart_devices(std::string_view why) {
   const Vec2 cursor = pipeline_->cursor().position;
   let_go_of_all(why);
+  // The old virtual devices go before new ones of the same names come: whoever finds a device by its name (the
+  // desktop's configuration, a test) would find either. No mouse's reader runs now: the wait costs no frame.
+  retired_.wait_until_empty();
   config_.pipeline.start = cursor;
   start_pipeline();
   take_present_mice();

@@ -53,7 +53,8 @@ class Daemon final : private ControlHandler {
  private:
   // A mouse the daemon has opened: waiting for its buttons to be released or for another program's grab to
   // end, or taken (grabbed, with its virtual device and frame assembler). Let go of, its reader stops, then its
-  // virtual devices release held buttons and go (to `retired_` if they held one), then the grab and the node.
+  // virtual devices release held buttons and go to `retired_`, then the grab and the node (to `retired_` too when the
+  // mouse was unplugged).
   struct Mouse {
     std::unique_ptr<EvdevDevice> device;
     std::unique_ptr<UinputSink> sink;
@@ -152,7 +153,7 @@ class Daemon final : private ControlHandler {
   // Motion after a pause waits for the helper's answer (at most kHoldForHelperNs): events by node.
   bool holding_ = false;
   std::vector<std::pair<std::string, InputEvent>> held_events_;
-  // The virtual devices of mice let go of, and the nodes of those unplugged, destroyed off the state lock.
+  // The virtual devices of mice let go of, and the nodes no longer needed, destroyed off the state lock.
   RetiredDevices retired_;
   std::map<std::string, std::unique_ptr<Mouse>> mice_;  // by node
   std::map<std::string, int> unopened_;                 // node -> tries left (not yet accessible)

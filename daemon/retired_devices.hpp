@@ -1,9 +1,9 @@
-// The devices of the mice the daemon lets go of, destroyed on a thread of their own: their virtual devices, and the
-// node of one unplugged. Destroying a uinput device, or closing the node of a grabbed mouse, waits for the kernel (an
-// RCU grace period: milliseconds, tens under emulation), and a virtual device that has just written the release of a
-// held button must stay a moment longer, because the kernel discards what its readers (the compositor) have not read
-// once it is removed. Neither may happen under the state lock that the other mice's readers wait for
-// (docs/DESIGN.md, "Grab only when nothing is held").
+// The devices the daemon is done with, destroyed on a thread of their own: the virtual devices of the mice it lets go
+// of, the nodes of those unplugged and of the input devices it does not keep open. Destroying a uinput device, or
+// closing an evdev node, waits for the kernel (an RCU grace period: milliseconds, tens under emulation), and a virtual
+// device that has just written the release of a button must stay a moment longer, because the kernel discards what
+// its readers (the compositor) have not read once it is removed. Neither may happen under the state lock that the
+// other mice's readers wait for (docs/DESIGN.md, "Grab only when nothing is held").
 #pragma once
 
 #include <pthread.h>
@@ -39,6 +39,12 @@ class RetiredDevices {
   RetiredDevices(const RetiredDevices&) = delete;
   RetiredDevices& operator=(const RetiredDevices&) = delete;
 
+  // Returns once every device handed over has been destroyed.
+  void wait_until_empty() {
+    std::unique_lock lock(mutex_);
+    emptied_.wait(lock, [this] { return kept_.empty() && !destroying_; });
+  }
+
   // Hands the device over (any type: the last owner's deleter travels with it), to be destroyed at `until` (at once
   // if that has passed). Does not wait.
   void keep(std::shared_ptr<void> device, Time until) {
@@ -68,15 +74,20 @@ class RetiredDevices {
       }
       std::shared_ptr<void> device = std::move(next->second);
       kept_.erase(next);
+      destroying_ = true;
       lock.unlock();
       device.reset();
       lock.lock();
+      destroying_ = false;
+      if (kept_.empty()) emptied_.notify_all();
     }
   }
 
   std::mutex mutex_;
-  std::condition_variable changed_;
+  std::condition_variable changed_;  // a device handed over, or the destructor called
+  std::condition_variable emptied_;  // nothing left to destroy
   std::vector<std::pair<Time, std::shared_ptr<void>>> kept_;
+  bool destroying_ = false;  // a device taken off `kept_` is being destroyed
   bool stopping_ = false;
   std::thread thread_;  // last: starts once the members above are ready
 };

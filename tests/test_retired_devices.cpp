@@ -79,6 +79,21 @@ TEST(RetiredDevices, OneDueSoonerThanTheOneWaitedForIsNotHeldBack) {
   EXPECT_EQ(log.front().id, 2);
 }
 
+// The daemon remaking its devices waits for the old ones to be gone, a release's wait included.
+TEST(RetiredDevices, WaitingUntilEmptyWaitsForTheLastDestruction) {
+  std::mutex mutex;
+  std::vector<Destruction> log;
+  RetiredDevices retired;
+  retired.wait_until_empty();  // nothing kept: returns at once
+  const Clock::time_point start = Clock::now();
+  retired.keep(std::make_unique<Device>(1, mutex, log), start + 40ms);
+  retired.keep(std::make_unique<Device>(2, mutex, log), start);
+  retired.wait_until_empty();
+  EXPECT_GE(Clock::now() - start, 40ms);
+  const std::lock_guard lock(mutex);
+  EXPECT_EQ(log.size(), 2u);
+}
+
 // Destroying a device waits for the kernel: keep() must not wait with it.
 class SlowDevice {
  public:

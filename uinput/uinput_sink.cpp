@@ -115,6 +115,10 @@ bool UinputSink::release_held() {
     if (e.type == ev::kSyn && e.code == ev::kSynDropped) continue;
     held_.observe(e);
     last_time_ = e.time;
+    if (e.type == ev::kKey) {
+      last_key_time_ = e.time;
+      wrote_a_key_ = true;
+    }
   }
 }
 

@@ -55,8 +55,12 @@ class UinputSink final : public EventSink {
   std::string devnode() const;
   bool holds_keys() const { return held_.any(); }
   // Writes the release of whatever the stream still holds down; true if it wrote one. The device should then
-  // stay kReleaseGrace before it is destroyed, which whoever calls this arranges (the destructor no longer waits).
+  // stay kReleaseGrace before it is destroyed, which whoever calls this arranges (the destructor waits only for a
+  // release it writes itself).
   bool release_held();
+  // Whether a key or button event was written with a time (the events' own, CLOCK_MONOTONIC) at or after `since`: a
+  // release the stream itself carried lately (the kernel releases what an unplugged mouse held) needs the same wait.
+  bool wrote_a_key_since(TimeUs since) const { return wrote_a_key_ && last_key_time_ >= since; }
   std::string syspath() const;
 
  private:
@@ -64,6 +68,8 @@ class UinputSink final : public EventSink {
   int fd_ = -1;  // uidev_'s, asked once rather than per frame
   HeldKeys held_;
   TimeUs last_time_ = 0;
+  TimeUs last_key_time_ = 0;
+  bool wrote_a_key_ = false;
   std::vector<input_event> batch_;  // the frame being written, kept to reuse its memory
 };
 

@@ -221,7 +221,8 @@ bool wait_ready(NotifySocket& notify, ChildProcess& daemon, Clock::duration time
 // Sends `in` through the test mouse and checks that what comes out of `out` is what the offline pipeline
 // makes of it. Returns what came out (nullopt when nothing did, or nothing was expected).
 // A test mouse that can be pulled out with a button down. TestMouse's device (a UinputSink, as the daemon's) writes
-// the release of what it holds before it goes; a mouse unplugged mid-drag sends none.
+// the release of what it holds before it goes; this one writes none of its own (the kernel releases what a device
+// held as it removes it, which a reader may read before the node hangs up, or not).
 class UnpluggableMouse {
  public:
   explicit UnpluggableMouse(const std::string& name) {
@@ -657,7 +658,8 @@ void flat_part(Report& report, const Options& options, Latency& latency, Latency
 
   // A mouse pulled out mid-drag: its virtual device releases the button and stays 50 ms for the desktop to read the
   // release. The daemon must not wait that long under the lock the other mice's readers take, or their frames wait
-  // too (at 8 kHz a mouse's kernel buffer overflows in that time).
+  // too (at 8 kHz a mouse's kernel buffer overflows in that time). The bar, 40 ms, is the wait's less what the
+  // emulator may add to a frame now and then (frames here take 0.1 ms, the worst a few ms).
   session.run(
       "[6] a mouse unplugged with a button held: the release comes out, the other mouse's frames do not wait",
       [&](Check& check) {
@@ -670,7 +672,7 @@ void flat_part(Report& report, const Options& options, Latency& latency, Latency
         expect_through(check, dragging, dragged, model, make_frame({key(ev::kBtnLeft, 1)}), "the press");
         // The desktop's side: reads the virtual device until it goes, as a compositor does.
         std::vector<ph::InputEvent> after_unplug;
-        std::thread desktop([&] {
+        std::jthread desktop([&] {
           const auto deadline = Clock::now() + kDeviceTimeout;
           while (!dragged.gone() && Clock::now() < deadline) {
             if (std::optional<Frame> frame = dragged.next_frame(100ms))
@@ -698,9 +700,9 @@ void flat_part(Report& report, const Options& options, Latency& latency, Latency
         std::vector<double> sorted = round_trip_ms;
         std::sort(sorted.begin(), sorted.end());
         const double worst = sorted.back(), median = sorted[sorted.size() / 2];
-        check.expect(worst < 25.0,
+        check.expect(worst < 40.0,
                      fmt::format("a frame of the other mouse took {:.1f} ms while the daemon let go of the "
-                                 "unplugged one (bar: under 25 ms; the virtual device's 50 ms for its readers "
+                                 "unplugged one (bar: under 40 ms; the virtual device's 50 ms for its readers "
                                  "must not hold up the other mice)",
                                  worst));
         check.note(

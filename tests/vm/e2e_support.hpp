@@ -646,8 +646,6 @@ inline bool process_has_open(pid_t pid, const std::string& path) {
   return false;
 }
 
-// A "physical" mouse through uinput: REL_X/REL_Y, wheel and horizontal wheel with their hi-res
-// companions, left, right and middle buttons. Destroying it releases what it holds, then removes it.
 // A test mouse's device: vm_mouse's, with the horizontal and high-resolution wheels and a middle button.
 inline DeviceDescription test_mouse_description(const std::string& name) {
   DeviceDescription d = vm::vm_mouse(name);
@@ -656,6 +654,8 @@ inline DeviceDescription test_mouse_description(const std::string& name) {
   return d;
 }
 
+// A "physical" mouse through uinput: REL_X/REL_Y, wheel and horizontal wheel with their hi-res
+// companions, left, right and middle buttons. Destroying it releases what it holds, then removes it.
 class TestMouse {
  public:
   explicit TestMouse(const std::string& name)
