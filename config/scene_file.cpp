@@ -450,10 +450,11 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
     rep.fail(t.get("method"), where + "method",
              fmt::format("unknown method '{}' (allowed: {})", r.method, methods.names()));
 
-  for (const auto& [key, map] :
-       {std::pair{"normal_map", &r.sources.normal_map}, std::pair{"depth_map", &r.sources.depth_map}}) {
+  for (const auto& [key, map, line] : {std::tuple{"normal_map", &r.sources.normal_map, &r.normal_map_line},
+                                       std::tuple{"depth_map", &r.sources.depth_map, &r.depth_map_line}}) {
     const std::optional<std::string> path = get_string(rep, t, key, where);
     if (!path) continue;
+    *line = static_cast<int>(t.get(key)->source().begin.line);
     // Resolved against the scene file's folder, "" would name that folder: said here, at its line.
     if (path->empty()) rep.fail(t.get(key), where + key, "must be the path of an image file, not empty");
     *map = resolve(base_dir, *path);
@@ -764,7 +765,8 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
       std::error_code ignored;
       if (map && std::filesystem::is_directory(*map, ignored)) {
         throw ConfigError(fmt::format("{}:{}: region '{}': {} {}: is a folder, not an image file", spec.file.string(),
-                                      r.line, r.name, key, map->string()));
+                                      key == std::string_view("normal_map") ? r.normal_map_line : r.depth_map_line,
+                                      r.name, key, map->string()));
       }
     }
     try {
@@ -781,7 +783,18 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
         std::error_code ignored;
         if (map && hint.empty() && !std::filesystem::exists(*map, ignored)) hint = service_hint(*map);
       }
-      throw ConfigError(fmt::format("{}:{}: region '{}': {}{}", spec.file.string(), r.line, r.name, e.what(), hint));
+      // An image's error begins with its path: said at the key that names it (the region's line otherwise).
+      int line = r.line;
+      std::string key;
+      for (const auto& [name, map, at] : {std::tuple{"normal_map", &r.sources.normal_map, r.normal_map_line},
+                                          std::tuple{"depth_map", &r.sources.depth_map, r.depth_map_line}}) {
+        if (*map && key.empty() && std::string_view(e.what()).starts_with((*map)->string() + ": ")) {
+          line = at;
+          key = std::string(name) + ": ";
+        }
+      }
+      throw ConfigError(
+          fmt::format("{}:{}: region '{}': {}{}{}", spec.file.string(), line, r.name, key, e.what(), hint));
     } catch (const std::invalid_argument& e) {
       throw ConfigError(fmt::format("{}:{}: region '{}': {}", spec.file.string(), r.line, r.name, e.what()));
     } catch (const std::bad_alloc&) {

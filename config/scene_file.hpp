@@ -55,6 +55,8 @@ struct RegionSpec {
   bool engine_auto = false;   // traversal = "auto": the traversal is chosen at load (core/engine/variant_choice.hpp)
   double accuracy_px = 0.25;  // auto's budget: the error a frame may add, px
   int line = 0;               // where the region starts in the file
+  int normal_map_line = 0;    // where its normal_map and depth_map keys are (0: not given)
+  int depth_map_line = 0;
 };
 
 // The parameters of method class M in a region: its table's, else M's defaults (added to the region).

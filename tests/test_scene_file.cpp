@@ -447,10 +447,39 @@ TEST(SceneFileErrors, AnEmptyMapPathOrAFolderIsSaidAsSuch) {
     load_scene(spec);
     ADD_FAILURE() << "no ConfigError";
   } catch (const ConfigError& e) {
-    EXPECT_TRUE(contains(e.what(), (dir / "scene.toml").string() + ":1: region 'r': normal_map " +
+    EXPECT_TRUE(contains(e.what(), (dir / "scene.toml").string() + ":5: region 'r': normal_map " +
                                        (dir / "maps").string() + ": is a folder, not an image file"))
         << e.what();
   }
+}
+
+// An image that cannot be read, or is not the kind of map its key says, is said at that key's line and names the key
+// (the region's header line and the path alone left the reader to find which of two maps it was).
+TEST(SceneFileErrors, AnImagesErrorNamesItsKeyAndLine) {
+  ScratchDir dir;
+  const TargetSpec target = all_targets().front();
+  write_target_files(dir.path(), {target});
+  const std::string normals = target.name() + ".normal.png";
+  const auto error_of = [&](const std::string& text) -> std::string {
+    try {
+      load_scene(parse_scene_text(text, dir / "scene.toml"));
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "no ConfigError";
+  };
+  const std::string missing =
+      error_of("[[region]]\nname = \"a\"\nwidth = 500\nheight = 500\n\nnormal_map = \"nothere.png\"\ndepth_map = \"" +
+               normals + "\"\n");
+  EXPECT_TRUE(contains(missing, (dir / "scene.toml").string() +
+                                    ":6: region 'a': normal_map: " + (dir / "nothere.png").string() + ": cannot open"))
+      << missing;
+  // A normal map (three channels) given as the depth map.
+  const std::string wrong = error_of(
+      "[[region]]\nname = \"d\"\nmethod = \"depth\"\nwidth = 500\nheight = 500\n"
+      "depth_map = \"" +
+      normals + "\"\n");
+  EXPECT_TRUE(contains(wrong, ":6: region 'd': depth_map: " + (dir / normals).string() + ": ")) << wrong;
 }
 
 // An effect's parameter out of its range is said at the key's own line, not at its table's header.
