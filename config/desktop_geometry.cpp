@@ -58,7 +58,8 @@ Rect resolve_desktop(const std::optional<Rect>& configured, const std::filesyste
   if (configured) return *configured;
   if (const auto found = desktop_from_modes(connected_modes(drm_dir))) return *found;
   warning = "desktop = \"auto\" found no connected display under " + drm_dir.string() +
-            "; assuming 1920x1080 (set desktop = [x, y, width, height] in the config file)";
+            "; assuming 1920x1080 until the session helper gives the layout (or set desktop = [x, y, width, "
+            "height] in a scene file's [daemon] table)";
   return {0, 0, 1920, 1080};
 }
 

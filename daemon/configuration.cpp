@@ -54,9 +54,8 @@ Configuration load_configuration(const ConfigChoice& choice) {
     c.source = "the embedded default scene";
     c.embedded = true;
   }
-  std::string warning;
-  c.pipeline = pipeline_config_of(c.settings, resolve_desktop(c.settings.desktop, choice.drm_dir, warning));
-  if (!warning.empty()) c.warnings.push_back(warning);
+  c.pipeline = pipeline_config_of(c.settings, resolve_desktop(c.settings.desktop, choice.drm_dir, c.desktop_guessed));
+  if (!c.desktop_guessed.empty()) c.warnings.push_back(c.desktop_guessed);
   // Laid out for the desktop found: its targets in the middle, as many as fit (Daemon::layout lays them out again
   // for the session helper's).
   if (c.embedded) {
@@ -67,7 +66,7 @@ Configuration load_configuration(const ConfigChoice& choice) {
   }
   // With desktop = "auto" read from the connected displays, regions off it are said here (a configured desktop's
   // are, above, with their lines; the session helper's layout is checked again when it comes: Daemon::layout).
-  if (!c.settings.desktop && warning.empty()) {
+  if (!c.settings.desktop && c.desktop_guessed.empty()) {
     for (const std::string& note : off_desktop_notes(*c.scene, c.pipeline.desktop))
       c.warnings.push_back(
           fmt::format("{}: {} (desktop = \"auto\": the connected displays side by side)", c.source, note));

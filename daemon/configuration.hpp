@@ -30,6 +30,7 @@ struct Configuration {
   PipelineConfig pipeline;
   std::vector<std::string> notes;     // for the log: the embedded default scene in use
   std::vector<std::string> warnings;  // for the log: invalid texels repaired, per region and map; the desktop guessed
+  std::string desktop_guessed;        // that last warning, "" when a display or the file set the desktop
 };
 
 // Throws ConfigError (scene file) with a message that names the file, line and key.

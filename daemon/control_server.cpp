@@ -62,6 +62,13 @@ ControlServer::ControlServer(std::string path, int epoll, const SessionDirectory
   listener_ = UniqueFd(::socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
   if (!listener_) fail("cannot create the socket", path_);
   struct stat st {};
+  if (::lstat(path_.c_str(), &st) == 0 && !S_ISSOCK(st.st_mode)) {
+    // bind() would say "Address already in use", which sends one looking for another daemon.
+    throw std::runtime_error(
+        fmt::format("control socket {}: {} is there, not a socket; remove it or give another "
+                    "--control",
+                    path_, S_ISDIR(st.st_mode) ? "a folder" : "a file"));
+  }
   if (::lstat(path_.c_str(), &st) == 0 && S_ISSOCK(st.st_mode)) {
     if (socket_answers(address)) {
       throw ControlSocketInUse(fmt::format(

@@ -801,8 +801,10 @@ void Daemon::on_reload_ended() {
     apply(std::move(*outcome->configuration));
     log_.info("reloaded: {} ({} regions), loaded in {:.2f} s while the cursor moved on", config_.source,
               config_.scene->regions().size(), seconds);
+    reload_failed_ = false;
   } else {
     log_.warning("reload failed: {}; keeping the previous scene", outcome->error);
+    reload_failed_ = true;
   }
   if (outcome->another_started) {
     reload_started_ = std::chrono::steady_clock::now();
@@ -819,6 +821,7 @@ void Daemon::apply(Configuration next) {
   // scene file set the desktop may be out of date, with no display change seen meanwhile to say so.
   if (helper_desktop_ && !next.settings.desktop && (helper_desktop_kept_up_ || !config_.settings.desktop)) {
     next.pipeline.desktop = *helper_desktop_;
+    std::erase(next.warnings, next.desktop_guessed);  // not guessed: the helper's
   } else if (!next.settings.desktop) {
     helper_desktop_.reset();
   }
@@ -857,9 +860,10 @@ std::string Daemon::status_line() const {
   std::string mice = taken == 0 ? std::string("waiting for a mouse") : fmt::format("{} mice: {}", taken, names);
   if (held > 0) mice += fmt::format("; {} held by another program", held);
   const bool helper = control_ && control_->has_helper();
-  return fmt::format("{}; scene: {} ({} regions); {} output{}", mice, config_.source, config_.scene->regions().size(),
+  return fmt::format("{}; scene: {} ({} regions); {} output{}{}", mice, config_.source, config_.scene->regions().size(),
                      config_.pipeline.mode == OutputMode::absolute ? "absolute" : "relative",
-                     helper ? "; session helper connected" : "");
+                     helper ? "; session helper connected" : "",
+                     reload_failed_ ? "; the last reload failed, the scene before it kept (see the log)" : "");
 }
 
 void Daemon::log_notes(const Configuration& configuration) const {

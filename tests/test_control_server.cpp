@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <mutex>
 #include <thread>
@@ -26,6 +27,7 @@
 #include "control/client.hpp"
 #include "daemon/control_server.hpp"
 #include "tests/as_nobody.hpp"
+#include "tests/file_bytes.hpp"
 #include "tests/scratch_dir.hpp"
 
 namespace ph {
@@ -321,6 +323,23 @@ TEST(ControlServer, MakesTheSocketsOwnFolder) {
 // A second daemon started beside a running one (`sudo pseudohapticd` while the service runs) must not take the
 // running one's socket: it used to unlink it as stale, bind its own, and remove that when it ended, leaving the
 // running daemon unreachable. A socket file whose daemon is gone is still replaced.
+// A file or a folder at the path is not taken for another daemon's socket ("Address already in use").
+TEST(ControlServer, AFileAtThePathIsSaidToBeNoSocket) {
+  const ScratchDir dir("control-file");
+  const std::string path = (dir.path() / "control").string();
+  std::ofstream(path) << "not a socket\n";
+  const FakeSessions sessions(::getuid());
+  const UniqueFd epoll(::epoll_create1(EPOLL_CLOEXEC));
+  const Logger log(false, false, std::fopen("/dev/null", "w"));
+  try {
+    ControlServer server(path, epoll.get(), sessions, log);
+    ADD_FAILURE() << "a server on a file";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("a file is there, not a socket"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(read_file_text(path), "not a socket\n");  // left as it was
+}
+
 TEST(ControlServer, LeavesALiveSocketAloneAndReplacesAStaleOne) {
   const ScratchDir dir("control");
   const std::string path = (dir.path() / "control").string();

@@ -247,6 +247,14 @@ class UnpluggableMouse {
   std::string node_;
 };
 
+// The last STATUS= line the daemon sent (what `systemctl status` shows), "" when none.
+std::string last_status(const NotifySocket& notify) {
+  const std::vector<std::string> lines = notify.history();
+  const auto it =
+      std::find_if(lines.rbegin(), lines.rend(), [](const std::string& l) { return l.starts_with("STATUS="); });
+  return it == lines.rend() ? std::string() : *it;
+}
+
 template <class Mouse>  // TestMouse, or UnpluggableMouse
 std::optional<Frame> expect_through(Check& check, Mouse& mouse, EventReader& out, ph::Pipeline& model, const Frame& in,
                                     const std::string& label) {
@@ -1059,6 +1067,10 @@ void flat_part(Report& report, const Options& options, Latency& latency, Latency
     check.expect(notify->expect("RELOADING=1", 10s), "expected RELOADING=1 after SIGHUP, got none within 10 s");
     check.expect(notify->expect("READY=1", 30s), "expected READY=1 after the failed reload, got none within 30 s");
     if (!daemon->running()) throw Fatal("the daemon exited: " + describe_wait_status(*daemon->wait_exit(0s)));
+    // systemctl status says it, not only the log.
+    const std::string status = last_status(*notify);
+    check.expect(status.find("the last reload failed") != std::string::npos,
+                 "expected the STATUS= line to say that the last reload failed, got: " + status);
     std::string said;
     const bool logged = wait_until(
         [&] {
@@ -1096,6 +1108,8 @@ void flat_part(Report& report, const Options& options, Latency& latency, Latency
         daemon->signal(SIGHUP);
         check.expect(notify->expect("RELOADING=1", 10s), "expected RELOADING=1 after SIGHUP, got none within 10 s");
         check.expect(notify->expect("READY=1", 60s), "expected READY=1 after RELOADING=1, got none within 60 s");
+        check.expect(last_status(*notify).find("reload failed") == std::string::npos,
+                     "the STATUS= line still says a reload failed after one that did not: " + last_status(*notify));
         if (!check.ok()) throw Fatal("no reload");
         const auto scene = std::make_shared<const ph::Scene>(ph::load_scene(ph::parse_scene_file(config)));
         std::size_t marked = 0;
