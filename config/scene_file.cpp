@@ -678,26 +678,57 @@ std::optional<HiddenFolder> hidden_from_the_service(const std::filesystem::path&
                                                            {"/var/tmp", "PrivateTmp=yes"}}};
   std::error_code ignored;
   const std::filesystem::path normal = std::filesystem::absolute(path, ignored).lexically_normal();
-  for (const HiddenFolder& hidden : kHidden) {
-    const std::filesystem::path inside = normal.lexically_relative(std::filesystem::path(hidden.folder));
-    if (!inside.empty() && *inside.begin() != "..") return hidden;
+  // And where its links lead: a link outside the folders that points into one is as hidden.
+  std::error_code unresolved;
+  const std::filesystem::path resolved = std::filesystem::weakly_canonical(normal, unresolved);
+  for (const std::filesystem::path& where : {normal, unresolved ? normal : resolved}) {
+    for (const HiddenFolder& hidden : kHidden) {
+      const std::filesystem::path inside = where.lexically_relative(std::filesystem::path(hidden.folder));
+      if (!inside.empty() && *inside.begin() != "..") return hidden;
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> unreadable_by_others(const std::filesystem::path& path) {
+  std::error_code error;
+  const std::filesystem::path file = std::filesystem::absolute(path, error).lexically_normal();
+  const std::filesystem::file_status status = std::filesystem::status(file, error);
+  if (error || !std::filesystem::is_regular_file(status)) return std::nullopt;  // missing: the load says so
+  if ((status.permissions() & std::filesystem::perms::others_read) == std::filesystem::perms::none)
+    return fmt::format("its mode {:o} does not let others read it",
+                       static_cast<unsigned>(status.permissions() & std::filesystem::perms::mask));
+  for (std::filesystem::path folder = file.parent_path(); !folder.empty(); folder = folder.parent_path()) {
+    const std::filesystem::file_status s = std::filesystem::status(folder, error);
+    if (!error && (s.permissions() & std::filesystem::perms::others_exec) == std::filesystem::perms::none)
+      return fmt::format("the folder {} (mode {:o}) does not let others through", folder.string(),
+                         static_cast<unsigned>(s.permissions() & std::filesystem::perms::mask));
+    if (folder == folder.root_path()) break;
   }
   return std::nullopt;
 }
 
 std::vector<std::string> service_path_warnings(const SceneSpec& spec) {
   std::vector<std::string> out;
+  constexpr std::string_view kRunsAs =
+      "pseudohapticd.service runs as a user of its own (DynamicUser=yes), which cannot read it: chmod a+r the file, "
+      "a+x the folders on its path";
+  if (const std::optional<std::string> why = unreadable_by_others(spec.file))
+    out.push_back(fmt::format("{}: {}; {}", spec.file.string(), *why, kRunsAs));
   for (const RegionSpec& r : spec.regions) {
-    for (const auto& [key, map] :
-         {std::pair{"normal_map", r.sources.normal_map}, std::pair{"depth_map", r.sources.depth_map}}) {
+    for (const auto& [key, map, line] : {std::tuple{"normal_map", r.sources.normal_map, r.normal_map_line},
+                                         std::tuple{"depth_map", r.sources.depth_map, r.depth_map_line}}) {
       if (!map) continue;
-      const std::optional<HiddenFolder> hidden = hidden_from_the_service(*map);
-      if (!hidden) continue;
-      out.push_back(
-          fmt::format("{}:{}: region '{}': {} {} lies under {}, which pseudohapticd.service cannot read "
-                      "({}; the daemon run by hand can): keep the images under "
-                      "/etc/pseudohaptic or /usr/local/share",
-                      spec.file.string(), r.line, r.name, key, map->string(), hidden->folder, hidden->setting));
+      if (const std::optional<HiddenFolder> hidden = hidden_from_the_service(*map)) {
+        out.push_back(
+            fmt::format("{}:{}: region '{}': {} {} lies under {}, which pseudohapticd.service cannot read "
+                        "({}; the daemon run by hand can): keep the images under "
+                        "/etc/pseudohaptic or /usr/local/share",
+                        spec.file.string(), line, r.name, key, map->string(), hidden->folder, hidden->setting));
+      } else if (const std::optional<std::string> why = unreadable_by_others(*map)) {
+        out.push_back(fmt::format("{}:{}: region '{}': {} {}: {}; {}", spec.file.string(), line, r.name, key,
+                                  map->string(), *why, kRunsAs));
+      }
     }
   }
   return out;

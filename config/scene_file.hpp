@@ -164,12 +164,18 @@ struct HiddenFolder {
 
 // The folder of those the service's sandbox hides that `path` lies in, or nullopt: /home, /root and /run/user
 // (ProtectHome=yes: there but empty or not to be entered), /tmp and /var/tmp (PrivateTmp=yes: the service has its
-// own, empty). Lexical: `path` made absolute against the working folder, as the scene file resolved it, links not
-// followed.
+// own, empty). `path` made absolute against the working folder, as the scene file resolved it, as written and with the
+// links it passes through followed.
 std::optional<HiddenFolder> hidden_from_the_service(const std::filesystem::path& path);
 
-// One line per region and map that lies where the service cannot read it (hidden_from_the_service), "FILE:LINE:
-// region 'NAME': " and the map, the folder and where to keep images instead; none where every map can be read.
+// Why a user other than the owner and the group cannot read the file at `path` (not readable by others, or a folder
+// on its path they may not enter), or nullopt (also when it is missing: its load says so). The service's user is such
+// a user; ACLs are not looked at.
+std::optional<std::string> unreadable_by_others(const std::filesystem::path& path);
+
+// One line per region and map that lies where the service cannot read it (hidden_from_the_service, at its key's line:
+// "FILE:LINE: region 'NAME': " and the map, the folder and where to keep images instead) or that its user may not
+// read (unreadable_by_others), and one for the scene file itself if so; none where every file can be read.
 // pseudohapticd run by hand reads them; under systemd its load fails.
 std::vector<std::string> service_path_warnings(const SceneSpec& spec);
 

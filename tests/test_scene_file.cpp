@@ -3,6 +3,7 @@
 #include "config/scene_file.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -453,6 +454,49 @@ TEST(SceneFileErrors, AnEmptyMapPathOrAFolderIsSaidAsSuch) {
   }
 }
 
+// check-config run as root reads what the service's own user cannot: a file only its owner may read (made under a
+// umask of 077), or one in a folder others may not enter. Said, with the key's line.
+TEST(SceneFileErrors, FilesOthersCannotReadAreWarnedOf) {
+  const ScratchDir dir("scene-private");
+  namespace perms = std::filesystem;
+  std::filesystem::permissions(dir.path(), perms::perms::owner_all | perms::perms::others_exec);
+  std::filesystem::create_directories(dir / "private");
+  std::filesystem::permissions(dir / "private", perms::perms::owner_all);
+  for (const char* name : {"private/n.png", "private/scene.toml", "mine.png", "open.png"})
+    std::ofstream(dir / name) << "x";
+  std::filesystem::permissions(dir / "mine.png", perms::perms::owner_read | perms::perms::owner_write);
+  EXPECT_FALSE(unreadable_by_others(dir / "open.png").has_value()) << *unreadable_by_others(dir / "open.png");
+  ASSERT_TRUE(unreadable_by_others(dir / "mine.png").has_value());
+  EXPECT_TRUE(contains(*unreadable_by_others(dir / "mine.png"), "its mode 600 does not let others read it"));
+  ASSERT_TRUE(unreadable_by_others(dir / "private/n.png").has_value());
+  EXPECT_TRUE(contains(*unreadable_by_others(dir / "private/n.png"),
+                       "the folder " + (dir / "private").string() + " (mode 700) does not let others through"));
+  EXPECT_FALSE(unreadable_by_others(dir / "missing.png").has_value());  // the load says it is missing
+  const SceneSpec spec = parse_scene_text(
+      "[[region]]\nname = \"p\"\nwidth = 2\nheight = 2\nmethod = \"hybrid\"\nnormal_map = \"mine.png\"\n"
+      "depth_map = \"private/n.png\"\n",
+      "/etc/pseudohaptic/scene.toml");
+  SceneSpec in_scratch = spec;
+  in_scratch.file = dir / "private/scene.toml";
+  in_scratch.regions[0].sources.normal_map = dir / "mine.png";
+  in_scratch.regions[0].sources.depth_map = dir / "private/n.png";
+  const std::string said = fmt::format("{}", fmt::join(service_path_warnings(in_scratch), "\n"));
+  EXPECT_TRUE(contains(said, (dir / "private/scene.toml").string() + ": the folder " + (dir / "private").string() +
+                                 " (mode 700) does not let others through; pseudohapticd.service runs as a user of "
+                                 "its own (DynamicUser=yes)"))
+      << said;
+  // (The scratch folder lies under /tmp, which the service does not see: that warning comes first where it does.)
+  if (!hidden_from_the_service(dir.path())) {
+    EXPECT_TRUE(contains(said, (dir / "private/scene.toml").string() + ":6: region 'p': normal_map " +
+                                   (dir / "mine.png").string() + ": its mode 600"))
+        << said;
+    EXPECT_TRUE(contains(said, ":7: region 'p': depth_map ")) << said;
+    EXPECT_TRUE(contains(said, "DynamicUser=yes")) << said;
+  } else {
+    EXPECT_TRUE(contains(said, ":6: region 'p': normal_map " + (dir / "mine.png").string() + " lies under")) << said;
+  }
+}
+
 // An image that cannot be read, or is not the kind of map its key says, is said at that key's line and names the key
 // (the region's header line and the path alone left the reader to find which of two maps it was).
 TEST(SceneFileErrors, AnImagesErrorNamesItsKeyAndLine) {
@@ -551,6 +595,8 @@ TEST(SceneFileErrors, FilesTheServiceCannotReadAreWarnedOfAndNamedWhenMissing) {
   for (const char* readable : {"/homework/n.png", "/run/udev/n.png", "/etc/pseudohaptic/n.png",
                                "/usr/local/share/n.png", "/tmpfs/n.png", "/var/lib/n.png"})
     EXPECT_EQ(folder(readable), "readable") << readable;
+  // A link outside the hidden folders that leads into one: /proc/self/root is a link to /.
+  EXPECT_EQ(folder("/proc/self/root/tmp/ph-test-maps/n.png"), "/tmp PrivateTmp=yes");
 
   const std::string missing_home = "/home/ph-test-no-such-user/maps";
   const SceneSpec spec = parse_scene_text(
@@ -560,7 +606,7 @@ TEST(SceneFileErrors, FilesTheServiceCannotReadAreWarnedOfAndNamedWhenMissing) {
       "/etc/pseudohaptic/scene.toml");
   const std::vector<std::string> warnings = service_path_warnings(spec);
   ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_TRUE(contains(warnings[0], "/etc/pseudohaptic/scene.toml:1: region 'mine': normal_map " + missing_home +
+  EXPECT_TRUE(contains(warnings[0], "/etc/pseudohaptic/scene.toml:6: region 'mine': normal_map " + missing_home +
                                         "/n.png lies under /home, which pseudohapticd.service cannot read"))
       << warnings[0];
   EXPECT_TRUE(service_path_warnings(parse_scene_text("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"/etc/n.png\"\n",
