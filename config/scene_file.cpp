@@ -279,6 +279,8 @@ WellsParams parse_wells(const Reporter& rep, const toml::table& t, std::string_v
   get_number_into(rep, t, "max_gain", where, w.max_gain);
   get_number_into(rep, t, "min_gain", where, w.min_gain);
   get_number_into(rep, t, "snap_px", where, w.snap_px);
+  // Left out, it is at most min_gain / 2 (its bound): a min_gain below 0.5 needs no snap_fraction beside it.
+  if (t.get("snap_fraction") == nullptr) w.snap_fraction = std::min(w.snap_fraction, w.min_gain / 2.0);
   get_number_into(rep, t, "snap_fraction", where, w.snap_fraction);
   const bool isophotes = w.pattern == WellPattern::isophotes;
   const PatternRule rule =
@@ -499,10 +501,13 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
     r.materials = parse_materials(rep, *m, where + "materials.");
     const bool needs_depth = r.materials->source == ClassSource::depth;
     const bool needs_normals = r.materials->source == ClassSource::normals;
-    if ((needs_depth && !r.sources.depth_map) || (needs_normals && !r.sources.normal_map && !r.sources.depth_map)) {
+    // Each source needs its own map: "normals" from a depth map's slopes would filter the heights at the normal
+    // map's radius, too small for them (docs/INTERROGATION.md, "Classes"), and make a flat plane's texels noise.
+    if ((needs_depth && !r.sources.depth_map) || (needs_normals && !r.sources.normal_map)) {
       rep.fail(key_or_table(*m, "source"), where + "materials.source",
                needs_depth ? "source = \"depth\" needs a depth_map, which the region has not"
-                           : "the region has no map to compute the classes from");
+                           : "source = \"normals\" needs a normal_map, which the region has not (\"auto\" takes the "
+                             "classes from the depth map)");
     }
   }
   if (const toml::table* w = get_table(rep, t, "wells", where)) {

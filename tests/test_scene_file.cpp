@@ -850,6 +850,22 @@ TEST(SceneFileInterrogation, MistakesNameTheKeyAndWhatIsAllowed) {
       "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n[region.materials]\nplanar = \"friction\"\n"
       "source = \"depth\"\n",
       7, "region[0].materials.source", {"source = \"depth\" needs a depth_map"});
+  // And "normals" a normal map: from a depth map's slopes the classes would be filtered at the normal map's radius.
+  expect_error("[[region]]\nwidth = 2\nheight = 2\ndepth_map = \"d.png\"\n[region.materials]\nsource = \"normals\"\n",
+               6, "region[0].materials.source", {"source = \"normals\" needs a normal_map"});
+}
+
+// min_gain may go down to its bound without a snap_fraction beside it: left out, snap_fraction stays within
+// min_gain / 2 (its own bound). Given, it is held to that bound at its own line.
+TEST(SceneFileInterrogation, ALowMinGainNeedsNoSnapFractionBesideIt) {
+  const std::string head = "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n[region.wells]\n";
+  const SceneSpec spec = parse_scene_text(head + "min_gain = 0.1\n", kOrigin);
+  ASSERT_TRUE(spec.regions[0].wells.has_value());
+  EXPECT_EQ(spec.regions[0].wells->min_gain, 0.1);
+  EXPECT_EQ(spec.regions[0].wells->snap_fraction, 0.05);
+  EXPECT_EQ(parse_scene_text(head + "min_gain = 0.8\n", kOrigin).regions[0].wells->snap_fraction,
+            WellsParams{}.snap_fraction);
+  expect_error(head + "min_gain = 0.4\nsnap_fraction = 0.25\n", 7, "region[0].wells", {"snap_fraction", "0.2"});
 }
 
 TEST(SceneFileInterrogation, LoadingBuildsTheEffectsAndKeepsOnlyWhatTheMethodWalks) {
