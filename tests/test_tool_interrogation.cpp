@@ -236,6 +236,35 @@ TEST(ToolInterrogation, InspectChecksEverythingBeforeWritingAnything) {
   expect_clean_failure(run_tool("inspect " + quote(dir / "new") + maps + " --normal-green directx", dir),
                        {"--normal-green says how to decode a normal map: give --normal-map"});
   EXPECT_FALSE(fs::exists(dir / "new"));
+  // Contours are of heights: without a depth map --contours was ignored without a word.
+  const fs::path normal_map = dir / "plane.normal.png";
+  write_normal_png16(normal_map, surface_normal_image({SurfaceKind::plane, 32}));
+  expect_clean_failure(
+      run_tool("inspect " + quote(dir / "new") + " --normal-map " + quote(normal_map) + " --contours 3", dir),
+      {"--contours sets the contours of a depth map: give --depth-map"});
+  EXPECT_FALSE(fs::exists(dir / "new"));
+}
+
+// A plane's mean curvature and a cylinder's Gaussian curvature are 0 but for rounding: the pictures of them are white,
+// not painted in full colour at the scale of the rounding (which read as a hole and a saddle).
+TEST(ToolInterrogation, InspectPaintsRoundingNoiseWhite) {
+  ScratchDir dir;
+  for (const SurfaceKind kind : {SurfaceKind::plane, SurfaceKind::cylinder}) {
+    const SurfaceSpec surface{kind, 64};
+    SCOPED_TRACE(surface.name());
+    const fs::path normal_map = dir / (surface.name() + ".normal.png");
+    write_normal_png16(normal_map, surface_normal_image(surface));
+    const fs::path out = dir / surface.name();
+    const ToolResult r = run_tool("inspect --normal-map " + quote(normal_map) + " " + quote(out), dir);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    for (const char* name :
+         kind == SurfaceKind::plane ? std::vector<const char*>{"K.png", "H.png"} : std::vector<const char*>{"K.png"}) {
+      const RawImage picture = read_image(out / name);
+      double darkest = 1.0;
+      for (const float v : picture.pixels) darkest = std::min(darkest, static_cast<double>(v));
+      EXPECT_GT(darkest, 0.9) << name << " is not white: " << r.out;
+    }
+  }
 }
 
 // A light of huge or tiny components is a direction like any other: its length overflowed (1e300^2) or underflowed,

@@ -76,8 +76,10 @@ void write_picture(const std::filesystem::path& path, const Grid<T>& grid, F col
   write_rgb_png8(path, grid.width, grid.height, rgb);
 }
 
-double write_diverging(const std::filesystem::path& path, const Grid<float>& values) {
-  const double scale = robust_scale(values);
+// `floor`: the scale at least, so that a surface whose values are rounding noise (a plane's H, a cylinder's K) comes
+// out white, not painted in full colour as if it were curved.
+double write_diverging(const std::filesystem::path& path, const Grid<float>& values, double floor) {
+  const double scale = std::max(robust_scale(values), floor);
   write_picture(path, values, [&](float v) { return diverging(v / scale); });
   return scale;
 }
@@ -131,6 +133,8 @@ int run_inspect(const InspectOptions& o) {
   if (from_depth && o.depth_map.empty()) throw std::invalid_argument("--from depth needs --depth-map");
   if (!from_depth && o.normal_map.empty()) throw std::invalid_argument("--from normal needs --normal-map");
   check_map_flags_have_their_map(o.maps, !o.normal_map.empty(), !o.depth_map.empty());
+  if (o.contours && o.depth_map.empty())
+    throw std::invalid_argument("--contours sets the contours of a depth map: give --depth-map, or leave it out");
   if (o.light.size() == 3 && !(light_length({o.light[0], o.light[1], o.light[2]}) > 0.0))
     throw CLI::ValidationError("--light", "must not be 0,0,0: give the direction toward the light");
 
@@ -145,8 +149,10 @@ int run_inspect(const InspectOptions& o) {
 
   const std::filesystem::path out = o.outdir;
   std::filesystem::create_directories(out);
-  const double k_scale = write_diverging(out / "K.png", p.curvature.gaussian);
-  const double h_scale = write_diverging(out / "H.png", p.curvature.mean);
+  // What the classes call planar sets the floors: a curvedness of planar_curvedness, and its square for K.
+  const double planar = p.tolerances.planar_curvedness;
+  const double k_scale = write_diverging(out / "K.png", p.curvature.gaussian, planar * planar);
+  const double h_scale = write_diverging(out / "H.png", p.curvature.mean, planar);
   write_picture(out / "class.png", p.classes, [](std::uint8_t c) { return kClassColours[c & 3]; });
   write_mask(out / "isophotes.png", p.isophotes);
   if (p.contours) {
@@ -158,7 +164,10 @@ int run_inspect(const InspectOptions& o) {
 
   fmt::print("{} x {} texels, curvature from the {} map ({}-bit), filter radius {}\n", p.width, p.height,
              from_depth ? "depth" : "normal", image.code_max == 0 ? 32 : p.bits, p.filter.radius);
-  fmt::print("K.png: K in 1/px^2, blue < 0 < red, full colour at +-{:.4g} (99th percentile of |K|)\n", k_scale);
+  fmt::print(
+      "K.png: K in 1/px^2, blue < 0 < red, full colour at +-{:.4g} (99th percentile of |K|, at least the planar "
+      "curvedness squared)\n",
+      k_scale);
   fmt::print("H.png: H in 1/px, blue < 0 < red (a bump is blue), full colour at +-{:.4g}\n", h_scale);
   fmt::print("class.png: planar below curvedness {:g} /px, parabolic below |k_small|/|k_large| {:g}\n",
              p.tolerances.planar_curvedness, p.tolerances.parabolic_ratio);
