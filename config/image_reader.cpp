@@ -1,10 +1,14 @@
 #include "config/image_reader.hpp"
 
+#include <fmt/format.h>
+
 #include <exception>
+#include <new>
 #include <string>
 #include <variant>
 
 #include "config/field_loader.hpp"
+#include "config/reader_sandbox.hpp"
 
 namespace ph {
 
@@ -18,8 +22,25 @@ image_wire::Answer serve_image_request(const image_wire::Request& request, const
     return read_image_size(std::get<image_wire::SizeRequest>(request).path, limits);
   } catch (const FieldError& e) {
     return image_wire::Failure{e.what()};
-  } catch (const std::exception& e) {  // e.g. std::bad_alloc under the memory limit
+  } catch (const std::bad_alloc&) {
+    return image_wire::Failure{reader_out_of_memory()};
+  } catch (const std::exception& e) {
     return image_wire::Failure{std::string("cannot read the image: ") + e.what()};
+  }
+}
+
+std::string reader_out_of_memory() {
+  return fmt::format(
+      "not enough memory to read it: the image reader may use {} GiB, which the region's fields and their copy for "
+      "the daemon (8 bytes a texel for the slopes, 4 for the heights) exceed; make the region smaller",
+      kReaderAddressSpaceBytes >> 30);
+}
+
+std::vector<std::byte> answer_image_request(const std::vector<std::byte>& request) {
+  try {
+    return image_wire::encode(serve_image_request(image_wire::decode_request(request)));
+  } catch (const std::bad_alloc&) {  // the answer's copy for the wire
+    return image_wire::encode(image_wire::Answer{image_wire::Failure{reader_out_of_memory()}});
   }
 }
 

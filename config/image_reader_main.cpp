@@ -22,9 +22,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pseudohaptic-image-reader: sandbox: %s\n", missed.c_str());
   try {
     std::vector<std::byte> bytes;
-    while (ph::image_wire::read_message(0, bytes))
-      ph::image_wire::write_message(
-          1, ph::image_wire::encode(ph::serve_image_request(ph::image_wire::decode_request(bytes))));
+    while (ph::image_wire::read_message(0, bytes)) ph::image_wire::write_message(1, ph::answer_image_request(bytes));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pseudohaptic-image-reader: %s\n", e.what());
     return 1;

@@ -212,7 +212,7 @@ std::vector<std::string> enter_reader_sandbox() {
     {RLIMIT_NOFILE, 64},
     {RLIMIT_CPU, 300},
 #if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
-    {RLIMIT_AS, rlim_t{8} << 30},
+    {RLIMIT_AS, rlim_t{kReaderAddressSpaceBytes}},
 #endif
   };
   for (const auto& [resource, value] : limits) {

@@ -3,6 +3,7 @@
 // names the file, never a crash of the asking process. Also the reader's sandbox itself.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -15,6 +16,7 @@
 #include <thread>
 
 #include "config/image_child.hpp"
+#include "config/image_reader.hpp"
 #include "config/image_wire.hpp"
 #include "config/reader_sandbox.hpp"
 #include "config/scene_file.hpp"
@@ -242,6 +244,52 @@ TEST(ImageChild, AReaderThatStopsInTheMiddleOfAnAnswerIsKilledAfterTheTimeout) {
 }
 
 // What a region asks for crosses as it is, each flag of FieldNeeds.
+// A region too large for the reader's memory is said as such, as an answer: the reader used to end on std::bad_alloc
+// while copying the fields for the wire, and the daemon could only say that it "ended without an answer".
+TEST(ImageChild, ARegionTooLargeForTheReadersMemoryIsSaidAsSuch) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  GTEST_SKIP() << "a sanitizer's shadow memory needs more address space than the limit this test sets";
+#else
+  const ScratchDir dir("image-child-memory");
+  const TargetSpec spec = small_target();
+  const SceneSpec scene = parse_scene_file(write_scene(dir.path(), spec));
+  image_wire::FieldsRequest request;
+  request.sources = scene.regions.at(0).sources;
+  request.width = request.height = kMaxRegionSide;  // 16384^2: 2 GiB of slopes, 1 GiB of heights
+  request.needs = {.gradient = true, .depth = true};
+  const std::vector<std::byte> asked = image_wire::encode(image_wire::Request{request});
+  int ends[2];
+  ASSERT_EQ(::pipe(ends), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // as the reader, under a lower limit than its 8 GiB
+    ::close(ends[0]);
+    const rlimit limit{rlim_t{1} << 30, rlim_t{1} << 30};
+    char verdict = 'l';
+    if (::setrlimit(RLIMIT_AS, &limit) == 0) {
+      verdict = 'x';
+      try {
+        const image_wire::Answer answer =
+            image_wire::decode_answer(answer_image_request(asked), image_wire::Request{request});
+        const auto* failure = std::get_if<image_wire::Failure>(&answer);
+        verdict = failure == nullptr                                                           ? 'a'
+                  : failure->message.find("not enough memory to read it") != std::string::npos ? 'y'
+                                                                                               : 'm';
+      } catch (...) {
+      }
+    }
+    (void)!::write(ends[1], &verdict, 1);
+    ::_exit(0);
+  }
+  ::close(ends[1]);
+  char verdict = '?';
+  (void)!::read(ends[0], &verdict, 1);
+  ::close(ends[0]);
+  ::waitpid(child, nullptr, 0);
+  EXPECT_EQ(verdict, 'y') << "l: no limit; x: threw; a: answered with fields; m: another failure";
+#endif
+}
+
 TEST(ImageWire, RequestsCarryEveryNeed) {
   for (const FieldNeeds needs : {FieldNeeds{true, false, false}, FieldNeeds{false, true, false},
                                  FieldNeeds{true, false, true}, FieldNeeds{true, true, true}}) {
