@@ -2,7 +2,10 @@
 // then answers requests on stdin (config/image_wire.hpp) until stdin ends: reads, decodes and resamples
 // a region's maps through the image module, or reads an image's size, and writes the answer to stdout.
 // Not meant to be run by hand. docs/SERVICE.md, "Images".
+#include <sys/prctl.h>
 #include <unistd.h>
+
+#include <csignal>
 
 #include <cstdio>
 #include <exception>
@@ -18,6 +21,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: pseudohapticd's image reader, started by the daemon; not for use by hand\n", argv[0]);
     return 2;
   }
+  // Ends with the daemon's thread that started it: a daemon that stops during a load does not wait for it.
+  const pid_t parent = ::getppid();
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+  if (::getppid() != parent) return 1;  // gone already, before the line above took effect
   for (const std::string& missed : ph::enter_reader_sandbox())
     std::fprintf(stderr, "pseudohaptic-image-reader: sandbox: %s\n", missed.c_str());
   try {

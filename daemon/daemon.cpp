@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <pthread.h>
 #include <sys/epoll.h>
 #include <sys/eventfd.h>
 #include <sys/signalfd.h>
@@ -13,8 +14,10 @@
 #include <cerrno>
 #include <csignal>
 #include <cstring>
+#include <future>
 #include <string>
 #include <string_view>
+#include <thread>
 
 #include "config/scene_file.hpp"
 #include "core/engine/default_scene.hpp"
@@ -87,11 +90,35 @@ void block_daemon_signals() {
   ::sigprocmask(SIG_BLOCK, &set, nullptr);  // fails only for an invalid `how`
 }
 
-Daemon::Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& notifier, const std::string& control_path)
+std::optional<Configuration> load_until_stopped(const ConfigChoice& choice, const Logger& log) {
+  // Shared with the thread, which may outlive this function.
+  auto load = std::make_shared<std::packaged_task<Configuration()>>([choice] { return load_configuration(choice); });
+  std::future<Configuration> loaded = load->get_future();
+  std::thread worker([load] { (*load)(); });
+  ::pthread_setname_np(worker.native_handle(), "ph-scene-load");
+  sigset_t stop;
+  sigemptyset(&stop);
+  sigaddset(&stop, SIGTERM);
+  sigaddset(&stop, SIGINT);
+  const timespec tick{0, 50'000'000};  // how often the load is looked at: at most this much later a start
+  while (loaded.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+    const int signal = ::sigtimedwait(&stop, nullptr, &tick);
+    if (signal == SIGTERM || signal == SIGINT) {
+      log.info("{} received while the scene loads; stopping", signal == SIGTERM ? "SIGTERM" : "SIGINT");
+      worker.detach();
+      return std::nullopt;
+    }
+  }
+  worker.join();
+  return loaded.get();
+}
+
+Daemon::Daemon(ConfigChoice choice, Configuration loaded, const Logger& log, const ServiceNotifier& notifier,
+               const std::string& control_path)
     : choice_(std::move(choice)),
       log_(log),
       notifier_(notifier),
-      config_(load_configuration(choice_)),
+      config_(std::move(loaded)),
       reloader_([choice = choice_] { return load_configuration(choice); }) {
   log_notes(config_);
   // Without /dev/uinput there is nothing to emit through: say so now rather than at the first mouse.
@@ -207,6 +234,13 @@ void Daemon::take_present_mice() {
   const std::lock_guard lock(state_);
   notifier_.stopping();
   let_go_of_all("stopping");
+  if (reloader_.loading()) {
+    stopped_during_a_load_ = true;
+    retired_.wait_until_empty();  // the releases read, the virtual devices gone
+    control_.reset();             // the socket removed
+    log_.info("stopped (the scene load under way is not waited for)");
+    return 0;
+  }
   log_.info("stopped");
   return 0;
 }

@@ -37,18 +37,29 @@ class StartupError : public std::runtime_error {
 // thing in main: a SIGHUP during a long start-up must not kill the daemon.
 void block_daemon_signals();
 
+// The first load of the configuration, on a thread of its own, while this thread waits for SIGTERM or SIGINT (blocked
+// by block_daemon_signals): nullopt when one comes first (logged), and the caller ends the process (std::_Exit) rather
+// than wait for the load, which may take long (a large image) or for ever (a FIFO named as the scene file). SIGHUP
+// stays pending: the event loop reloads at its start. Throws what the load throws (ConfigError).
+std::optional<Configuration> load_until_stopped(const ConfigChoice& choice, const Logger& log);
+
 class Daemon final : private ControlHandler {
  public:
-  // Loads the configuration and takes the mice present now. Expects block_daemon_signals() to have run.
-  // Throws StartupError, ConfigError or UdevError with a message for the user. `control_path`: where
-  // the control socket listens ("" for none); a socket that cannot be made is logged, not fatal.
-  Daemon(ConfigChoice choice, const Logger& log, const ServiceNotifier& notifier, const std::string& control_path);
+  // Takes the mice present now, with `loaded`, the configuration `choice` names (load_until_stopped). Expects
+  // block_daemon_signals() to have run. Throws StartupError or UdevError with a message for the user. `control_path`:
+  // where the control socket listens ("" for none); a socket that cannot be made is logged, not fatal.
+  Daemon(ConfigChoice choice, Configuration loaded, const Logger& log, const ServiceNotifier& notifier,
+         const std::string& control_path);
   ~Daemon();
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
 
   // Runs until SIGTERM or SIGINT; then lets go of every mouse. Returns the exit status.
   int run();
+  // After run(): a reload's load was under way at the stop. It may take long yet (a large image, a FIFO named as the
+  // scene file), and destroying the daemon would wait for it: the caller ends the process instead (std::_Exit), run()
+  // having done what must be done before (mice let go of, virtual devices gone, the control socket removed).
+  bool stopped_during_a_load() const { return stopped_during_a_load_; }
 
  private:
   // A mouse the daemon has opened: waiting for its buttons to be released or for another program's grab to
@@ -139,7 +150,8 @@ class Daemon final : private ControlHandler {
   LogindSessions sessions_;
   SceneReloader reloader_;  // SIGHUP's load, on a worker thread
   SteadyTime reload_started_{};
-  bool reload_failed_ = false;  // the last reload's load failed: said in the status line until one succeeds
+  bool reload_failed_ = false;
+  bool stopped_during_a_load_ = false;  // the last reload's load failed: said in the status line until one succeeds
   std::unique_ptr<ControlServer> control_;
   // Resync: pointers the daemon does not take, watched without a grab; the pixels it emitted lately (a
   // helper's report of one of those is the daemon's own motion, not a warp); when its mice last moved.

@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include <CLI/CLI.hpp>
+#include <cstdlib>
 #include <exception>
 #include <optional>
 #include <string>
@@ -54,8 +55,15 @@ int main(int argc, char** argv) {
   choice.default_scene = default_scene;
   choice.default_file = std::string(ph::kDefaultSceneFile);
   try {
-    ph::Daemon daemon(choice, log, notifier, control);
-    return daemon.run();
+    std::optional<ph::Configuration> loaded = ph::load_until_stopped(choice, log);
+    if (!loaded) {  // SIGTERM or SIGINT during the load: nothing taken yet, nothing to let go of
+      notifier.stopping();
+      std::_Exit(0);
+    }
+    ph::Daemon daemon(choice, std::move(*loaded), log, notifier, control);
+    const int status = daemon.run();
+    if (daemon.stopped_during_a_load()) std::_Exit(status);  // not waiting for the load (daemon/daemon.hpp)
+    return status;
   } catch (const std::exception& e) {
     log.error("{}", e.what());
     notifier.status(std::string("failed: ") + e.what());

@@ -2,6 +2,7 @@
 // that neither can gain an option the other does not show.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "tests/file_bytes.hpp"
+#include "tests/scratch_dir.hpp"
 
 namespace {
 
@@ -135,6 +137,30 @@ TEST(ManPages, TheDaemonRefusesAnEmptySceneFilePathAsTheCommandLineErrorItIs) {
   EXPECT_LE(WEXITSTATUS(status), 127) << out;
   EXPECT_NE(out.find("--config: an empty path"), std::string::npos) << out;
   EXPECT_EQ(out.find("default scene"), std::string::npos) << out;
+}
+
+// pseudohapticd(8): SIGTERM and SIGINT end the daemon, also while its scene loads: it waited for the load (seconds
+// for a large image, for ever for a FIFO named as the scene file), as systemd's stop timeout ran out.
+TEST(ManPages, TheDaemonStopsOnSigtermWhileItsSceneLoads) {
+  const ph::ScratchDir dir("daemon-fifo");
+  const std::string fifo = (dir / "scene.toml").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const char* signal : {"TERM", "INT"}) {
+    SCOPED_TRACE(signal);
+    // No writer ever opens the FIFO: the load waits in open(). The shell measures how long the daemon takes to go.
+    const std::string command = fmt::format(
+        "'{}' -c '{}' --control '' 2>&1 & pid=$!; sleep 0.3; start=$(date +%s%N); kill -{} $pid; "
+        "( sleep 10; kill -KILL $pid ) >/dev/null 2>&1 & guard=$!; wait $pid; rc=$?; kill $guard 2>/dev/null; "
+        "echo \"rc=$rc ms=$(( ($(date +%s%N) - start) / 1000000 ))\"",
+        PH_DAEMON_PATH, fifo, signal);
+    const std::string out = output_of(command);
+    EXPECT_NE(out.find("rc=0 "), std::string::npos) << out;
+    EXPECT_NE(out.find(fmt::format("SIG{} received while the scene loads; stopping", signal)), std::string::npos)
+        << out;
+    const std::size_t ms_at = out.find("ms=");
+    ASSERT_NE(ms_at, std::string::npos) << out;
+    EXPECT_LT(std::stol(out.substr(ms_at + 3)), 5000) << out;
+  }
 }
 
 TEST(ManPages, TheDaemonsPageNamesEveryOption) { expect_page_names_every_option(PH_DAEMON_PATH, PH_DAEMON_MAN_PAGE); }
