@@ -124,17 +124,27 @@ TEST(ManPages, EveryProgramAndPageCarriesTheProjectsVersion) {
 
 // pseudohapticd(8): a command-line error exits with 100 to 127 before anything starts. `-c ""` (a drop-in whose
 // variable is unset) is one: it used to run the default scene file or the embedded scene without a word.
-TEST(ManPages, TheDaemonRefusesAnEmptySceneFilePathAsTheCommandLineErrorItIs) {
-  // Under a time limit: a daemon that took the empty path would run until a signal (and, as root, take the mice).
-  FILE* pipe = ::popen(fmt::format("timeout -s KILL 10 '{}' -c '' --control '' 2>&1", PH_DAEMON_PATH).c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
+// Runs `command` (standard error with standard output) under a time limit, since a program that took what it should
+// refuse would run until a signal, and expects it to exit as a command-line error does (100 to 127); its output.
+std::string expect_command_line_error(const std::string& command) {
+  FILE* pipe = ::popen(fmt::format("timeout -s KILL 10 {} </dev/null 2>&1", command).c_str(), "r");
+  if (pipe == nullptr) {
+    ADD_FAILURE() << "popen failed: " << command;
+    return "";
+  }
   std::string out;
   std::array<char, 4096> buffer{};
   while (const std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
   const int status = ::pclose(pipe);
-  ASSERT_TRUE(WIFEXITED(status)) << out;
-  EXPECT_GE(WEXITSTATUS(status), 100) << out;
-  EXPECT_LE(WEXITSTATUS(status), 127) << out;
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) >= 100 && WEXITSTATUS(status) <= 127)
+      << command << ": exit status " << status << "\n"
+      << out;
+  return out;
+}
+
+TEST(ManPages, TheDaemonRefusesAnEmptySceneFilePathAsTheCommandLineErrorItIs) {
+  // (A daemon that took the empty path would, as root, take the mice.)
+  const std::string out = expect_command_line_error(fmt::format("'{}' -c '' --control ''", PH_DAEMON_PATH));
   EXPECT_NE(out.find("--config: an empty path"), std::string::npos) << out;
   EXPECT_EQ(out.find("default scene"), std::string::npos) << out;
 }
@@ -170,16 +180,7 @@ TEST(ManPages, TheDaemonsPageNamesEveryOption) { expect_page_names_every_option(
 // leaves it, or longer than a socket's path may be) is a command-line error, not a daemon to wait for for ever.
 TEST(ManPages, TheSessionHelperRefusesASocketPathThatCannotBeAsTheCommandLineErrorItIs) {
   for (const std::string& path : {std::string(), "/tmp/" + std::string(110, 'a')}) {
-    FILE* pipe = ::popen(
-        fmt::format("timeout -s KILL 10 '{}' --control '{}' </dev/null 2>&1", PH_SESSION_PATH, path).c_str(), "r");
-    ASSERT_NE(pipe, nullptr);
-    std::string out;
-    std::array<char, 4096> buffer{};
-    while (const std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
-    const int status = ::pclose(pipe);
-    ASSERT_TRUE(WIFEXITED(status)) << out;
-    EXPECT_GE(WEXITSTATUS(status), 100) << out;
-    EXPECT_LE(WEXITSTATUS(status), 127) << out;
+    const std::string out = expect_command_line_error(fmt::format("'{}' --control '{}'", PH_SESSION_PATH, path));
     EXPECT_NE(out.find("--control: is "), std::string::npos) << out;
   }
 }
