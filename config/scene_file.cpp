@@ -1,6 +1,8 @@
 #include "config/scene_file.hpp"
 
 #include <fmt/format.h>
+#include <grp.h>
+#include <sys/stat.h>
 
 #include <toml++/toml.h>
 
@@ -675,6 +677,39 @@ std::string service_hint(const std::filesystem::path& path) {
 
 }  // namespace
 
+namespace {
+
+// `path` (absolute) with the links on it followed as far as they can be read: reading a link needs no access to where
+// it leads (under the service, a hidden folder cannot be entered, and canonical() fails there), and a name that cannot
+// be looked at ends the walk, the rest taken as written.
+std::filesystem::path follow_links(std::filesystem::path path) {
+  for (int hops = 0; hops < 40; ++hops) {  // as the kernel's limit on links in one lookup
+    std::filesystem::path walked = path.root_path();
+    const std::filesystem::path relative = path.relative_path();
+    bool followed = false;
+    for (auto it = relative.begin(); it != relative.end() && !followed; ++it) {
+      const std::filesystem::path next = walked / *it;
+      std::error_code error;
+      if (std::filesystem::symlink_status(next, error).type() != std::filesystem::file_type::symlink || error) {
+        walked = next;
+        continue;
+      }
+      const std::filesystem::path target = std::filesystem::read_symlink(next, error);
+      if (error) return path;
+      std::filesystem::path rest;
+      for (auto r = std::next(it); r != relative.end(); ++r) rest /= *r;
+      path = (target.is_absolute() ? target : walked / target);
+      if (!rest.empty()) path /= rest;
+      path = path.lexically_normal();
+      followed = true;
+    }
+    if (!followed) return path;
+  }
+  return path;
+}
+
+}  // namespace
+
 std::optional<HiddenFolder> hidden_from_the_service(const std::filesystem::path& path) {
   static constexpr std::array<HiddenFolder, 5> kHidden = {{{"/home", "ProtectHome=yes"},
                                                            {"/root", "ProtectHome=yes"},
@@ -684,9 +719,7 @@ std::optional<HiddenFolder> hidden_from_the_service(const std::filesystem::path&
   std::error_code ignored;
   const std::filesystem::path normal = std::filesystem::absolute(path, ignored).lexically_normal();
   // And where its links lead: a link outside the folders that points into one is as hidden.
-  std::error_code unresolved;
-  const std::filesystem::path resolved = std::filesystem::weakly_canonical(normal, unresolved);
-  for (const std::filesystem::path& where : {normal, unresolved ? normal : resolved}) {
+  for (const std::filesystem::path& where : {normal, follow_links(normal)}) {
     for (const HiddenFolder& hidden : kHidden) {
       const std::filesystem::path inside = where.lexically_relative(std::filesystem::path(hidden.folder));
       if (!inside.empty() && *inside.begin() != "..") return hidden;
@@ -695,21 +728,51 @@ std::optional<HiddenFolder> hidden_from_the_service(const std::filesystem::path&
   return std::nullopt;
 }
 
-std::optional<std::string> unreadable_by_others(const std::filesystem::path& path) {
+namespace {
+
+// Whether the service's user may use a file or folder of this status for `need` (others_read, others_exec): as
+// anyone else, or through its groups (pseudohapticd.service: SupplementaryGroups=input uinput).
+bool service_may(const std::filesystem::path& path, const std::filesystem::file_status& status,
+                 std::filesystem::perms need_as_others, std::filesystem::perms need_as_group) {
+  using std::filesystem::perms;
+  if ((status.permissions() & need_as_others) != perms::none) return true;
+  if ((status.permissions() & need_as_group) == perms::none) return false;
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return false;
+  for (const char* name : {"input", "uinput"}) {
+    if (const ::group* g = ::getgrnam(name); g != nullptr && g->gr_gid == st.st_gid) return true;
+  }
+  return false;
+}
+
+// The first folder above `file` that the service's user may not enter, and its mode.
+std::optional<std::string> closed_folder_above(const std::filesystem::path& file) {
   std::error_code error;
-  const std::filesystem::path file = std::filesystem::absolute(path, error).lexically_normal();
-  const std::filesystem::file_status status = std::filesystem::status(file, error);
-  if (error || !std::filesystem::is_regular_file(status)) return std::nullopt;  // missing: the load says so
-  if ((status.permissions() & std::filesystem::perms::others_read) == std::filesystem::perms::none)
-    return fmt::format("its mode {:o} does not let others read it",
-                       static_cast<unsigned>(status.permissions() & std::filesystem::perms::mask));
   for (std::filesystem::path folder = file.parent_path(); !folder.empty(); folder = folder.parent_path()) {
     const std::filesystem::file_status s = std::filesystem::status(folder, error);
-    if (!error && (s.permissions() & std::filesystem::perms::others_exec) == std::filesystem::perms::none)
+    if (!error && !service_may(folder, s, std::filesystem::perms::others_exec, std::filesystem::perms::group_exec))
       return fmt::format("the folder {} (mode {:o}) does not let others through", folder.string(),
                          static_cast<unsigned>(s.permissions() & std::filesystem::perms::mask));
     if (folder == folder.root_path()) break;
   }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<std::string> unreadable_by_others(const std::filesystem::path& path) {
+  std::error_code error;
+  const std::filesystem::path file = std::filesystem::absolute(path, error).lexically_normal();
+  const std::filesystem::file_status status = std::filesystem::status(file, error);  // through links
+  if (error || !std::filesystem::is_regular_file(status)) return std::nullopt;       // missing: the load says so
+  if (!service_may(file, status, std::filesystem::perms::others_read, std::filesystem::perms::group_read))
+    return fmt::format("its mode {:o} does not let others read it",
+                       static_cast<unsigned>(status.permissions() & std::filesystem::perms::mask));
+  // The folders on the path as written, and on the path its links lead to.
+  if (std::optional<std::string> closed = closed_folder_above(file)) return closed;
+  std::error_code unresolved;
+  const std::filesystem::path resolved = std::filesystem::canonical(file, unresolved);
+  if (!unresolved && resolved != file) return closed_folder_above(resolved);
   return std::nullopt;
 }
 

@@ -150,8 +150,8 @@ class Daemon final : private ControlHandler {
   LogindSessions sessions_;
   SceneReloader reloader_;  // SIGHUP's load, on a worker thread
   SteadyTime reload_started_{};
-  bool reload_failed_ = false;
-  bool stopped_during_a_load_ = false;  // the last reload's load failed: said in the status line until one succeeds
+  bool reload_failed_ = false;          // the last reload's load failed: said in the status line until one succeeds
+  bool stopped_during_a_load_ = false;  // run() ended with a reload's load under way
   std::unique_ptr<ControlServer> control_;
   // Resync: pointers the daemon does not take, watched without a grab; the pixels it emitted lately (a
   // helper's report of one of those is the daemon's own motion, not a warp); when its mice last moved.

@@ -58,6 +58,7 @@ int main(int argc, char** argv) {
     std::optional<ph::Configuration> loaded = ph::load_until_stopped(choice, log);
     if (!loaded) {  // SIGTERM or SIGINT during the load: nothing taken yet, nothing to let go of
       notifier.stopping();
+      log.info("stopped (the scene load under way is not waited for)");
       std::_Exit(0);
     }
     ph::Daemon daemon(choice, std::move(*loaded), log, notifier, control);

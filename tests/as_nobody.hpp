@@ -3,6 +3,7 @@
 // comes back through a pipe.
 #pragma once
 
+#include <grp.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -19,7 +20,8 @@ inline int as_nobody(const std::function<int()>& check) {
   if (child == 0) {
     ::close(ends[0]);
     int result = -1;
-    if (::setgid(65534) == 0 && ::setuid(65534) == 0) {
+    // Without root's supplementary groups (gid 0 among them): nobody's own only.
+    if (::setgroups(0, nullptr) == 0 && ::setgid(65534) == 0 && ::setuid(65534) == 0) {
       try {
         result = check();
       } catch (...) {

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <grp.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -28,6 +29,7 @@
 #include "core/engine/method_depth.hpp"
 #include "core/engine/method_hybrid.hpp"
 #include "core/engine/targets.hpp"
+#include "tests/as_nobody.hpp"
 #include "tests/file_bytes.hpp"
 #include "tests/scoped_env.hpp"
 #include "tests/scratch_dir.hpp"
@@ -458,14 +460,31 @@ TEST(SceneFileErrors, AnEmptyMapPathOrAFolderIsSaidAsSuch) {
 // umask of 077), or one in a folder others may not enter. Said, with the key's line.
 TEST(SceneFileErrors, FilesOthersCannotReadAreWarnedOf) {
   const ScratchDir dir("scene-private");
-  namespace perms = std::filesystem;
-  std::filesystem::permissions(dir.path(), perms::perms::owner_all | perms::perms::others_exec);
+  using std::filesystem::perms;
+  std::filesystem::permissions(dir.path(), perms::owner_all | perms::others_exec);
   std::filesystem::create_directories(dir / "private");
-  std::filesystem::permissions(dir / "private", perms::perms::owner_all);
+  std::filesystem::permissions(dir / "private", perms::owner_all);
   for (const char* name : {"private/n.png", "private/scene.toml", "mine.png", "open.png"})
     std::ofstream(dir / name) << "x";
-  std::filesystem::permissions(dir / "mine.png", perms::perms::owner_read | perms::perms::owner_write);
-  EXPECT_FALSE(unreadable_by_others(dir / "open.png").has_value()) << *unreadable_by_others(dir / "open.png");
+  std::filesystem::permissions(dir / "mine.png", perms::owner_read | perms::owner_write);
+  // The folders above the scratch folder are the machine's: open.png is readable where they all let others through.
+  bool above_open = true;
+  for (fs::path f = dir.path().parent_path(); !f.empty(); f = f.parent_path()) {
+    above_open = above_open && (fs::status(f).permissions() & perms::others_exec) != perms::none;
+    if (f == f.root_path()) break;
+  }
+  EXPECT_EQ(unreadable_by_others(dir / "open.png").has_value(), !above_open);
+  // Reached through a link, the folders its target lies in count too.
+  fs::create_symlink(dir / "private/scene.toml", dir / "link.toml");
+  ASSERT_TRUE(unreadable_by_others(dir / "link.toml").has_value());
+  EXPECT_TRUE(contains(*unreadable_by_others(dir / "link.toml"), "the folder " + (dir / "private").string()));
+  // The service's groups (SupplementaryGroups=input uinput) read what they own.
+  if (const ::group* input = ::getgrnam("input")) {
+    std::ofstream(dir / "input.png") << "x";
+    ASSERT_EQ(::chown((dir / "input.png").c_str(), static_cast<uid_t>(-1), input->gr_gid), 0);
+    std::filesystem::permissions(dir / "input.png", perms::owner_read | perms::owner_write | perms::group_read);
+    EXPECT_EQ(unreadable_by_others(dir / "input.png").has_value(), !above_open);
+  }
   ASSERT_TRUE(unreadable_by_others(dir / "mine.png").has_value());
   EXPECT_TRUE(contains(*unreadable_by_others(dir / "mine.png"), "its mode 600 does not let others read it"));
   ASSERT_TRUE(unreadable_by_others(dir / "private/n.png").has_value());
@@ -597,6 +616,18 @@ TEST(SceneFileErrors, FilesTheServiceCannotReadAreWarnedOfAndNamedWhenMissing) {
     EXPECT_EQ(folder(readable), "readable") << readable;
   // A link outside the hidden folders that leads into one: /proc/self/root is a link to /.
   EXPECT_EQ(folder("/proc/self/root/tmp/ph-test-maps/n.png"), "/tmp PrivateTmp=yes");
+  // Also where the link's target cannot be entered (as under the service, to which the folder is hidden): the link
+  // itself is read, not where it leads.
+  const ScratchDir dir("scene-hidden-link");
+  std::filesystem::create_directories(dir / "private");
+  std::filesystem::permissions(dir.path(), std::filesystem::perms::all);
+  std::filesystem::permissions(dir / "private", std::filesystem::perms::owner_all);
+  std::ofstream(dir / "private/n.png") << "x";
+  const std::optional<HiddenFolder> direct = hidden_from_the_service(dir / "private/n.png");
+  const std::string through_link = "/proc/self/root" + (dir / "private/n.png").string();
+  if (::getuid() != 0) std::filesystem::permissions(dir / "private", std::filesystem::perms::none);
+  EXPECT_EQ(as_nobody([&] { return hidden_from_the_service(through_link) == direct ? 1 : 0; }), 1);
+  std::filesystem::permissions(dir / "private", std::filesystem::perms::owner_all);
 
   const std::string missing_home = "/home/ph-test-no-such-user/maps";
   const SceneSpec spec = parse_scene_text(
