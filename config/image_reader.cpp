@@ -36,12 +36,16 @@ std::string reader_out_of_memory() {
       kReaderAddressSpaceBytes >> 30);
 }
 
-std::vector<std::byte> answer_image_request(const std::vector<std::byte>& request) {
+std::vector<std::byte> encode_answer(const image_wire::Answer& answer) {
   try {
-    return image_wire::encode(serve_image_request(image_wire::decode_request(request)));
+    return image_wire::encode(answer);
   } catch (const std::bad_alloc&) {  // the answer's copy for the wire
     return image_wire::encode(image_wire::Answer{image_wire::Failure{reader_out_of_memory()}});
   }
+}
+
+std::vector<std::byte> answer_image_request(const std::vector<std::byte>& request) {
+  return encode_answer(serve_image_request(image_wire::decode_request(request)));
 }
 
 }  // namespace ph

@@ -18,6 +18,9 @@ image_wire::Answer serve_image_request(const image_wire::Request& request, const
 // past the reader's address space) it is a Failure that says so, not the end of the reader.
 std::vector<std::byte> answer_image_request(const std::vector<std::byte>& request);
 
+// `answer` encoded for the wire; out of memory for the copy, a Failure that says so.
+std::vector<std::byte> encode_answer(const image_wire::Answer& answer);
+
 // What a Failure says when the reader ran out of memory.
 std::string reader_out_of_memory();
 

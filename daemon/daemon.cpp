@@ -86,9 +86,6 @@ sigset_t daemon_signals() {
 }  // namespace
 
 void block_daemon_signals() {
-  // An ignored signal is discarded, never pending: started under nohup (SIGHUP ignored) or as a shell's background job
-  // (SIGINT ignored), the signalfd would never see it. Their default action, then blocked, makes them wait for it.
-  for (const int s : {SIGTERM, SIGINT, SIGHUP}) ::signal(s, SIG_DFL);
   const sigset_t set = daemon_signals();
   ::sigprocmask(SIG_BLOCK, &set, nullptr);  // fails only for an invalid `how`
 }

@@ -12,6 +12,8 @@
 #include <cerrno>
 #include <cmath>
 #include <fstream>
+#include <functional>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -243,9 +245,53 @@ TEST(ImageChild, AReaderThatStopsInTheMiddleOfAnAnswerIsKilledAfterTheTimeout) {
   EXPECT_NE(message.find("not complete in time"), std::string::npos) << message;
 }
 
-// What a region asks for crosses as it is, each flag of FieldNeeds.
-// A region too large for the reader's memory is said as such, as an answer: the reader used to end on std::bad_alloc
-// while copying the fields for the wire, and the daemon could only say that it "ended without an answer".
+// Runs `check` in a child process whose address space is limited to what it uses now plus `headroom` (the reader's
+// own limit is 8 GiB, more than a test should take), after `before` ran there unlimited; its one-letter verdict.
+char under_memory_limit(std::size_t headroom, const std::function<void()>& before, const std::function<char()>& check) {
+  int ends[2];
+  if (::pipe(ends) != 0) return 'p';
+  const pid_t child = ::fork();
+  if (child < 0) return 'f';
+  if (child == 0) {
+    ::close(ends[0]);
+    char verdict = 'l';
+    try {
+      before();
+      std::ifstream status("/proc/self/status");
+      std::size_t vm_kib = 0;
+      for (std::string key; status >> key;) {
+        if (key == "VmSize:") {
+          status >> vm_kib;
+          break;
+        }
+      }
+      const rlim_t limit = static_cast<rlim_t>(vm_kib) * 1024 + headroom;
+      const rlimit rl{limit, limit};
+      if (vm_kib > 0 && ::setrlimit(RLIMIT_AS, &rl) == 0) verdict = check();
+    } catch (...) {
+      verdict = 'x';
+    }
+    (void)!::write(ends[1], &verdict, 1);
+    ::_exit(0);
+  }
+  ::close(ends[1]);
+  char verdict = '?';
+  (void)!::read(ends[0], &verdict, 1);
+  ::close(ends[0]);
+  ::waitpid(child, nullptr, 0);
+  return verdict;
+}
+
+// 'y' when `answer` is a Failure that says the reader ran out of memory.
+char out_of_memory_verdict(const image_wire::Answer& answer) {
+  const auto* failure = std::get_if<image_wire::Failure>(&answer);
+  if (failure == nullptr) return 'a';
+  return failure->message.find("not enough memory to read it") != std::string::npos ? 'y' : 'm';
+}
+
+// A region too large for the reader's memory is said as such, as an answer, whether the reading runs out (the fields)
+// or the answer's copy for the wire does: the reader used to end on std::bad_alloc there, and the daemon could only
+// say that it "ended without an answer".
 TEST(ImageChild, ARegionTooLargeForTheReadersMemoryIsSaidAsSuch) {
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
   GTEST_SKIP() << "a sanitizer's shadow memory needs more address space than the limit this test sets";
@@ -258,35 +304,30 @@ TEST(ImageChild, ARegionTooLargeForTheReadersMemoryIsSaidAsSuch) {
   request.width = request.height = kMaxRegionSide;  // 16384^2: 2 GiB of slopes, 1 GiB of heights
   request.needs = {.gradient = true, .depth = true};
   const std::vector<std::byte> asked = image_wire::encode(image_wire::Request{request});
-  int ends[2];
-  ASSERT_EQ(::pipe(ends), 0);
-  const pid_t child = ::fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {  // as the reader, under a lower limit than its 8 GiB
-    ::close(ends[0]);
-    const rlimit limit{rlim_t{1} << 30, rlim_t{1} << 30};
-    char verdict = 'l';
-    if (::setrlimit(RLIMIT_AS, &limit) == 0) {
-      verdict = 'x';
-      try {
-        const image_wire::Answer answer =
-            image_wire::decode_answer(answer_image_request(asked), image_wire::Request{request});
-        const auto* failure = std::get_if<image_wire::Failure>(&answer);
-        verdict = failure == nullptr                                                           ? 'a'
-                  : failure->message.find("not enough memory to read it") != std::string::npos ? 'y'
-                                                                                               : 'm';
-      } catch (...) {
-      }
-    }
-    (void)!::write(ends[1], &verdict, 1);
-    ::_exit(0);
-  }
-  ::close(ends[1]);
-  char verdict = '?';
-  (void)!::read(ends[0], &verdict, 1);
-  ::close(ends[0]);
-  ::waitpid(child, nullptr, 0);
-  EXPECT_EQ(verdict, 'y') << "l: no limit; x: threw; a: answered with fields; m: another failure";
+  const char reading = under_memory_limit(
+      std::size_t{256} << 20, [] {},
+      [&] {
+        return out_of_memory_verdict(
+            image_wire::decode_answer(answer_image_request(asked), image_wire::Request{request}));
+      });
+  EXPECT_EQ(reading, 'y') << "l: no limit; x: threw; a: answered with fields; m: another failure";
+
+  // An answer of 512 MiB of slopes made before the limit, which leaves no room for its copy for the wire.
+  image_wire::FieldsRequest slopes;
+  slopes.width = slopes.height = 8192;
+  slopes.needs = {.gradient = true};
+  std::optional<image_wire::Answer> answer;
+  const char encoding = under_memory_limit(
+      std::size_t{256} << 20,
+      [&] {
+        image_wire::FieldsAnswer made;
+        made.fields.gradient.emplace(8192, 8192);
+        answer.emplace(std::move(made));
+      },
+      [&] {
+        return out_of_memory_verdict(image_wire::decode_answer(encode_answer(*answer), image_wire::Request{slopes}));
+      });
+  EXPECT_EQ(encoding, 'y') << "l: no limit; x: threw; a: answered with fields; m: another failure";
 #endif
 }
 
