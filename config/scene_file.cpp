@@ -908,11 +908,7 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
     if (!method_needs.reads_depth(true)) region.fields.depth.reset();
     std::string variant = label_of(spec.daemon.engine) + " (the [daemon] table's)";
     if (r.engine_auto) {
-      VariantChoice choice = choose_variant(region, {r.accuracy_px});
-      choice.options.sampling = r.engine->sampling;
-      choice.options.lut_directions = r.engine->lut_directions;
-      region.options = choice.options;
-      variant = "auto: " + choice.reason;
+      variant = "auto";  // chosen below, once the scene has prepared the region
     } else if (r.engine) {
       region.options = r.engine;
       variant = label_of(*r.engine) + " (set in the region)";
@@ -924,6 +920,18 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
     regions.push_back(std::move(region));
   }
   Scene scene(std::move(regions));
+  // traversal = "auto" looks at each region as its method prepared it: before, a hybrid region's step marks did not
+  // exist yet, and auto took its steps' C/D for curvature's on flat normals.
+  for (std::size_t i = 0; i < spec.regions.size(); ++i) {
+    const RegionSpec& r = spec.regions[i];
+    if (!r.engine_auto) continue;
+    VariantChoice choice = choose_variant(scene.regions()[i], {r.accuracy_px});
+    choice.options.sampling = r.engine->sampling;
+    choice.options.lut_directions = r.engine->lut_directions;
+    scene.set_region_options(i, choice.options);
+    if (report != nullptr)
+      report->variants.at(report->variants.size() - spec.regions.size() + i) = "auto: " + choice.reason;
+  }
   scene.set_options(spec.daemon.engine);  // builds what the variant precomputes (direction tables), only then
   return scene;
 }

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "config/image_io.hpp"
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
 #include "core/engine/direction_lut.hpp"
@@ -184,6 +185,26 @@ TEST(RegionOptions, SceneFileSetsThemPerRegionAndAutoChoosesAtLoad) {
   EXPECT_EQ(report.variants[1].rfind("auto: exact", 0), 0u) << report.variants[1];
   EXPECT_EQ(report.variants[2], "direction_lut8 (set in the region)");
   EXPECT_EQ(report.variants[3], "exact (the [daemon] table's)");
+}
+
+// A hybrid region's steps are found when the scene prepares it: auto must look at the region after that. Before, it
+// saw curvature on flat normals, chose the cheap walk, and the step (C/D 0.67 to 4 with the exact walk) was not felt.
+TEST(RegionOptions, AutoSeesAHybridRegionsSteps) {
+  const ScratchDir dir("variant-choice-hybrid");
+  write_normal_png16(dir / "flat.normal.png", NormalImage(64, 64));
+  Grid<float> block(64, 64, 0.25f);
+  for (int y = 16; y < 48; ++y)
+    for (int x = 16; x < 48; ++x) block.at(x, y) = 0.75f;
+  write_gray_png16(dir / "block.depth.png", block);
+  const SceneSpec spec = parse_scene_file(
+      write_scene(dir.path(),
+                  "[[region]]\nwidth = 64\nheight = 64\nmethod = \"hybrid\"\nnormal_map = \"flat.normal.png\"\n"
+                  "depth_map = \"block.depth.png\"\nrelief_px = 16\ntraversal = \"auto\"\n"));
+  SceneLoadReport report;
+  const Scene scene = load_scene(spec, &report);
+  ASSERT_TRUE(scene.regions()[0].options.has_value());
+  EXPECT_EQ(scene.regions()[0].options->traversal, Traversal::exact) << report.variants.at(0);
+  EXPECT_EQ(report.variants.at(0).rfind("auto: exact", 0), 0u) << report.variants.at(0);
 }
 
 TEST(RegionOptions, SceneFileRejectsWhatAutoCannotUse) {

@@ -1,5 +1,7 @@
 #include "core/engine/scene.hpp"
 
+#include <algorithm>
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -93,6 +95,11 @@ std::size_t Scene::bytes() const {
     for (const EffectPtr& effect : region.effects) total += effect->bytes();
   }
   return total + lut_bytes() + flat_tiles_.bytes();
+}
+
+void Scene::set_region_options(std::size_t i, std::optional<EngineOptions> options) {
+  regions_.at(i).options = std::move(options);
+  per_region_options_ = std::any_of(regions_.begin(), regions_.end(), [](const Region& r) { return r.options; });
 }
 
 void Scene::set_options(const EngineOptions& options) {

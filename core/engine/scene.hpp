@@ -68,6 +68,9 @@ class Scene {
   // whose method is not C/D 1 throughout gets its table, with its own number of directions (memory:
   // Scene::lut_bytes); the others have none. Throws std::invalid_argument if the options are invalid.
   void set_options(const EngineOptions& options);
+  // Region `i`'s own options (none: the scene's), set after the scene is made: what traversal = "auto" chooses
+  // looks at the region as its method prepared it (the hybrid's step marks). Call set_options after it.
+  void set_region_options(std::size_t i, std::optional<EngineOptions> options);
   const EngineOptions& options() const { return options_; }
 
   // The options of a frame that starts on texel `start`: its region's, else the scene's.
