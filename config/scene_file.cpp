@@ -22,6 +22,7 @@
 #include <system_error>
 #include <utility>
 
+#include "core/engine/method_hybrid.hpp"
 #include "core/engine/variant_choice.hpp"
 
 namespace ph {
@@ -355,6 +356,7 @@ void parse_method_tables(const Reporter& rep, const toml::table& t, const std::s
       continue;
     }
     const std::string w = where + entry->name + ".";
+    r.method_table_lines[entry->name] = static_cast<int>(table->source().begin.line);
     reject_unknown_keys(rep, *table, std::set<std::string_view>(entry->keys.begin(), entry->keys.end()), w);
     r.method_params[entry->name] = entry->parse(TomlParamReader(rep, *table, w));
   }
@@ -959,6 +961,24 @@ std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadRep
   for (std::string& w : relief_scale_warnings(spec, scene)) out.push_back(std::move(w));
   for (std::string& w : effect_warnings(spec, scene)) out.push_back(std::move(w));
   for (std::string& w : method_warnings(spec)) out.push_back(std::move(w));
+  for (std::string& w : unused_method_table_warnings(spec)) out.push_back(std::move(w));
+  return out;
+}
+
+std::vector<std::string> unused_method_table_warnings(const SceneSpec& spec) {
+  std::vector<std::string> out;
+  for (const RegionSpec& r : spec.regions) {
+    for (const auto& [name, line] : r.method_table_lines) {
+      if (name == r.method) continue;
+      out.push_back(
+          fmt::format("{}:{}: region '{}': [region.{}] changes nothing here: the region's method is {}, which {} (only "
+                      "`pseudohaptic trace --method {}` reads it)",
+                      spec.file.string(), line, r.name, name, r.method,
+                      r.method == HybridMethod::kName ? "takes the curvature and depth methods' defaults"
+                                                      : "reads its own table alone",
+                      name));
+    }
+  }
   return out;
 }
 

@@ -48,8 +48,9 @@ struct RegionSpec {
   FieldSources sources;  // paths already resolved against the scene file's folder
   // Per method name, the parameters of its [region.NAME] table; a method without one gets its defaults.
   std::map<std::string, MethodParams, std::less<>> method_params;
-  std::optional<MaterialsParams> materials;  // [region.materials]: curvature classes as materials
-  std::optional<WellsParams> wells;          // [region.wells]: isophote or contour gravity wells
+  std::map<std::string, int, std::less<>> method_table_lines;  // the method tables given, and their lines
+  std::optional<MaterialsParams> materials;                    // [region.materials]: curvature classes as materials
+  std::optional<WellsParams> wells;                            // [region.wells]: isophote or contour gravity wells
   // The region's own traversal, sampling and lut_directions (over the [daemon] table's); none: the scene's.
   std::optional<EngineOptions> engine;
   bool engine_auto = false;   // traversal = "auto": the traversal is chosen at load (core/engine/variant_choice.hpp)
@@ -141,9 +142,14 @@ std::vector<std::string> effect_warnings(const SceneSpec& spec, const Scene& sce
 // region with gain = 0 (C/D 1 everywhere), as relief_px = 0 is warned of among the map notes. None otherwise.
 std::vector<std::string> method_warnings(const SceneSpec& spec);
 
-// What loading the scene found to warn of, in this order: map_warnings, relief_scale_warnings, effect_warnings and
-// method_warnings. What the daemon logs at load (with desktop_warnings), and what the tools that load a scene file
-// print.
+// One line per method table a region gives for a method it does not use ("FILE:LINE: region 'NAME': " and which):
+// the daemon reads only its method's (the hybrid method none: it takes curvature's and depth's defaults);
+// `pseudohaptic trace --method` reads the table of the method it is given.
+std::vector<std::string> unused_method_table_warnings(const SceneSpec& spec);
+
+// What loading the scene found to warn of, in this order: map_warnings, relief_scale_warnings, effect_warnings,
+// method_warnings and unused_method_table_warnings. What the daemon logs at load (with desktop_warnings), and what the
+// tools that load a scene file print.
 std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadReport& report, const Scene& scene);
 
 // Where a region of `rect` lies wholly or partly off `desktop`: "at X,Y (WxH px) lies outside the desktop X,Y WxH px:

@@ -394,6 +394,22 @@ TEST(SceneFileWarnings, ADepthGainOfZeroIsWarnedOf) {
                              "region feels flat");
 }
 
+// A method table for a method the region does not use is read by nothing the daemon does: said, with where it is
+// read (trace --method). A hybrid region takes the curvature and depth methods' defaults, not their tables.
+TEST(SceneFileWarnings, AMethodTableTheRegionsMethodDoesNotReadIsWarnedOf) {
+  const SceneSpec spec = parse_scene_text(
+      "[[region]]\nname = \"h\"\nwidth = 2\nheight = 2\nmethod = \"hybrid\"\nnormal_map = \"n.png\"\n"
+      "depth_map = \"d.png\"\n[region.curvature]\nkmax_prime = 20.0\n[region.hybrid]\n"
+      "[[region]]\nname = \"c\"\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n[region.curvature]\n",
+      kOrigin);
+  const std::vector<std::string> warnings = unused_method_table_warnings(spec);
+  ASSERT_EQ(warnings.size(), 1u);  // the curvature region's own table is read
+  EXPECT_EQ(warnings[0], kOrigin.string() +
+                             ":8: region 'h': [region.curvature] changes nothing here: the region's method is hybrid, "
+                             "which takes the curvature and depth methods' defaults (only `pseudohaptic trace "
+                             "--method curvature` reads it)");
+}
+
 TEST(SceneFileErrors, DepthMethodWithoutDepthMap) {
   expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\nmethod = \"depth\"\n", 1,
                "region[0].depth_map", {"depth method needs a depth_map"});
