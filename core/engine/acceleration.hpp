@@ -40,14 +40,19 @@ class PointerAcceleration {
  public:
   explicit PointerAcceleration(const AccelSettings& settings = {});
 
-  // One frame's motion in device counts at `time` (µs) -> motion in screen px (1 px per 1000-dpi unit
-  // before acceleration, as libinput's normalised coordinates). Frames must come in time order; a
-  // time that goes backwards is treated as a pause.
+  // One frame's motion in device counts at `time` (µs) -> motion in screen px. The adaptive profile works in
+  // 1000-dpi units (libinput's normalised coordinates); the flat one scales the device's own counts, as libinput's
+  // flat filter for a mouse does (its touchpad one normalises). Frames must come in time order; a time that goes
+  // backwards is treated as a pause.
   // Inline: the flat profile, the daemon's per-frame path at its most common, then makes no call.
   Vec2 apply(Vec2 counts, TimeUs time) {
-    const Vec2 units = settings_.dpi == kNormalDpi ? counts : counts * (kNormalDpi / settings_.dpi);
-    const double factor = settings_.profile == AccelProfile::adaptive ? adaptive_factor(units, time) : flat_factor_;
-    const Vec2 out = units * factor;
+    Vec2 out;
+    if (settings_.profile == AccelProfile::adaptive) {
+      const Vec2 units = settings_.dpi == kNormalDpi ? counts : counts * (kNormalDpi / settings_.dpi);
+      out = units * adaptive_factor(units, time);
+    } else {
+      out = counts * flat_factor_;
+    }
     return is_finite(out) ? out : Vec2{};
   }
 
