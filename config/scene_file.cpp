@@ -398,10 +398,12 @@ void parse_region_engine(const Reporter& rep, const toml::table& t, const std::s
     e.sampling = Sampling::nearest;
   }
   // Set in the region for a traversal that has no direction table, the count would change nothing: said, as
-  // accuracy_px without "auto" is.
-  if (t.get("lut_directions") != nullptr && !r.engine_auto && e.traversal != Traversal::direction_lut) {
+  // accuracy_px without "auto" is. "auto" chooses between exact and frame_midpoint (core/engine/variant_choice.hpp).
+  if (t.get("lut_directions") != nullptr && (r.engine_auto || e.traversal != Traversal::direction_lut)) {
     rep.fail(t.get("lut_directions"), where + "lut_directions",
-             "applies to traversal = \"direction_lut\" (or \"auto\") only");
+             r.engine_auto ? "changes nothing with traversal = \"auto\", which chooses between exact and "
+                             "frame_midpoint"
+                           : "applies to traversal = \"direction_lut\" only");
   }
   if (const std::string problem = validate(e); !problem.empty()) {
     rep.fail(key_or_table(t, "traversal"), where + "traversal",

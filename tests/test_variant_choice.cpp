@@ -227,12 +227,13 @@ TEST(RegionOptions, SceneFileRejectsWhatAutoCannotUse) {
   EXPECT_NE(error_of("lut_directions = 12\n").find("must be 8 or 16"), std::string::npos);
   // A count for a traversal without a direction table changes nothing: said, as accuracy_px without "auto" is.
   EXPECT_NE(error_of("lut_directions = 8\n")
-                .find(":5: region[0].lut_directions: applies to traversal = "
-                      "\"direction_lut\" (or \"auto\") only"),
+                .find(":5: region[0].lut_directions: applies to traversal = \"direction_lut\" only"),
             std::string::npos)
       << error_of("lut_directions = 8\n");
   EXPECT_EQ(error_of("traversal = \"direction_lut\"\nlut_directions = 8\n"), "no error");
-  EXPECT_EQ(error_of("traversal = \"auto\"\nlut_directions = 8\n"), "no error");
+  // Nor with "auto", which never walks with a direction table.
+  EXPECT_NE(error_of("traversal = \"auto\"\nlut_directions = 8\n").find("changes nothing with traversal = \"auto\""),
+            std::string::npos);
   // A sampling the direction table cannot take, from the [daemon] table, is said at the region's traversal.
   const std::string daemon_bilinear = "[daemon]\nsampling = \"bilinear\"\n";
   try {
