@@ -247,7 +247,9 @@ TEST(ImageChild, AReaderThatStopsInTheMiddleOfAnAnswerIsKilledAfterTheTimeout) {
 
 // Runs `check` in a child process whose address space is limited to what it uses now plus `headroom` (the reader's
 // own limit is 8 GiB, more than a test should take), after `before` ran there unlimited; its one-letter verdict.
-char under_memory_limit(std::size_t headroom, const std::function<void()>& before, const std::function<char()>& check) {
+// (Unused under a sanitizer, where the test that calls it is skipped.)
+[[maybe_unused]] char under_memory_limit(std::size_t headroom, const std::function<void()>& before,
+                                         const std::function<char()>& check) {
   int ends[2];
   if (::pipe(ends) != 0) return 'p';
   const pid_t child = ::fork();
@@ -283,7 +285,7 @@ char under_memory_limit(std::size_t headroom, const std::function<void()>& befor
 }
 
 // 'y' when `answer` is a Failure that says the reader ran out of memory.
-char out_of_memory_verdict(const image_wire::Answer& answer) {
+[[maybe_unused]] char out_of_memory_verdict(const image_wire::Answer& answer) {
   const auto* failure = std::get_if<image_wire::Failure>(&answer);
   if (failure == nullptr) return 'a';
   return failure->message.find("not enough memory to read it") != std::string::npos ? 'y' : 'm';
