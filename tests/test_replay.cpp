@@ -210,6 +210,39 @@ TEST(Replay, TrailingEventsWithoutSynReportAreKept) {
   EXPECT_EQ(output.events, input.events);
 }
 
+// Cut off before its SYN_REPORT, the last frame is not applied, as a dropped frame; in absolute mode its motion is
+// left out as a dropped frame's is: the absolute device has no REL_X/REL_Y, and a file that had them would replay
+// on no device.
+TEST(Replay, AFinalFrameWithoutSynReportKeepsNoMotionInAbsoluteMode) {
+  Recording input;
+  input.device = testing::test_mouse();
+  add_frame(input, 1000, {rel(ev::kRelX, 5)});
+  input.events.push_back({2000, ev::kRel, ev::kRelX, 5});
+  input.events.push_back({2000, ev::kKey, ev::kBtnLeft, 1});
+  PipelineConfig config = start_at({100.5, 100.5});
+  config.mode = OutputMode::absolute;
+  const Recording output = replay(input, bump_scene(), config);
+  ASSERT_FALSE(output.events.empty());
+  for (const InputEvent& e : output.events) EXPECT_NE(e.type, ev::kRel) << e.code << " " << e.value;
+  EXPECT_EQ(output.events.back(), (InputEvent{2000, ev::kKey, ev::kBtnLeft, 1}));
+}
+
+// A device that does not declare REL_X and REL_Y is not one the daemon takes: every event passes through unchanged,
+// as the tool says, even motion it carries (it used to be rescaled over the scene, into events its description did
+// not have).
+TEST(Replay, ADeviceWithoutRelativeAxesPassesThroughUnchanged) {
+  Recording input = scripted_stroke(30, 4, 0);
+  input.device.codes[ev::kRel].reset(ev::kRelY);
+  ASSERT_FALSE(input.device.has(ev::kRel, ev::kRelY));
+  for (const OutputMode mode : {OutputMode::relative, OutputMode::absolute}) {
+    PipelineConfig config = start_at({100.5, 250.5});
+    config.mode = mode;
+    const Recording output = replay(input, bump_scene(), config);
+    EXPECT_EQ(output.device, input.device);
+    EXPECT_EQ(output.events, input.events);
+  }
+}
+
 TEST(Replay, AbsoluteModeEmitsPositionsOnlyWithinTheDesktop) {
   PipelineConfig config = start_at({10.5, 10.5});
   config.mode = OutputMode::absolute;

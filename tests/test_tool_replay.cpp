@@ -268,6 +268,19 @@ TEST(ReplayTool, WarnsOfInvalidTexelsInTheScene) {
       << r.err;
 }
 
+// A scene file fine with its own method may not be with the one --method asks for: the error says whose it was.
+TEST(ReplayTool, AnErrorOfTheMethodFromTheCommandLineSaysSo) {
+  ScratchDir dir;
+  write_normal_png16(dir / "flat.png", NormalImage(4, 4));
+  write_file(dir / "scene.toml", "[[region]]\nname = \"n\"\nwidth = 4\nheight = 4\nnormal_map = \"flat.png\"\n");
+  const fs::path in = stroke_file(dir, "in.evemu", 20, 1, 0);
+  const ToolResult r = run_tool(
+      "replay --scene " + quote(dir / "scene.toml") + " --method depth " + quote(in) + " " + quote(dir / "out.evemu"),
+      dir);
+  expect_clean_failure(r, {"the depth method needs a depth map", "(the method --method depth gives every region)"});
+  EXPECT_FALSE(fs::exists(dir / "out.evemu"));
+}
+
 // Gravity wells whose pattern is empty (levels above every height) are warned of, as the daemon warns at load; and
 // trace, which loads the scene as replay does, warns alike.
 TEST(ReplayTool, WarnsOfWellsWithAnEmptyPatternAsTraceDoes) {
@@ -371,10 +384,14 @@ TEST(ReplayTool, StartPlacesTheCursorModel) {
     EXPECT_FALSE(fs::exists(dir / "x.evemu"));
   }
   {
-    SCOPED_TRACE("a start that is not a number");
-    const ToolResult r = run_tool("replay --start nan,3 " + quote(in) + " " + quote(dir / "x.evemu"), dir);
-    expect_clean_failure(r, {"--start: X and Y must be finite numbers"});
-    EXPECT_FALSE(fs::exists(dir / "x.evemu"));
+    SCOPED_TRACE("a start that is not a finite number: refused with the command line (exit 2 or more)");
+    for (const char* start : {"nan,3", "1e400,3"}) {
+      const ToolResult r =
+          run_tool("replay --start " + std::string(start) + " " + quote(in) + " " + quote(dir / "x.evemu"), dir);
+      expect_clean_failure(r, {"--start: must be a finite number"});
+      EXPECT_GE(r.rc, 2) << start;
+      EXPECT_FALSE(fs::exists(dir / "x.evemu"));
+    }
   }
 }
 
@@ -803,6 +820,33 @@ TEST(ReplayTool, AFailedTraceLeavesTheOutputUncommitted) {
   EXPECT_EQ(read_text(dir / "old.evemu"), "old output\n");
   EXPECT_EQ(listing(dir), before);
   EXPECT_TRUE(fs::is_empty(dir / "a-directory"));
+}
+
+// A reader of standard output that goes away early (`| head`) makes the replay fail as any write error does, its
+// temporary files removed: SIGPIPE used to end it (status 141) with the trace's temporary file left behind.
+TEST(ReplayTool, AReaderThatGoesAwayLeavesNoTemporaryFiles) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir, "in.evemu", 3000, 3, 1);
+  const std::string command = fmt::format(
+      "cd {} && ( '{}' replay --trace t.csv in.evemu - 2>err.txt; echo $? >rc.txt ) | head -c 100 >/dev/null",
+      quote(dir.path()), PH_TOOL_PATH);
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  EXPECT_EQ(read_text(dir / "rc.txt"), "1\n") << read_text(dir / "err.txt");
+  EXPECT_TRUE(contains(read_text(dir / "err.txt"), "Broken pipe")) << read_text(dir / "err.txt");
+  EXPECT_EQ(listing(dir), (std::set<std::string>{"in.evemu", "err.txt", "rc.txt"}));
+}
+
+// "-" and /dev/stdout are one output: the trace and the replay used to be written into it one after the other.
+TEST(ReplayTool, StandardOutputByAnyNameIsOneOutput) {
+  ScratchDir dir;
+  const fs::path in = stroke_file(dir);
+  for (const std::string& args :
+       {"--trace /dev/stdout " + quote(in) + " -", "--trace - " + quote(in) + " /dev/stdout"}) {
+    const ToolResult r = run_tool("replay " + args, dir);
+    EXPECT_EQ(r.rc, 1) << args;
+    EXPECT_TRUE(contains(r.err, "is OUTPUT too")) << args << ": " << r.err;
+    EXPECT_TRUE(r.out.empty()) << args;
+  }
 }
 
 TEST(ReplayTool, ReplacesARegularFileKeepingItsMode) {

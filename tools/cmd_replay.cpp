@@ -218,9 +218,16 @@ ReplayScene load_replay_scene(const std::string& scene_file, const std::string& 
     for (RegionSpec& region : spec.regions) region.method = method;
   }
   SceneLoadReport report;
-  Scene scene = load_scene(spec, &report);
-  for (const std::string& w : load_warnings(spec, report, scene)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
-  return {std::move(scene), spec.daemon, false};
+  std::optional<Scene> scene;
+  try {
+    scene.emplace(load_scene(spec, &report));
+  } catch (const ConfigError& e) {
+    if (method.empty()) throw;
+    // The file's own method may have been fine: say whose it was.
+    throw ConfigError(fmt::format("{} (the method --method {} gives every region)", e.what(), method));
+  }
+  for (const std::string& w : load_warnings(spec, report, *scene)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
+  return {std::move(*scene), spec.daemon, false};
 }
 
 // The pipeline's settings: the flags'; with --as-daemon, the [daemon] table's as the daemon takes them
@@ -261,7 +268,7 @@ int run_replay(const ReplayOptions& o) {
   if (!o.trace.empty() && same_path(o.input, o.trace))
     throw std::invalid_argument(
         fmt::format("--trace {} is the recording INPUT: write the trace to another file", o.trace));
-  if (!o.trace.empty() && same_path(o.output, o.trace))
+  if (!o.trace.empty() && same_output(o.output, o.trace))
     throw std::invalid_argument(fmt::format("--trace {} is OUTPUT too: give each its own file", o.trace));
   // Everything is read and checked before anything is written: no partial output that looks valid.
   ReplayScene loaded = load_replay_scene(o.scene_file, o.method);
@@ -344,7 +351,7 @@ Run add_replay_command(CLI::App& app) {
                  "CSV, one row per frame: time_us,in_dx,in_dy,out_dx,out_dy,cursor_x,cursor_y,cd_min,cd_max,dropped")
       ->check(non_empty_path());
   add_number_tuple(app, "--start", o->start, "X,Y",
-                   "Start of the cursor model, screen px (default: the desktop's centre)");
+                   "Start of the cursor model, screen px (default: the desktop's centre)", {finite_number()});
   app.add_flag("--as-daemon", o->as_daemon,
                "Run the pipeline as the daemon would with the scene file: output mode, acceleration, speed, "
                "mouse_dpi, pointer_speed and desktop from its [daemon] table, or the daemon's defaults (absolute "

@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -34,6 +35,9 @@ int with_stdout_flushed(int status) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A reader that goes away (`| head`) makes a write fail with EPIPE, which the commands report and clean up after
+  // (replay's temporary files), rather than SIGPIPE ending the process in the middle of them.
+  std::signal(SIGPIPE, SIG_IGN);
   CLI::App app{
       "pseudohaptic: pseudo-haptic textures for an ordinary mouse.\n"
       "Tools to make test targets, trace the cursor across a texture and compare the methods."};

@@ -26,6 +26,17 @@ inline bool same_path(const std::string& a, const std::string& b) {
   return std::filesystem::weakly_canonical(a, ignored) == std::filesystem::weakly_canonical(b, ignored);
 }
 
+// Whether two outputs of the command are one: "-" is standard output, which another output may name as well
+// (/dev/stdout, /proc/self/fd/1, or the file standard output is redirected to).
+inline bool same_output(const std::string& a, const std::string& b) {
+  if (a == "-" && b == "-") return true;
+  if (a != "-" && b != "-") return same_path(a, b);
+  const std::string& other = a == "-" ? b : a;
+  struct stat out {};
+  struct stat at {};
+  return ::fstat(1, &out) == 0 && ::stat(other.c_str(), &at) == 0 && same_file(out, at);
+}
+
 // Whether standard input is the file at `path` (a recording redirected in with `< FILE`): writing `path` would
 // replace what is being read.
 inline bool is_standard_input(const std::string& path) {

@@ -245,8 +245,10 @@ Frame Pipeline::pass_dropped(const Frame& in, FrameReport* report) const {
   if (frame_done != nullptr) *frame_done = true;
 }
 
+// A frame the stream ends in, its SYN_REPORT never come, is not applied (the daemon would have waited for the
+// SYN_REPORT): it passes as a dropped frame does, its motion left out where the output device has none.
 void FrameProcessor::finish() {
-  if (!pending_.events.empty()) sink_.write(pending_);
+  if (!pending_.events.empty()) sink_.write(pipeline_.pass_dropped(pending_, nullptr));
   pending_.events.clear();
   dropping_ = false;
 }

@@ -20,6 +20,10 @@ Recording replay(const Recording& input, const Scene& scene, const PipelineConfi
   // without relative motion (a tablet, a keyboard) the daemon never takes, and its description stays its own.
   const bool taken = input.device.has(ev::kRel, ev::kRelX) && input.device.has(ev::kRel, ev::kRelY);
   output.device = config.mode == OutputMode::absolute && taken ? output_device(input.device, config) : input.device;
+  if (!taken) {  // every event passes through, unchanged, as the daemon leaves such a device to the desktop
+    output.events = input.events;
+    return output;
+  }
   output.events.reserve(input.events.size());
   // The scene outlives this call: share it without owning it.
   Pipeline pipeline(std::shared_ptr<const Scene>(std::shared_ptr<const Scene>(), &scene), config);
