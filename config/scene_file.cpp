@@ -453,6 +453,7 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   r.rect.h = get_int(rep, t, "height", where, std::nullopt, 1, kMaxRegionSide);
 
   r.method = get_string(rep, t, "method", where).value_or("curvature");
+  r.method_in_file = r.method;
   const MethodEntry* entry = methods.find(r.method);
   if (entry == nullptr)
     rep.fail(t.get("method"), where + "method",
@@ -970,14 +971,15 @@ std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadRep
 std::vector<std::string> unused_method_table_warnings(const SceneSpec& spec) {
   std::vector<std::string> out;
   for (const RegionSpec& r : spec.regions) {
+    // (The file's own method's table is read by the daemon; the method a tool's --method gives, by that tool.)
     for (const auto& [name, line] : r.method_table_lines) {
-      if (name == r.method) continue;
+      if (name == r.method || name == r.method_in_file) continue;
       out.push_back(
           fmt::format("{}:{}: region '{}': [region.{}] changes nothing here: the region's method is {}, which {} (only "
-                      "`pseudohaptic trace --method {}` reads it)",
-                      spec.file.string(), line, r.name, name, r.method,
-                      r.method == HybridMethod::kName ? "takes the curvature and depth methods' defaults"
-                                                      : "reads its own table alone",
+                      "`pseudohaptic trace` and `replay` with --method {} read it)",
+                      spec.file.string(), line, r.name, name, r.method_in_file,
+                      r.method_in_file == HybridMethod::kName ? "takes the curvature and depth methods' defaults"
+                                                              : "reads its own table alone",
                       name));
     }
   }

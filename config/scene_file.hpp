@@ -49,6 +49,7 @@ struct RegionSpec {
   // Per method name, the parameters of its [region.NAME] table; a method without one gets its defaults.
   std::map<std::string, MethodParams, std::less<>> method_params;
   std::map<std::string, int, std::less<>> method_table_lines;  // the method tables given, and their lines
+  std::string method_in_file;  // `method` as the file gives it (the tools' --method may replace `method`)
   std::optional<MaterialsParams> materials;                    // [region.materials]: curvature classes as materials
   std::optional<WellsParams> wells;                            // [region.wells]: isophote or contour gravity wells
   // The region's own traversal, sampling and lut_directions (over the [daemon] table's); none: the scene's.

@@ -406,8 +406,15 @@ TEST(SceneFileWarnings, AMethodTableTheRegionsMethodDoesNotReadIsWarnedOf) {
   ASSERT_EQ(warnings.size(), 1u);  // the curvature region's own table is read
   EXPECT_EQ(warnings[0], kOrigin.string() +
                              ":8: region 'h': [region.curvature] changes nothing here: the region's method is hybrid, "
-                             "which takes the curvature and depth methods' defaults (only `pseudohaptic trace "
-                             "--method curvature` reads it)");
+                             "which takes the curvature and depth methods' defaults (only `pseudohaptic trace` and "
+                             "`replay` with --method curvature read it)");
+  // Under a tool's --method the region's method changes: the file's own method's table (read by the daemon) and the
+  // one --method reads are not warned of.
+  SceneSpec replaced = spec;
+  for (RegionSpec& r : replaced.regions) r.method = "depth";
+  EXPECT_EQ(unused_method_table_warnings(replaced).size(), 1u);  // still the hybrid region's [region.curvature]
+  for (RegionSpec& r : replaced.regions) r.method = "curvature";
+  EXPECT_TRUE(unused_method_table_warnings(replaced).empty());
 }
 
 TEST(SceneFileErrors, DepthMethodWithoutDepthMap) {

@@ -102,8 +102,10 @@ void append_daemon(fmt::memory_buffer& out, const DaemonSettings& d) {
     fmt::format_to(to, "  desktop: auto\n");
   }
   const AccelSettings accel = acceleration_of(d);
-  fmt::format_to(to, "  acceleration: {} (speed {}, {} dpi){}\n", accel_profile_name(accel.profile), accel.speed,
-                 accel.dpi, d.acceleration ? "" : " by default for this output");
+  // The resolution counts for the adaptive profile alone (the flat one scales the mice's own counts).
+  fmt::format_to(to, "  acceleration: {} (speed {}{}){}\n", accel_profile_name(accel.profile), accel.speed,
+                 accel.profile == AccelProfile::adaptive ? fmt::format(", {} dpi", accel.dpi) : std::string(),
+                 d.acceleration ? "" : " by default for this output");
   fmt::format_to(to, "  pointer_speed: {}\n", d.pointer_speed);
   fmt::format_to(to, "  engine: {}\n", label_of(d.engine));
 }

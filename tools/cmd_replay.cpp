@@ -222,8 +222,10 @@ ReplayScene load_replay_scene(const std::string& scene_file, const std::string& 
   try {
     scene.emplace(load_scene(spec, &report));
   } catch (const ConfigError& e) {
-    if (method.empty()) throw;
-    // The file's own method may have been fine: say whose it was.
+    // The file's own method may have been fine: where --method changed a region's, say whose the method was.
+    const bool changed = std::any_of(spec.regions.begin(), spec.regions.end(),
+                                     [](const RegionSpec& r) { return r.method != r.method_in_file; });
+    if (!changed) throw;
     throw ConfigError(fmt::format("{} (the method --method {} gives every region)", e.what(), method));
   }
   for (const std::string& w : load_warnings(spec, report, *scene)) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);

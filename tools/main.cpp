@@ -1,5 +1,6 @@
 // pseudohaptic: the command-line tool for researchers and for checking scenes.
 #include <fmt/core.h>
+#include <poll.h>
 
 #include <CLI/CLI.hpp>
 #include <cerrno>
@@ -23,11 +24,27 @@ void say_error(const std::string& text) {
   std::fflush(stderr);
 }
 
+// Whether standard output is a pipe whose reader has gone (`| head` that has read enough): its writes fail with EPIPE.
+bool stdout_reader_gone() {
+  pollfd out{1, 0, 0};
+  return ::poll(&out, 1, 0) == 1 && (out.revents & POLLERR) != 0;
+}
+
+// Ends the process as SIGPIPE would (status 141, no message), once a command has cleaned up after the failed write:
+// the tool ignores SIGPIPE so that it may (replay's temporary files), and `| head` must stay quiet all the same.
+[[noreturn]] void end_as_sigpipe() {
+  std::fflush(stderr);
+  std::signal(SIGPIPE, SIG_DFL);
+  std::raise(SIGPIPE);
+  std::_Exit(141);  // (not reached)
+}
+
 // What a command wrote to standard output is buffered: a disk that filled or a reader that went away shows only
 // when it is flushed, so the exit status must wait for that.
 int with_stdout_flushed(int status) {
   errno = 0;
   if (std::fflush(stdout) == 0 && !std::ferror(stdout)) return status;
+  if (stdout_reader_gone()) end_as_sigpipe();
   say_error(std::string("<stdout>: write failed") + (errno != 0 ? std::string(": ") + std::strerror(errno) : ""));
   return 1;
 }
@@ -35,8 +52,8 @@ int with_stdout_flushed(int status) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // A reader that goes away (`| head`) makes a write fail with EPIPE, which the commands report and clean up after
-  // (replay's temporary files), rather than SIGPIPE ending the process in the middle of them.
+  // A reader that goes away (`| head`) makes a write fail with EPIPE, which the commands clean up after (replay's
+  // temporary files) before the process ends as SIGPIPE would have ended it (end_as_sigpipe).
   std::signal(SIGPIPE, SIG_IGN);
   CLI::App app{
       "pseudohaptic: pseudo-haptic textures for an ordinary mouse.\n"
@@ -115,6 +132,7 @@ int main(int argc, char** argv) {
     say_error((e.path1().empty() ? "" : e.path1().string() + ": ") + what);
     return 1;
   } catch (const std::exception& e) {
+    if (stdout_reader_gone()) end_as_sigpipe();
     say_error(e.what());
     return 1;
   }

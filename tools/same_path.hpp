@@ -34,7 +34,8 @@ inline bool same_output(const std::string& a, const std::string& b) {
   const std::string& other = a == "-" ? b : a;
   struct stat out {};
   struct stat at {};
-  return ::fstat(1, &out) == 0 && ::stat(other.c_str(), &at) == 0 && same_file(out, at);
+  // A device (/dev/null) takes two outputs alike; a file, a FIFO or a socket would get them mixed.
+  return ::fstat(1, &out) == 0 && ::stat(other.c_str(), &at) == 0 && same_file(out, at) && !S_ISCHR(at.st_mode);
 }
 
 // Whether standard input is the file at `path` (a recording redirected in with `< FILE`): writing `path` would

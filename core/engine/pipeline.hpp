@@ -107,7 +107,7 @@ class Pipeline {
 
 // Groups events into frames and hands them through the pipeline to a sink. SYN_DROPPED: the events up to
 // and including the next SYN_REPORT form a dropped frame (the kernel's rule; a live source resynchronises
-// through libevdev before they get here). Events after the last SYN_REPORT are flushed unchanged.
+// through libevdev before they get here). Events after the last SYN_REPORT pass as a dropped frame's (finish()).
 class FrameProcessor {
  public:
   FrameProcessor(Pipeline& pipeline, EventSink& sink) : pipeline_(pipeline), sink_(sink) {}

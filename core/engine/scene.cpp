@@ -98,6 +98,9 @@ std::size_t Scene::bytes() const {
 }
 
 void Scene::set_region_options(std::size_t i, std::optional<EngineOptions> options) {
+  if (options) {
+    if (auto error = validate(*options); !error.empty()) throw std::invalid_argument("engine options: " + error);
+  }
   regions_.at(i).options = std::move(options);
   per_region_options_ = std::any_of(regions_.begin(), regions_.end(), [](const Region& r) { return r.options; });
 }
