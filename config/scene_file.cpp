@@ -642,7 +642,11 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
   SceneSpec spec;
   spec.file = origin;
   spec.methods = std::move(methods);
-  if (const toml::table* daemon = get_table(rep, root, "daemon", "")) spec.daemon = parse_daemon(rep, *daemon);
+  if (const toml::table* daemon = get_table(rep, root, "daemon", "")) {
+    spec.daemon = parse_daemon(rep, *daemon);
+    if (const toml::node* dpi = daemon->get("mouse_dpi"))
+      spec.mouse_dpi_line = static_cast<int>(dpi->source().begin.line);
+  }
   const toml::node* regions = root.get("region");
   if (regions == nullptr) return spec;
   const toml::array* arr = regions->as_array();
@@ -965,7 +969,17 @@ std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadRep
   for (std::string& w : effect_warnings(spec, scene)) out.push_back(std::move(w));
   for (std::string& w : method_warnings(spec)) out.push_back(std::move(w));
   for (std::string& w : unused_method_table_warnings(spec)) out.push_back(std::move(w));
+  for (std::string& w : daemon_warnings(spec)) out.push_back(std::move(w));
   return out;
+}
+
+std::vector<std::string> daemon_warnings(const SceneSpec& spec) {
+  if (spec.mouse_dpi_line == 0 || acceleration_of(spec.daemon).profile != AccelProfile::flat) return {};
+  return {
+      fmt::format("{}:{}: daemon.mouse_dpi changes nothing with the flat profile, which scales the mice's own "
+                  "counts as libinput's does (the adaptive profile reads it){}",
+                  spec.file.string(), spec.mouse_dpi_line,
+                  spec.daemon.acceleration ? "" : "; the flat profile is the default for relative output")};
 }
 
 std::vector<std::string> unused_method_table_warnings(const SceneSpec& spec) {

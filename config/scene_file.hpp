@@ -49,9 +49,9 @@ struct RegionSpec {
   // Per method name, the parameters of its [region.NAME] table; a method without one gets its defaults.
   std::map<std::string, MethodParams, std::less<>> method_params;
   std::map<std::string, int, std::less<>> method_table_lines;  // the method tables given, and their lines
-  std::string method_in_file;  // `method` as the file gives it (the tools' --method may replace `method`)
-  std::optional<MaterialsParams> materials;                    // [region.materials]: curvature classes as materials
-  std::optional<WellsParams> wells;                            // [region.wells]: isophote or contour gravity wells
+  std::string method_in_file;                // `method` as the file gives it (the tools' --method may replace `method`)
+  std::optional<MaterialsParams> materials;  // [region.materials]: curvature classes as materials
+  std::optional<WellsParams> wells;          // [region.wells]: isophote or contour gravity wells
   // The region's own traversal, sampling and lut_directions (over the [daemon] table's); none: the scene's.
   std::optional<EngineOptions> engine;
   bool engine_auto = false;   // traversal = "auto": the traversal is chosen at load (core/engine/variant_choice.hpp)
@@ -77,6 +77,7 @@ struct SceneSpec {
   std::filesystem::path file;  // empty for a scene given as text
   std::vector<RegionSpec> regions;
   DaemonSettings daemon;                       // the [daemon] table; its defaults when there is none
+  int mouse_dpi_line = 0;                      // where the [daemon] table sets mouse_dpi (0: it does not)
   MethodRegistry methods = builtin_methods();  // what the regions' methods may be
 };
 
@@ -148,9 +149,13 @@ std::vector<std::string> method_warnings(const SceneSpec& spec);
 // `pseudohaptic trace --method` reads the table of the method it is given.
 std::vector<std::string> unused_method_table_warnings(const SceneSpec& spec);
 
+// A line when the [daemon] table sets mouse_dpi with the flat profile in force, which does not read it: libinput's
+// flat filter scales a mouse's own counts.
+std::vector<std::string> daemon_warnings(const SceneSpec& spec);
+
 // What loading the scene found to warn of, in this order: map_warnings, relief_scale_warnings, effect_warnings,
-// method_warnings and unused_method_table_warnings. What the daemon logs at load (with desktop_warnings), and what the
-// tools that load a scene file print.
+// method_warnings, unused_method_table_warnings and daemon_warnings. What the daemon logs at load (with
+// desktop_warnings), and what the tools that load a scene file print.
 std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadReport& report, const Scene& scene);
 
 // Where a region of `rect` lies wholly or partly off `desktop`: "at X,Y (WxH px) lies outside the desktop X,Y WxH px:

@@ -417,6 +417,22 @@ TEST(SceneFileWarnings, AMethodTableTheRegionsMethodDoesNotReadIsWarnedOf) {
   EXPECT_TRUE(unused_method_table_warnings(replaced).empty());
 }
 
+// mouse_dpi is read by the adaptive profile alone: set beside the flat one (relative output's default) it changes
+// nothing, which is said; with the adaptive profile, or left out, nothing is.
+TEST(SceneFileWarnings, AMouseDpiTheFlatProfileDoesNotReadIsWarnedOf) {
+  const auto warnings = [](const std::string& daemon) {
+    return daemon_warnings(parse_scene_text("[daemon]\n" + daemon, kOrigin));
+  };
+  const std::vector<std::string> flat = warnings("output = \"relative\"\nmouse_dpi = 1600\n");
+  ASSERT_EQ(flat.size(), 1u);
+  EXPECT_EQ(flat[0].rfind(kOrigin.string() + ":3: daemon.mouse_dpi changes nothing with the flat profile", 0), 0u)
+      << flat[0];
+  EXPECT_EQ(warnings("acceleration = \"flat\"\nmouse_dpi = 1600\n").size(), 1u);
+  EXPECT_TRUE(warnings("acceleration = \"adaptive\"\nmouse_dpi = 1600\n").empty());
+  EXPECT_TRUE(warnings("mouse_dpi = 1600\n").empty());  // absolute output: adaptive by default
+  EXPECT_TRUE(warnings("acceleration = \"flat\"\n").empty());
+}
+
 TEST(SceneFileErrors, DepthMethodWithoutDepthMap) {
   expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\nmethod = \"depth\"\n", 1,
                "region[0].depth_map", {"depth method needs a depth_map"});
