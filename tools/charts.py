@@ -73,10 +73,11 @@ def parse_number(text, path, line, column, required):
         raise InputError(f"{path}:{line}: column {column}: not a number: {s!r}") from None
 
 
-def read_table(path, required, numeric_required, numeric_optional=()):
-    """Rows of a CSV file as dicts (numbers parsed); InputError naming the file when it or a column is missing."""
+def read_table(path, required, numeric_required, numeric_optional=(), command="accuracy"):
+    """Rows of a CSV file as dicts (numbers parsed); InputError naming the file when it or a column is missing.
+    `command`: the pseudohaptic command that writes the file, for the message when it is missing."""
     if not path.is_file():
-        raise InputError(f"{path}: no such file (written by `pseudohaptic accuracy {path.parent}`)")
+        raise InputError(f"{path}: no such file (written by `pseudohaptic {command} {path.parent}`)")
     with path.open(newline="") as f:
         reader = csv.reader(f)
         header = next(reader, None)

@@ -9,6 +9,7 @@
 // severities a mode, exact and exact+bilinear: a few seconds, for CI.
 #include <fmt/core.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -93,7 +94,8 @@ int run_stability(const StabilityOptions& o) {
     if (std::none_of(modes.begin(), modes.end(), [&](const FailureMode* m) { return m->name == name; })) {
       std::string all;
       for (const FailureMode& m : failure_modes()) all += (all.empty() ? "" : ", ") + m.name;
-      throw std::invalid_argument(fmt::format("unknown mode '{}' (modes: {})", name, all));
+      // A value of the command line that is not one of the modes: refused as the command line (exit 2 or more).
+      throw CLI::ValidationError("--mode", fmt::format("unknown mode '{}' (modes: {})", name, all));
     }
   }
   prepare_output_folder(outdir, {"stability.csv", "modes.csv"});

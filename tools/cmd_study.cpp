@@ -7,6 +7,8 @@
 #include <fmt/core.h>
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
+
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -92,7 +94,8 @@ std::vector<StudyTechnique> chosen_techniques(const StudyOptions& o) {
     if (it == all.end()) {
       std::string known;
       for (const StudyTechnique& t : all) known += (known.empty() ? "" : ", ") + t.name;
-      throw std::invalid_argument(fmt::format("unknown technique '{}' (techniques: {})", name, known));
+      // A value of the command line that is not one of the techniques: refused as the command line (exit 2 or more).
+      throw CLI::ValidationError("--technique", fmt::format("unknown technique '{}' (techniques: {})", name, known));
     }
     out.push_back(*it);
   }

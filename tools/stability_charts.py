@@ -44,8 +44,8 @@ LOG_X = {"grating-a0.5", "grating-a4", "fbm", "thin", "quantised"}
 
 def read_inputs(csvdir):
     rows, _ = charts.read_table(csvdir / "stability.csv", STABILITY_REQUIRED, ["severity"],
-                                [c for c in NUMERIC if c != "severity"])
-    modes, _ = charts.read_table(csvdir / "modes.csv", ["mode", "family", "severity"], [])
+                                [c for c in NUMERIC if c != "severity"], command="stability")
+    modes, _ = charts.read_table(csvdir / "modes.csv", ["mode", "family", "severity"], [], command="stability")
     order = [m["mode"] for m in modes]
     unknown = sorted({r["mode"] for r in rows} - set(order))
     if unknown:

@@ -178,8 +178,9 @@ def main(argv):
     p.add_argument("outdir", type=Path, help="folder to write the PNG files into (created if needed)")
     args = p.parse_args(argv)
     try:
-        summary, _ = read_table(args.csvdir / "summary.csv", SUMMARY_REQUIRED, SUMMARY_NUMERIC, SUMMARY_OPTIONAL)
-        trials, _ = read_table(args.csvdir / "trials.csv", TRIALS_REQUIRED, [])
+        summary, _ = read_table(args.csvdir / "summary.csv", SUMMARY_REQUIRED, SUMMARY_NUMERIC, SUMMARY_OPTIONAL,
+                                command="study")
+        trials, _ = read_table(args.csvdir / "trials.csv", TRIALS_REQUIRED, [], command="study")
         args.outdir.mkdir(parents=True, exist_ok=True)
         written = [chart_errors(summary, args.outdir), chart_times(trials, summary, args.outdir),
                    chart_techniques(summary, args.outdir)]
