@@ -29,6 +29,7 @@
 #include "tests/csv_table.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/tool_runner.hpp"
+#include "tools/csv_file.hpp"
 
 namespace ph {
 namespace {
@@ -275,6 +276,34 @@ TEST(Tool, NumberFlagsRefuseNanAndInfinity) {
 // A full disk (/dev/full) under what a command writes: its output is lost, so it must not say success. Before, trace
 // to a file or to standard output and demo exited 0 with nothing written; and where standard error was full too,
 // the tool aborted.
+// A command's output file is whole or as it was: written beside it and renamed over it at the end, so that a run
+// that fails (or is cut short) leaves no half-written CSV for the charts to read as a result. A device is written
+// through (a rename would replace /dev/null itself).
+TEST(Tool, ACsvFileIsReplacedWholeOrNotAtAll) {
+  ScratchDir dir;
+  const fs::path path = dir / "rows.csv";
+  std::ofstream(path) << "old\n";
+  fs::permissions(path, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  {
+    tools::CsvFile dropped(path);
+    dropped.write("new, unfinished");
+  }  // an error or a failed run: never closed
+  EXPECT_EQ(read_text(path), "old\n");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1);  // no temporary file
+  {
+    tools::CsvFile done(path);
+    done.write("new\n");
+    done.close();
+  }
+  EXPECT_EQ(read_text(path), "new\n");
+  EXPECT_EQ(fs::status(path).permissions(), fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1);
+  tools::CsvFile null("/dev/null");
+  null.write("x\n");
+  null.close();
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+}
+
 TEST(Tool, AWriteThatFailsIsAnErrorNotASuccess) {
   if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full here";
   ScratchDir dir;

@@ -134,7 +134,8 @@ int run_stability(const StabilityOptions& o) {
                config.engines.size(), seconds_since(t_mode));
   }
   f.close();
-  // After the rows: a run that fails leaves both files as they were, not new modes beside old rows.
+  // After the rows: a run that fails (or is cut short) before them leaves both files as they were, not new modes
+  // beside old rows; each file is replaced whole (tools/csv_file.hpp).
   write_modes(outdir / "modes.csv", modes);
   fmt::print("wrote {} rows to {} in {:.1f} s; {} faults (NaN, C/D out of bounds, strokes that never ended)\n", rows,
              path.string(), seconds_since(t_start), faults);

@@ -3,6 +3,8 @@
 
 #include <fmt/core.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
@@ -15,18 +17,29 @@
 
 namespace ph::tools {
 
-// Any failure (cannot open, a full disk) is an error that names the file and the reason. close() says whether
-// everything reached it; dropped on an error, the file is closed quietly.
+// Any failure (cannot open, a full disk) is an error that names the file and the reason. A regular file (or a new
+// one) is written to a temporary file beside it, which close() renames over it: a run that fails or is interrupted
+// leaves the file as it was (an interrupted one, its temporary `.NAME.PID.partial` beside it), never half written.
+// Standard output, a FIFO, a device or a link is written through. close() says whether everything reached it;
+// dropped on an error, the file is closed quietly and the temporary one removed.
 class CsvFile {
  public:
-  explicit CsvFile(std::filesystem::path path)
-      : path_(std::move(path)), file_(path_ == "-" ? stdout : std::fopen(path_.c_str(), "w")) {
+  explicit CsvFile(std::filesystem::path path) : path_(std::move(path)) {
+    struct stat st {};
+    const bool exists = path_ != "-" && ::lstat(path_.c_str(), &st) == 0;
+    if (path_ != "-" && (!exists || S_ISREG(st.st_mode))) {
+      staged_ = path_.parent_path() / fmt::format(".{}.{}.partial", path_.filename().string(), ::getpid());
+      if (exists) mode_ = st.st_mode & 07777;
+    }
+    const std::filesystem::path& opened = staged_.empty() ? path_ : staged_;
+    file_ = path_ == "-" ? stdout : std::fopen(opened.c_str(), "w");
     if (file_ == nullptr) fail("cannot open for writing");
   }
   CsvFile(const CsvFile&) = delete;
   CsvFile& operator=(const CsvFile&) = delete;
   ~CsvFile() {
     if (file_ != nullptr && file_ != stdout) std::fclose(file_);
+    if (!staged_.empty()) ::unlink(staged_.c_str());
   }
 
   void write(std::string_view text) {
@@ -39,10 +52,15 @@ class CsvFile {
   }
 
   void close() {
+    if (mode_ != 0 && file_ != nullptr && file_ != stdout) ::fchmod(::fileno(file_), mode_);  // the file's own mode
     const bool failed = std::fflush(file_) != 0 || std::ferror(file_) != 0;
     const int closed = file_ == stdout ? 0 : std::fclose(file_);
     file_ = nullptr;
     if (failed || closed != 0) fail("write failed");
+    if (!staged_.empty()) {
+      if (::rename(staged_.c_str(), path_.c_str()) != 0) fail("cannot replace it");
+      staged_.clear();
+    }
   }
 
  private:
@@ -52,7 +70,9 @@ class CsvFile {
   }
 
   std::filesystem::path path_;
-  std::FILE* file_;
+  std::filesystem::path staged_;  // the temporary file, "" once renamed (or when written through)
+  mode_t mode_ = 0;               // the replaced file's mode, 0 for a new file
+  std::FILE* file_ = nullptr;
 };
 
 }  // namespace ph::tools
