@@ -688,6 +688,18 @@ std::string service_hint(const std::filesystem::path& path) {
 
 namespace {
 
+// A region's maps with their keys and the lines the keys are on (a map not given: its path empty, line 0), for what
+// is said of a map at its key.
+struct MapKey {
+  std::string_view key;
+  const std::optional<std::filesystem::path>* path;
+  int line;
+};
+std::array<MapKey, 2> map_keys(const RegionSpec& r) {
+  return {{{"normal_map", &r.sources.normal_map, r.normal_map_line},
+           {"depth_map", &r.sources.depth_map, r.depth_map_line}}};
+}
+
 // `path` (absolute) with the links on it followed as far as they can be read: reading a link needs no access to where
 // it leads (under the service, a hidden folder cannot be entered, and canonical() fails there), and a name that cannot
 // be looked at ends the walk, the rest taken as written.
@@ -793,8 +805,8 @@ std::vector<std::string> service_path_warnings(const SceneSpec& spec) {
   if (const std::optional<std::string> why = unreadable_by_others(spec.file))
     out.push_back(fmt::format("{}: {}; {}", spec.file.string(), *why, kRunsAs));
   for (const RegionSpec& r : spec.regions) {
-    for (const auto& [key, map, line] : {std::tuple{"normal_map", r.sources.normal_map, r.normal_map_line},
-                                         std::tuple{"depth_map", r.sources.depth_map, r.depth_map_line}}) {
+    for (const auto& [key, path, line] : map_keys(r)) {
+      const std::optional<std::filesystem::path>& map = *path;
       if (!map) continue;
       if (const std::optional<HiddenFolder> hidden = hidden_from_the_service(*map)) {
         out.push_back(
@@ -868,13 +880,11 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
     }
     if (r.wells) needs = joined(needs, wells_needs(*r.wells));
     FieldLoadReport field_report;
-    for (const auto& [key, map] :
-         {std::pair{"normal_map", r.sources.normal_map}, std::pair{"depth_map", r.sources.depth_map}}) {
+    for (const auto& [key, map, line] : map_keys(r)) {
       std::error_code ignored;
-      if (map && std::filesystem::is_directory(*map, ignored)) {
+      if (*map && std::filesystem::is_directory(**map, ignored)) {
         throw ConfigError(fmt::format("{}:{}: region '{}': {} {}: is a folder, not an image file", spec.file.string(),
-                                      key == std::string_view("normal_map") ? r.normal_map_line : r.depth_map_line,
-                                      r.name, key, map->string()));
+                                      line, r.name, key, (*map)->string()));
       }
     }
     try {
@@ -894,8 +904,7 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
       // An image's error begins with its path: said at the key that names it (the region's line otherwise).
       int line = r.line;
       std::string key;
-      for (const auto& [name, map, at] : {std::tuple{"normal_map", &r.sources.normal_map, r.normal_map_line},
-                                          std::tuple{"depth_map", &r.sources.depth_map, r.depth_map_line}}) {
+      for (const auto& [name, map, at] : map_keys(r)) {
         if (*map && key.empty() && std::string_view(e.what()).starts_with((*map)->string() + ": ")) {
           line = at;
           key = std::string(name) + ": ";

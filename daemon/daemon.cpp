@@ -265,7 +265,7 @@ void Daemon::consider(const std::string& node) {
   if (name.starts_with(kOwnDevicePrefix)) {
     log_.debug("{} {}: a virtual device of pseudohapticd; not taken", node, quoted_name(*device));
     passed_over_.insert(node);
-    retired_.keep(std::move(device), std::chrono::steady_clock::now());  // closed off the lock
+    retired_.keep(std::move(device));  // closed off the lock
     return;
   }
   if (!device->is_pointer()) {
@@ -274,7 +274,7 @@ void Daemon::consider(const std::string& node) {
     if (device->moves_the_cursor()) {
       watch_untaken(node, std::move(device));
     } else {
-      retired_.keep(std::move(device), std::chrono::steady_clock::now());  // a keyboard plugged in: closed off the lock
+      retired_.keep(std::move(device));  // a keyboard plugged in: closed off the lock
     }
     return;
   }
@@ -384,7 +384,7 @@ bool Daemon::on_released_elsewhere(int fd) {
 void Daemon::let_go(const std::string& node, std::string_view why) {
   if (const auto u = untaken_.find(node); u != untaken_.end()) {
     ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, u->second->fd(), nullptr);
-    retired_.keep(std::move(u->second), std::chrono::steady_clock::now());  // not grabbed: closed off the lock
+    retired_.keep(std::move(u->second));  // not grabbed: closed off the lock
     untaken_.erase(u);
   }
   const auto it = mice_.find(node);
@@ -421,7 +421,7 @@ void Daemon::retire_virtual_devices(Mouse& mouse) {
   }
   // An unplugged mouse's node too: closing it lets go of the grab, which waits for the kernel. (One still there is
   // let go of here: it may be taken again at once, and a grab not yet let go of would refuse that.)
-  if (mouse.device && mouse.device->hung_up()) retired_.keep(std::move(mouse.device), now);
+  if (mouse.device && mouse.device->hung_up()) retired_.keep(std::move(mouse.device));
 }
 
 void Daemon::let_go_of_all(std::string_view why) {

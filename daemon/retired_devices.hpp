@@ -46,8 +46,8 @@ class RetiredDevices {
   }
 
   // Hands the device over (any type: the last owner's deleter travels with it), to be destroyed at `until` (at once
-  // if that has passed). Does not wait.
-  void keep(std::shared_ptr<void> device, Time until) {
+  // if that has passed, or is left out). Does not wait.
+  void keep(std::shared_ptr<void> device, Time until = {}) {
     if (!device) return;
     {
       const std::lock_guard lock(mutex_);
