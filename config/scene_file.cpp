@@ -388,6 +388,7 @@ void parse_region_engine(const Reporter& rep, const toml::table& t, const std::s
   check_key(
       rep, t, "lut_directions", where, [&] { return e.lut_directions == 8 || e.lut_directions == 16; },
       "must be 8 or 16");
+  r.own_lut_directions = t.get("lut_directions") != nullptr;
   if (r.engine_auto && e.sampling == Sampling::bilinear) {
     // "auto" chooses among the nearest-sampling variants: a bilinear [daemon] table is the others' default, not
     // this region's; bilinear asked for in the region itself contradicts it.
@@ -646,6 +647,8 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
     spec.daemon = parse_daemon(rep, *daemon);
     if (const toml::node* dpi = daemon->get("mouse_dpi"))
       spec.mouse_dpi_line = static_cast<int>(dpi->source().begin.line);
+    if (const toml::node* lut = daemon->get("lut_directions"))
+      spec.lut_directions_line = static_cast<int>(lut->source().begin.line);
   }
   const toml::node* regions = root.get("region");
   if (regions == nullptr) return spec;
@@ -983,12 +986,26 @@ std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadRep
 }
 
 std::vector<std::string> daemon_warnings(const SceneSpec& spec) {
-  if (spec.mouse_dpi_line == 0 || acceleration_of(spec.daemon).profile != AccelProfile::flat) return {};
-  return {
-      fmt::format("{}:{}: daemon.mouse_dpi changes nothing with the flat profile, which scales the mice's own "
-                  "counts as libinput's does (the adaptive profile reads it){}",
-                  spec.file.string(), spec.mouse_dpi_line,
-                  spec.daemon.acceleration ? "" : "; the flat profile is the default for relative output")};
+  std::vector<std::string> out;
+  if (spec.mouse_dpi_line != 0 && acceleration_of(spec.daemon).profile == AccelProfile::flat) {
+    out.push_back(
+        fmt::format("{}:{}: daemon.mouse_dpi changes nothing with the flat profile, which scales the mice's "
+                    "own counts as libinput's does (the adaptive profile reads it){}",
+                    spec.file.string(), spec.mouse_dpi_line,
+                    spec.daemon.acceleration ? "" : "; the flat profile is the default for relative output"));
+  }
+  const auto walks_with_the_scenes_table = [](const RegionSpec& r) {
+    return r.engine && !r.engine_auto && r.engine->traversal == Traversal::direction_lut && !r.own_lut_directions;
+  };
+  if (spec.lut_directions_line != 0 && spec.daemon.engine.traversal != Traversal::direction_lut &&
+      std::none_of(spec.regions.begin(), spec.regions.end(), walks_with_the_scenes_table)) {
+    out.push_back(
+        fmt::format("{}:{}: daemon.lut_directions changes nothing: it applies to traversal = "
+                    "\"direction_lut\", which neither the [daemon] table nor a region without a "
+                    "lut_directions of its own walks with",
+                    spec.file.string(), spec.lut_directions_line));
+  }
+  return out;
 }
 
 std::vector<std::string> unused_method_table_warnings(const SceneSpec& spec) {
@@ -1012,11 +1029,20 @@ std::vector<std::string> unused_method_table_warnings(const SceneSpec& spec) {
 std::vector<std::string> method_warnings(const SceneSpec& spec) {
   std::vector<std::string> out;
   for (const RegionSpec& r : spec.regions) {
-    if (r.method == DepthMethod::kName && method_params<DepthMethod>(r).gain == 0.0) {
+    if (r.method != DepthMethod::kName) continue;
+    const double gain = method_params<DepthMethod>(r).gain;
+    if (gain == 0.0) {
       out.push_back(
           fmt::format("{}:{}: region '{}': depth.gain = 0 makes the depth method's C/D 1 everywhere: the "
                       "region feels flat",
                       spec.file.string(), r.line, r.name));
+    } else if (gain < 0.0) {
+      // Allowed (it is the formula's sign), but more often a white-is-deep map read the wrong way round: relief_px
+      // is the key for that, since it turns the relief for every method and for the interrogation effects alike.
+      out.push_back(
+          fmt::format("{}:{}: region '{}': depth.gain = {:g} turns the relief over: bumps are felt as holes (for a "
+                      "depth map stored white-is-deep, a negative relief_px reads it the right way round instead)",
+                      spec.file.string(), r.line, r.name, gain));
     }
   }
   return out;

@@ -59,6 +59,7 @@ struct RegionSpec {
   int line = 0;               // where the region starts in the file
   int normal_map_line = 0;    // where its normal_map and depth_map keys are (0: not given)
   int depth_map_line = 0;
+  bool own_lut_directions = false;  // the region sets lut_directions itself (not taking the [daemon] table's)
 };
 
 // The parameters of method class M in a region: its table's, else M's defaults (added to the region).
@@ -78,6 +79,7 @@ struct SceneSpec {
   std::vector<RegionSpec> regions;
   DaemonSettings daemon;                       // the [daemon] table; its defaults when there is none
   int mouse_dpi_line = 0;                      // where the [daemon] table sets mouse_dpi (0: it does not)
+  int lut_directions_line = 0;                 // where the [daemon] table sets lut_directions (0: it does not)
   MethodRegistry methods = builtin_methods();  // what the regions' methods may be
 };
 
@@ -149,8 +151,10 @@ std::vector<std::string> method_warnings(const SceneSpec& spec);
 // `pseudohaptic trace --method` reads the table of the method it is given.
 std::vector<std::string> unused_method_table_warnings(const SceneSpec& spec);
 
-// A line when the [daemon] table sets mouse_dpi with the flat profile in force, which does not read it: libinput's
-// flat filter scales a mouse's own counts.
+// A line for each [daemon] key that changes nothing: mouse_dpi with the flat profile in force, which does not read
+// it (libinput's flat filter scales a mouse's own counts); lut_directions when no frame walks with a direction
+// table of that count (neither the [daemon] traversal nor a region's without its own lut_directions is
+// direction_lut).
 std::vector<std::string> daemon_warnings(const SceneSpec& spec);
 
 // What loading the scene found to warn of, in this order: map_warnings, relief_scale_warnings, effect_warnings,

@@ -394,6 +394,22 @@ TEST(SceneFileWarnings, ADepthGainOfZeroIsWarnedOf) {
                              "region feels flat");
 }
 
+// A negative gain turns the relief over for the depth method alone: allowed, and said, with the key that reads a
+// white-is-deep map the right way round.
+TEST(SceneFileWarnings, ANegativeDepthGainIsWarnedOf) {
+  const std::string region =
+      "[[region]]\nname = \"{}\"\nwidth = 2\nheight = 2\ndepth_map = \"d.png\"\n"
+      "method = \"depth\"\n[region.depth]\ngain = {}\n";
+  const SceneSpec spec = parse_scene_text(
+      fmt::format(fmt::runtime(region), "turned", -2.5) + fmt::format(fmt::runtime(region), "upright", 0.5), kOrigin);
+  const std::vector<std::string> warnings = method_warnings(spec);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], kOrigin.string() +
+                             ":1: region 'turned': depth.gain = -2.5 turns the relief over: bumps are felt as holes "
+                             "(for a depth map stored white-is-deep, a negative relief_px reads it the right way "
+                             "round instead)");
+}
+
 // A method table for a method the region does not use is read by nothing the daemon does: said, with where it is
 // read (trace --method). A hybrid region takes the curvature and depth methods' defaults, not their tables.
 TEST(SceneFileWarnings, AMethodTableTheRegionsMethodDoesNotReadIsWarnedOf) {
@@ -431,6 +447,25 @@ TEST(SceneFileWarnings, AMouseDpiTheFlatProfileDoesNotReadIsWarnedOf) {
   EXPECT_TRUE(warnings("acceleration = \"adaptive\"\nmouse_dpi = 1600\n").empty());
   EXPECT_TRUE(warnings("mouse_dpi = 1600\n").empty());  // absolute output: adaptive by default
   EXPECT_TRUE(warnings("acceleration = \"flat\"\n").empty());
+}
+
+// The [daemon] table's lut_directions is read only by a walk with direction tables: the [daemon] traversal's, or a
+// region's that sets traversal = "direction_lut" without a count of its own. Set where none reads it, it is said.
+TEST(SceneFileWarnings, ALutDirectionsNoWalkReadsIsWarnedOf) {
+  const auto warnings = [](const std::string& text) { return daemon_warnings(parse_scene_text(text, kOrigin)); };
+  const std::string region = "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n";
+  const std::vector<std::string> unread = warnings("[daemon]\ntraversal = \"exact\"\nlut_directions = 16\n" + region);
+  ASSERT_EQ(unread.size(), 1u);
+  EXPECT_EQ(unread[0].rfind(kOrigin.string() + ":3: daemon.lut_directions changes nothing", 0), 0u) << unread[0];
+  EXPECT_EQ(warnings("[daemon]\nlut_directions = 8\n" + region +
+                     "traversal = \"direction_lut\"\n"
+                     "lut_directions = 16\n")
+                .size(),
+            1u);  // the one region that walks with tables counts its own directions
+  EXPECT_EQ(warnings("[daemon]\nlut_directions = 8\n" + region + "traversal = \"auto\"\n").size(), 1u);
+  EXPECT_TRUE(warnings("[daemon]\nlut_directions = 8\n" + region + "traversal = \"direction_lut\"\n").empty());
+  EXPECT_TRUE(warnings("[daemon]\ntraversal = \"direction_lut\"\nlut_directions = 8\n" + region).empty());
+  EXPECT_TRUE(warnings("[daemon]\ntraversal = \"exact\"\n" + region).empty());
 }
 
 TEST(SceneFileErrors, DepthMethodWithoutDepthMap) {
