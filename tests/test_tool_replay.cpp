@@ -421,7 +421,8 @@ TEST(ReplayTool, CommaOptionsBeforeThePositionalsLeaveThemAlone) {
 }
 
 // --desktop takes what a scene file's desktop takes: one of 2e9 px gave absolute output an axis range that
-// overflowed ("A: 00 0 -294967297") without a word.
+// overflowed ("A: 00 0 -294967297") without a word. It is a command-line error (exit 105), found before the
+// recording is read: a missing recording is not what is reported.
 TEST(ReplayTool, DesktopIsRefusedWhereASceneFileRefusesIt) {
   ScratchDir dir;
   const fs::path in = stroke_file(dir, "in.evemu", 10, 3, 0);
@@ -431,8 +432,13 @@ TEST(ReplayTool, DesktopIsRefusedWhereASceneFileRefusesIt) {
                                       " " + quote(dir / "x.evemu"),
                                   dir);
     expect_clean_failure(r, {"--desktop: W and H must be from 1 to 1048576, X and Y within ±1048576"});
+    EXPECT_EQ(r.rc, 105) << r.err;
     EXPECT_FALSE(fs::exists(dir / "x.evemu"));
   }
+  const ToolResult early =
+      run_tool("replay --desktop 0,0,0,100 " + quote(dir / "missing.evemu") + " " + quote(dir / "x.evemu"), dir);
+  expect_clean_failure(early, {"--desktop: W and H must be from 1"});
+  EXPECT_EQ(early.err.find("missing.evemu"), std::string::npos) << early.err;
   const ToolResult widest = run_tool(
       "replay --output-mode absolute --desktop -1048576,0,1048576,100 " + quote(in) + " " + quote(dir / "x.evemu"),
       dir);

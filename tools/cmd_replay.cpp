@@ -277,10 +277,6 @@ int run_replay(const ReplayOptions& o) {
   RecordingInfo info;
   const Recording input = read_recording_file(o.input, o.device_given ? o.device : kFirstPointerDevice, &info);
   const PipelineConfig config = replay_config(o, loaded.daemon);
-  // As a scene file's desktop: larger ones overflowed absolute output's axis ranges.
-  if (!is_valid_desktop(config.desktop))
-    throw std::invalid_argument(fmt::format("--desktop: W and H must be from 1 to {}, X and Y within ±{}",
-                                            kMaxDesktopCoordinate, kMaxDesktopCoordinate));
   if (config.start && !(std::isfinite(config.start->x) && std::isfinite(config.start->y)))
     throw std::invalid_argument("--start: X and Y must be finite numbers");
   if (loaded.embedded) loaded.scene = embedded_scene(o.method, config.desktop);
@@ -379,8 +375,22 @@ Run add_replay_command(CLI::App& app) {
       ->check(CLI::Range(kMinMouseDpi, kMaxMouseDpi))
       ->capture_default_str()
       ->each([o](const std::string&) { o->dpi_given = true; });
+  // As a scene file's desktop: larger ones overflowed absolute output's axis ranges. Checked with the other
+  // options, before the recording and the scene are read.
   add_number_tuple(app, "--desktop", o->desktop, "X,Y,W,H",
-                   "Desktop rectangle the cursor model is kept in (default 0,0,1920,1080)");
+                   "Desktop rectangle the cursor model is kept in (default 0,0,1920,1080)")
+      ->check(
+          [](const std::string& text) -> std::string {
+            // (A check runs before the option's own function, which says what is not four integers.)
+            std::vector<std::int32_t> d(4);
+            const std::vector<std::string> parts = split_at_commas(text);
+            for (std::size_t i = 0; i < parts.size(); ++i)
+              if (parts.size() != d.size() || !parse_tuple_number(parts[i], d[i])) return "";
+            if (is_valid_desktop(Rect{d[0], d[1], d[2], d[3]})) return "";
+            return fmt::format("W and H must be from 1 to {}, X and Y within ±{}", kMaxDesktopCoordinate,
+                               kMaxDesktopCoordinate);
+          },
+          "");
   app.add_option("--gain", o->gain, "Screen px per device count at C/D 1 (the base pointer speed)")
       ->check(finite_from(kMinPointerSpeed, kMaxPointerSpeed))  // the scene file's pointer_speed's range
       ->capture_default_str()
