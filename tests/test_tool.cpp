@@ -1151,8 +1151,18 @@ TEST(Tool, CheckConfig) {
                          "the normals are smoothed within it (87.5 % of the texels; at 0.8 % the smoothing's "
                          "flattening taken off again)"))
         << r.out;
-    EXPECT_TRUE(contains(r.out, "fusion: none: the depth map's heights explain the normals")) << r.out;
+    EXPECT_TRUE(contains(r.out, "fusion: none: over most of the region the depth map's slopes explain the normals"))
+        << r.out;
     EXPECT_FALSE(contains(run_tool("check-config " + quote(scene), dir).out, "steps:"));  // curvature: no such line
+    // noise_slope = 0 keeps the normals as given: neither line gives another reason.
+    std::ofstream(dir / "hybrid-as-given.toml", std::ios::binary) << text << "[region.hybrid]\nnoise_slope = 0\n";
+    const ToolResult given = run_tool("check-config " + quote(dir / "hybrid-as-given.toml"), dir);
+    ASSERT_EQ(given.rc, 0) << given.err;
+    EXPECT_TRUE(contains(given.out,
+                         "rounding: slope sigma 8.8e-06 from the map's storage: noise_slope = 0 keeps the "
+                         "normals as given"))
+        << given.out;
+    EXPECT_TRUE(contains(given.out, "fusion: none: noise_slope = 0 keeps the normals as given")) << given.out;
   }
   {
     SCOPED_TRACE("hybrid: a generator's 8-bit normals read again from 16-bit heights");
@@ -1182,7 +1192,7 @@ TEST(Tool, CheckConfig) {
     // map's own, 2 / 255 / sqrt(12) = 2.3e-3.
     EXPECT_TRUE(contains(r.out, "rounding: slope sigma 0.00019: the normals are a generator's reading")) << r.out;
     EXPECT_TRUE(contains(r.out, "(normal map's own: 0.0023) and smoothed within it (")) << r.out;
-    EXPECT_TRUE(contains(r.out, "fusion: none")) << r.out;
+    EXPECT_TRUE(contains(r.out, "fusion: none: the normals were read again from the heights (above)")) << r.out;
     EXPECT_TRUE(contains(r.out, "scale: the normal map's slopes are 1 times the depth map's")) << r.out;
     EXPECT_FALSE(contains(r.out, "makes them agree")) << r.out;
     // The same maps with the depth map's relief_px halved: its slopes are half the normals', and it says so.

@@ -20,6 +20,7 @@
 #include "config/scene_file.hpp"
 #include "core/engine/decode.hpp"
 #include "core/engine/default_scene.hpp"
+#include "core/engine/method_hybrid.hpp"
 #include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
 
@@ -45,16 +46,27 @@ std::string steps_line(const RegionFields& fields) {
                      share);
 }
 
+// Whether the hybrid method read a generator's normals again from the depth map's finer heights: their rounding is
+// then below the normal map's own.
+bool read_again_from_heights(const RegionFields& fields, const FieldLoadReport& report) {
+  return report.normals.texels > 0 && fields.gradient_rounding > 0.0 &&
+         fields.gradient_rounding < gradient_rounding_of_normals(report.normals.value_step);
+}
+
 // How the hybrid method smooths the normals: within the rounding the map's storage leaves, none for a float map; a
 // rounding below the normal map's own says that it read a generator's normals again from finer heights.
-std::string rounding_line(const RegionFields& fields, const FieldLoadReport& report) {
+std::string rounding_line(const RegionFields& fields, const FieldLoadReport& report, double noise_slope) {
   if (fields.gradient_rounding <= 0.0) return "none (a float map): the normals are used as given";
+  if (noise_slope <= 0.0) {
+    return fmt::format("slope sigma {:.2g} from the map's storage: noise_slope = 0 keeps the normals as given",
+                       fields.gradient_rounding);
+  }
   const std::size_t texels = fields.gradient ? fields.gradient->values.size() : 0;
   auto percent = [texels](std::size_t n) { return texels == 0 ? 0.0 : 100.0 * n / static_cast<double>(texels); };
   const std::string smoothed =
       fmt::format("smoothed within it ({:.1f} % of the texels; at {:.1f} % the smoothing's flattening taken off again)",
                   percent(fields.smoothed_texels), percent(fields.unflattened_texels));
-  if (report.normals.texels > 0 && fields.gradient_rounding < gradient_rounding_of_normals(report.normals.value_step)) {
+  if (read_again_from_heights(fields, report)) {
     return fmt::format(
         "slope sigma {:.2g}: the normals are a generator's reading of the depth map's heights, which are stored "
         "finer, so they are read again from them (normal map's own: {:.2g}) and {}",
@@ -65,10 +77,16 @@ std::string rounding_line(const RegionFields& fields, const FieldLoadReport& rep
 }
 
 // Whether the hybrid method pulled the normals toward the depth map's slopes (docs/METHODS.md, "Hybrid"), which
-// `noise_slope` bounds.
-std::string fusion_line(const RegionFields& fields) {
+// `noise_slope` bounds, and if not, why not. The disagreement it weighs is a robust sigma over the region: a
+// disagreement of scale on a relief that is flat over most of the region does not count, and the scale line says it.
+std::string fusion_line(const RegionFields& fields, const FieldLoadReport& report, double noise_slope) {
   if (!fields.depth) return "none without a depth map";
-  if (!fields.fused_normals_weight) return "none: the depth map's heights explain the normals within their rounding";
+  if (noise_slope <= 0.0) return "none: noise_slope = 0 keeps the normals as given";
+  if (read_again_from_heights(fields, report)) return "none: the normals were read again from the heights (above)";
+  if (!fields.fused_normals_weight) {
+    return "none: over most of the region the depth map's slopes explain the normals within their rounding and "
+           "noise_slope";
+  }
   return fmt::format(
       "the normals are pulled toward the depth map's slopes where they disagree by noise (their weight {:.2g})",
       *fields.fused_normals_weight);
@@ -134,8 +152,9 @@ std::string summary(const SceneSpec& spec, const Scene& scene, const SceneLoadRe
     if (i < report.variants.size()) fmt::format_to(to, "      traversal: {}\n", report.variants[i]);
     if (region.fields.discontinuity) {
       fmt::format_to(to, "      steps: {}\n", steps_line(region.fields));
-      fmt::format_to(to, "      rounding: {}\n", rounding_line(region.fields, fr));
-      fmt::format_to(to, "      fusion: {}\n", fusion_line(region.fields));
+      const double noise_slope = method_params<HybridMethod>(r).noise_slope;
+      fmt::format_to(to, "      rounding: {}\n", rounding_line(region.fields, fr, noise_slope));
+      fmt::format_to(to, "      fusion: {}\n", fusion_line(region.fields, fr, noise_slope));
       if (r.sources.normal_map && r.sources.depth_map)
         fmt::format_to(to, "      scale: {}\n", scale_line(r, region.fields));
     }
