@@ -1052,9 +1052,20 @@ TEST(Tool, TargetsAndDemo) {
   ASSERT_EQ(names.size(), 24u) << r.out;
   for (std::size_t i = 0; i < all.size(); ++i) EXPECT_EQ(names[i], all[i].name());
 
-  // A step so small that a stroke would stop part way printed that part's range as the target's, with exit 0.
+  // A step so small that a stroke would stop part way printed that part's range as the target's, with exit 0; and
+  // no table's head without a row.
   const ToolResult tiny = run_tool("demo --targets " + quote(folder) + " --step 4e-5", dir);
   expect_clean_failure(tiny, {"more than the 10000000 a stroke may take: give a larger --step"});
+  EXPECT_EQ(tiny.out, "");
+
+  // A damaged target file (a run killed while writing it) failed every demo after it: it is written again.
+  const TargetSpec& damaged = all[5];
+  std::ofstream(target_file_paths(folder, damaged).normal_map, std::ios::binary) << "garbage";
+  const ToolResult mended = run_tool("demo --targets " + quote(folder), dir);
+  ASSERT_EQ(mended.rc, 0) << mended.err;
+  EXPECT_TRUE(contains(mended.err, "not a PNG file; writing the target " + damaged.name() + " again")) << mended.err;
+  EXPECT_EQ(mended.out, r.out);
+  EXPECT_EQ(run_tool("demo --targets " + quote(folder), dir).err, "");  // mended for good
 
   // A file the targets cannot be written to: the file system's reason.
   fs::create_directories(dir / "blocked" / (all.front().name() + ".toml"));

@@ -264,6 +264,9 @@ TEST(ToolInterrogation, InspectPaintsRoundingNoiseWhite) {
       for (const float v : picture.pixels) darkest = std::min(darkest, static_cast<double>(v));
       EXPECT_GT(darkest, 0.9) << name << " is not white: " << r.out;
     }
+    // The legend gives the scale the picture used: the floor, the planar curvedness squared (5e-5 /px for 16-bit
+    // maps), also where every K is exactly 0 (it said +-1 there).
+    EXPECT_NE(r.out.find("K.png: K in 1/px^2, blue < 0 < red, full colour at +-2.5e-09 "), std::string::npos) << r.out;
   }
 }
 

@@ -58,12 +58,29 @@ Range stroke_range(const SceneSpec& target_scene, std::string_view method, doubl
   return {result.cd_min, result.cd_max};
 }
 
+// The scene of target `t` in `folder`, loaded once to see that its files read: a damaged one (a run killed while the
+// targets were written, a file edited by hand) is written again, once, and said.
+SceneSpec readable_target_scene(const std::filesystem::path& folder, const TargetSpec& t) {
+  const std::filesystem::path scene_file = target_file_paths(folder, t).scene;
+  try {
+    SceneSpec spec = parse_scene_file(scene_file);
+    (void)load_scene(spec);
+    return spec;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "pseudohaptic: warning: {}; writing the target {} again\n", e.what(), t.name());
+    write_target_files(folder, {t});
+    return parse_scene_file(scene_file);
+  }
+}
+
 }  // namespace
 
 Run add_demo_command(CLI::App& app) {
   auto dir = std::make_shared<std::string>();
   auto step = std::make_shared<double>(2.0);
-  app.add_option("--targets", *dir, "Folder of the target files (default: $XDG_CACHE_HOME/pseudohaptic/targets)")
+  app.add_option("--targets", *dir,
+                 "Folder of the target files (default: $XDG_CACHE_HOME/pseudohaptic/targets, else "
+                 "~/.cache/pseudohaptic/targets); written if missing or unreadable")
       ->check(non_empty_path());
   app.add_option("--step", *step, "Motor travel per frame, px")->check(positive_number())->capture_default_str();
   return [dir, step] {
@@ -77,18 +94,22 @@ Run add_demo_command(CLI::App& app) {
       });
       writing.finish();
     }
-    fmt::print("C/D ratio met on a horizontal stroke through the centre of each target\n");
-    fmt::print("(below 1: the cursor speeds up, downhill; above 1: it slows down, uphill)\n\n");
-    fmt::print("{:<28} {:>19} {:>19}\n", "target", "curvature", "depth");
+    // The table's head goes out with its first row: a --step that no stroke can take leaves no empty table.
+    const auto print_head = [] {
+      fmt::print("C/D ratio met on a horizontal stroke through the centre of each target\n");
+      fmt::print("(below 1: the cursor speeds up, downhill; above 1: it slows down, uphill)\n\n");
+      fmt::print("{:<28} {:>19} {:>19}\n", "target", "curvature", "depth");
+    };
     std::size_t done = 0;
     ProgressLine measuring;  // on a terminal only: elsewhere the table's rows say as much
     for (const TargetSpec& t : targets) {
       ++done;
       if (measuring.in_place()) measuring.show(fmt::format("[{:2}/{}] {}", done, targets.size(), t.name()));
-      const SceneSpec spec = parse_scene_file(target_file_paths(folder, t).scene);
+      const SceneSpec spec = readable_target_scene(folder, t);
       const Range c = stroke_range(spec, CurvatureMethod::kName, *step);
       const Range d = stroke_range(spec, DepthMethod::kName, *step);
       measuring.finish(true);
+      if (done == 1) print_head();
       fmt::print("{:<28} {:>8.3f} .. {:>6.3f} {:>8.3f} .. {:>6.3f}\n", t.name(), c.lo, c.hi, d.lo, d.hi);
       std::fflush(stdout);
     }

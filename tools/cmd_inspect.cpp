@@ -54,15 +54,16 @@ Rgb diverging(double t) {
   return out;
 }
 
-// The 99th percentile of |v|: a robust scale that a few spikes (steps, walls) cannot flatten into white.
+// The 99th percentile of |v|: a robust scale that a few spikes (steps, walls) cannot flatten into white. 0 where
+// (nearly) every value is 0: the floor the caller gives then sets the scale.
 double robust_scale(const Grid<float>& values) {
   std::vector<float> magnitudes;
   magnitudes.reserve(values.values.size());
   for (float v : values.values) magnitudes.push_back(std::abs(v));
-  if (magnitudes.empty()) return 1.0;
+  if (magnitudes.empty()) return 0.0;
   const std::size_t k = std::min(magnitudes.size() - 1, magnitudes.size() * 99 / 100);
   std::nth_element(magnitudes.begin(), magnitudes.begin() + k, magnitudes.end());
-  return magnitudes[k] > 0.0f ? magnitudes[k] : 1.0;
+  return magnitudes[k];
 }
 
 template <typename T, typename F>
@@ -80,7 +81,8 @@ void write_picture(const std::filesystem::path& path, const Grid<T>& grid, F col
 // out white, not painted in full colour as if it were curved.
 double write_diverging(const std::filesystem::path& path, const Grid<float>& values, double floor) {
   const double scale = std::max(robust_scale(values), floor);
-  write_picture(path, values, [&](float v) { return diverging(v / scale); });
+  const double divisor = scale > 0.0 ? scale : 1.0;  // (a floor of 0 over values all 0: white either way)
+  write_picture(path, values, [&](float v) { return diverging(v / divisor); });
   return scale;
 }
 
@@ -193,7 +195,11 @@ Run add_inspect_command(CLI::App& app) {
       "Write what the surface-interrogation methods see in a texture as false-colour PNGs into OUTDIR:\n"
       "K.png (Gaussian curvature), H.png (mean curvature), class.png (planar / parabolic / elliptic /\n"
       "hyperbolic; the legend goes to standard output), isophotes.png and, with a depth map, contours.png.");
-  app.add_option("OUTDIR", o->outdir, "Folder to write into (created if needed)")->required()->check(non_empty_path());
+  app.add_option("OUTDIR", o->outdir,
+                 "Folder to write into (created if needed); the pictures of these names there are replaced, and "
+                 "a contours.png an earlier run left is removed when this run has no depth map")
+      ->required()
+      ->check(non_empty_path());
   app.add_option("--normal-map", o->normal_map, "Normal map image (PNG, TIFF, EXR)")->check(non_empty_path());
   app.add_option("--depth-map", o->depth_map, "Depth map image (one channel)")->check(non_empty_path());
   app.add_option("--from", o->from, "Curvature from the normal or the depth map (default: normal when given)")
