@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
@@ -79,6 +80,57 @@ TEST(ToolStudy, SmallRunIsSeededOrderedAndDependsOnTheTechnique) {
   const double chance = summary_value(read_rows(dir / "c" / "summary.csv"), "none", "all", "error_pct");
   EXPECT_GT(chance, 30.0);
   EXPECT_LT(chance, 70.0);
+}
+
+// tools/study_paired.py, which docs/STUDY.md's paired table comes from, reads what the study wrote (its differences
+// agree in sign with summary.csv's means), and names the file and line of a trials.csv that is not what it wrote
+// rather than ending in a traceback.
+TEST(ToolStudy, StudyPairedReadsTheRunAndNamesAMalformedFile) {
+  ScratchDir dir;
+  ASSERT_EQ(run_tool("study --small --seed 5 " + quote(dir / "a"), dir).rc, 0);
+  const fs::path script = PH_STUDY_PAIRED;
+  const ToolResult paired = run_program("python3", quote(script) + " " + quote(dir / "a"), dir);
+  ASSERT_EQ(paired.rc, 0) << paired.err;
+  const std::string row = "| curvature:sign+1 \u2212 depth, all targets | ";
+  const std::size_t at = paired.out.find(row);
+  ASSERT_NE(at, std::string::npos) << paired.out;
+  // The decision time's difference, the row's last cell: depth is faster (the first test), so it is positive.
+  const std::string line = paired.out.substr(at, paired.out.find('\n', at) - at);
+  const std::size_t last_bar = line.rfind('|');
+  const std::size_t cell_start = line.rfind('|', last_bar - 1);
+  EXPECT_EQ(line.substr(cell_start, 3), "| +") << line;
+
+  std::vector<std::string> lines;
+  std::istringstream in(read_text(dir / "a" / "trials.csv"));
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  ASSERT_GT(lines.size(), 6u);
+  const auto write_trials = [&](const std::string& name, const std::vector<std::string>& text) {
+    fs::create_directories(dir / name);
+    std::ofstream out(dir / name / "trials.csv", std::ios::binary);
+    for (const std::string& l : text) out << l << '\n';
+  };
+  std::vector<std::string> bad_time = lines;
+  // time_s is the 14th column: made a word on line 6.
+  std::vector<std::string> cells;
+  std::istringstream cells_in(bad_time[5]);
+  for (std::string c; std::getline(cells_in, c, ',');) cells.push_back(c);
+  ASSERT_GT(cells.size(), 13u);
+  cells[13] = "abc";
+  bad_time[5].clear();
+  for (std::size_t i = 0; i < cells.size(); ++i) bad_time[5] += (i ? "," : "") + cells[i];
+  write_trials("word", bad_time);
+  write_trials("short", {lines[0], lines[1], "0,depth"});
+  write_trials("other", {"a,b", "1,2"});
+  for (const auto& [name, said] : std::vector<std::pair<std::string, std::string>>{
+           {"word", "trials.csv:6: time_s: not a number: 'abc'"},
+           {"short", "trials.csv:3: fewer cells than the header has"},
+           {"other", "trials.csv: missing column(s) participant, technique"}}) {
+    SCOPED_TRACE(name);
+    const ToolResult r = run_program("python3", quote(script) + " " + quote(dir / name), dir);
+    EXPECT_EQ(r.rc, 1) << r.err;
+    EXPECT_NE(r.err.find(said), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("Traceback"), std::string::npos) << r.err;
+  }
 }
 
 // A technique named twice runs once: the files are those of naming it once, not every row twice.

@@ -101,7 +101,7 @@ def chart_times(trials, summary, outdir):
         if r["scored"] != "1" or r["technique"] not in techniques:
             continue
         a = sums[(r["technique"], (r["profile"], r["radius"], r["height"]), r["participant"])]
-        a[0] += float(r["time_s"])
+        a[0] += r["time_s"]
         a[1] += 1
     fig, ax = plt.subplots(figsize=(11, 4.8))
     width = 0.8 / len(techniques)
@@ -180,7 +180,7 @@ def main(argv):
     try:
         summary, _ = read_table(args.csvdir / "summary.csv", SUMMARY_REQUIRED, SUMMARY_NUMERIC, SUMMARY_OPTIONAL,
                                 command="study")
-        trials, _ = read_table(args.csvdir / "trials.csv", TRIALS_REQUIRED, [], command="study")
+        trials, _ = read_table(args.csvdir / "trials.csv", TRIALS_REQUIRED, ["time_s"], command="study")
         args.outdir.mkdir(parents=True, exist_ok=True)
         written = [chart_errors(summary, args.outdir), chart_times(trials, summary, args.outdir),
                    chart_techniques(summary, args.outdir)]

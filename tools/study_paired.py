@@ -12,6 +12,7 @@ table of the comparisons docs/STUDY.md discusses; a comparison whose techniques 
 import argparse
 import csv
 import math
+import signal
 import sys
 from collections import defaultdict
 
@@ -64,7 +65,7 @@ def per_participant(rows, technique, keep):
     for row in rows:
         if row["technique"] == technique and row["scored"] == "1" and keep(row):
             trials[row["participant"]].append(row)
-    return {p: (100.0 * sum(r["correct"] == "0" for r in ts) / len(ts), sum(float(r["time_s"]) for r in ts) / len(ts))
+    return {p: (100.0 * sum(r["correct"] == "0" for r in ts) / len(ts), sum(r["time_s"] for r in ts) / len(ts))
             for p, ts in trials.items()}
 
 
@@ -82,15 +83,43 @@ def signed(value, digits):
     return text.replace("-", "\u2212")
 
 
+REQUIRED = ["participant", "technique", "scored", "correct", "time_s", "shape", "height", "radius"]
+
+
+def read_trials(path):
+    """The rows of trials.csv, time_s as a float; exits naming the file (and line) where it is not what
+    `pseudohaptic study` writes."""
+    try:
+        with open(path, newline="") as f:
+            reader = csv.DictReader(f)
+            missing = [c for c in REQUIRED if c not in (reader.fieldnames or [])]
+            if missing:
+                sys.exit(f"study_paired.py: {path}: missing column(s) {', '.join(missing)} "
+                         f"(written by `pseudohaptic study`)")
+            rows = []
+            for row in reader:
+                if any(row[c] is None for c in REQUIRED):
+                    sys.exit(f"study_paired.py: {path}:{reader.line_num}: fewer cells than the header has")
+                try:
+                    row["time_s"] = float(row["time_s"])
+                except ValueError:
+                    sys.exit(f"study_paired.py: {path}:{reader.line_num}: time_s: not a number: {row['time_s']!r}")
+                if not math.isfinite(row["time_s"]):
+                    sys.exit(f"study_paired.py: {path}:{reader.line_num}: time_s: not finite: {row['time_s']}")
+                rows.append(row)
+    except OSError as e:
+        sys.exit(f"study_paired.py: {e.filename}: {e.strerror}")
+    except (csv.Error, UnicodeDecodeError) as e:
+        sys.exit(f"study_paired.py: {path}: not a CSV file: {e}")
+    return rows
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("outdir", help="what `pseudohaptic study OUTDIR` wrote")
     args = parser.parse_args()
-    try:
-        with open(f"{args.outdir}/trials.csv", newline="") as f:
-            rows = list(csv.DictReader(f))
-    except OSError as e:
-        sys.exit(f"study_paired.py: {e.filename}: {e.strerror}")
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # `| head`: end quietly, as the C++ tool does
+    rows = read_trials(f"{args.outdir}/trials.csv")
     techniques = {row["technique"] for row in rows}
     print("| paired difference | error, percentage points | decision time, s |")
     print("|---|---|---|")
@@ -99,6 +128,8 @@ def main():
             continue
         pa, pb = per_participant(rows, a, keep), per_participant(rows, b, keep)
         both = sorted(set(pa) & set(pb))
+        if not both:  # no participant has scored trials of both here (a run of few targets)
+            continue
         errors = mean_ci([pa[p][0] - pb[p][0] for p in both])
         times = mean_ci([pa[p][1] - pb[p][1] for p in both])
         print(f"| {a} \u2212 {b}, {label} | {signed(errors[0], 2)} \u00b1 {errors[1]:.2f} | "
