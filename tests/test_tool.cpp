@@ -457,6 +457,12 @@ TEST(Tool, TraceErrors) {
                          {"exactly one"});
   }
   {
+    SCOPED_TRACE("an empty target name: said of --target, not taken for no texture");
+    const ToolResult r = run_tool("trace --target ''" + out, dir);
+    expect_clean_failure(r, {"--target: is empty: give a target's name"});
+    EXPECT_FALSE(contains(r.err, "exactly one")) << r.err;
+  }
+  {
     SCOPED_TRACE("missing files");
     expect_clean_failure(run_tool("trace --scene " + quote(dir / "nope.toml") + out, dir), {"nope.toml"});
     expect_clean_failure(run_tool("trace --normal-map " + quote(dir / "nope.png") + out, dir), {"nope.png"});

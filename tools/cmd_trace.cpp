@@ -324,7 +324,12 @@ Run add_trace_command(CLI::App& app) {
   auto* src = app.add_option_group("texture", "What to trace across (exactly one)");
   src->add_option("--scene", o->scene_file, "Scene file (TOML); the stroke defaults to the first region")
       ->check(non_empty_path());
-  src->add_option("--target", o->target, "One of the 24 targets by name (e.g. bump-gaussian-h1-r200), exact fields");
+  src->add_option("--target", o->target, "One of the 24 targets by name (e.g. bump-gaussian-h1-r200), exact fields")
+      ->check(CLI::Validator(
+          [](std::string& name) -> std::string {
+            return name.empty() ? "is empty: give a target's name (see `pseudohaptic targets`)" : std::string();
+          },
+          ""));
   src->add_option("--normal-map", o->normal_map, "Normal map image (PNG, TIFF, EXR); region at (0,0), image size")
       ->check(non_empty_path());
   src->add_option("--depth-map", o->depth_map, "Depth map image (one channel); with --normal-map too, both are used")
