@@ -703,6 +703,26 @@ std::array<MapKey, 2> map_keys(const RegionSpec& r) {
            {"depth_map", &r.sources.depth_map, r.depth_map_line}}};
 }
 
+// What the region's method and effects read together: the loader builds nothing else.
+FieldNeeds region_needs(const RegionSpec& r, const Method& method) {
+  FieldNeeds needs = method.needs();
+  if (r.materials) {
+    needs =
+        joined(needs, materials_needs(*r.materials, r.sources.normal_map.has_value(), r.sources.depth_map.has_value()));
+  }
+  if (r.wells) needs = joined(needs, wells_needs(*r.wells));
+  return needs;
+}
+
+// Whether the loader opens the map `key` names (config/field_loader.cpp): the depth map for its heights or for
+// slopes where there is no normal map, the normal map for slopes. One the region names but nothing reads is not
+// opened at all.
+bool map_is_read(std::string_view key, const RegionSpec& r, FieldNeeds needs) {
+  if (key == "normal_map") return needs.gradient && r.sources.normal_map.has_value();
+  return r.sources.depth_map.has_value() &&
+         (needs.reads_depth(true) || (needs.gradient && !r.sources.normal_map.has_value()));
+}
+
 // `path` (absolute) with the links on it followed as far as they can be read: reading a link needs no access to where
 // it leads (under the service, a hidden folder cannot be entered, and canonical() fails there), and a name that cannot
 // be looked at ends the walk, the rest taken as written.
@@ -808,9 +828,10 @@ std::vector<std::string> service_path_warnings(const SceneSpec& spec) {
   if (const std::optional<std::string> why = unreadable_by_others(spec.file))
     out.push_back(fmt::format("{}: {}; {}", spec.file.string(), *why, kRunsAs));
   for (const RegionSpec& r : spec.regions) {
+    const FieldNeeds needs = region_needs(r, *make_method(r, spec.methods));
     for (const auto& [key, path, line] : map_keys(r)) {
       const std::optional<std::filesystem::path>& map = *path;
-      if (!map) continue;
+      if (!map || !map_is_read(key, r, needs)) continue;
       if (const std::optional<HiddenFolder> hidden = hidden_from_the_service(*map)) {
         out.push_back(
             fmt::format("{}:{}: region '{}': {} {} lies under {}, which pseudohapticd.service cannot read "
@@ -876,12 +897,7 @@ Scene load_scene(const SceneSpec& spec, SceneLoadReport* report, FieldReader* re
     region.rect = r.rect;
     region.method = make_method(r, spec.methods);
     const FieldNeeds method_needs = region.method->needs();
-    FieldNeeds needs = method_needs;
-    if (r.materials) {
-      needs = joined(needs,
-                     materials_needs(*r.materials, r.sources.normal_map.has_value(), r.sources.depth_map.has_value()));
-    }
-    if (r.wells) needs = joined(needs, wells_needs(*r.wells));
+    const FieldNeeds needs = region_needs(r, *region.method);
     FieldLoadReport field_report;
     for (const auto& [key, map, line] : map_keys(r)) {
       std::error_code ignored;

@@ -750,6 +750,22 @@ TEST(SceneFileErrors, FilesTheServiceCannotReadAreWarnedOfAndNamedWhenMissing) {
                        "normal_map /tmp/targets/n.png lies under /tmp, which pseudohapticd.service cannot "
                        "read (PrivateTmp=yes; the daemon run by hand can)"))
       << in_tmp[0];
+  // A map the region names but neither its method nor an effect reads is not opened: nothing to warn of (a target's
+  // scene names both maps; the curvature method reads the normals alone). The depth method reads the heights alone.
+  const std::string both_maps =
+      "[[region]]\nname = \"t\"\nwidth = 2\nheight = 2\nnormal_map = "
+      "\"/tmp/targets/n.png\"\ndepth_map = \"/tmp/targets/d.png\"\n";
+  const std::vector<std::string> curvature =
+      service_path_warnings(parse_scene_text(both_maps, "/etc/pseudohaptic/scene.toml"));
+  ASSERT_EQ(curvature.size(), 1u);
+  EXPECT_TRUE(contains(curvature[0], ":5: region 't': normal_map /tmp/targets/n.png lies under /tmp")) << curvature[0];
+  const std::vector<std::string> depth =
+      service_path_warnings(parse_scene_text(both_maps + "method = \"depth\"\n", "/etc/pseudohaptic/scene.toml"));
+  ASSERT_EQ(depth.size(), 1u);
+  EXPECT_TRUE(contains(depth[0], ":6: region 't': depth_map /tmp/targets/d.png lies under /tmp")) << depth[0];
+  EXPECT_EQ(service_path_warnings(parse_scene_text(both_maps + "method = \"hybrid\"\n", "/etc/pseudohaptic/scene.toml"))
+                .size(),
+            2u);
 }
 
 // A region the cursor cannot reach on the configured desktop, wholly or in part, is warned of; with desktop = "auto"
