@@ -1077,6 +1077,11 @@ TEST(Tool, TargetsAndDemo) {
   fs::create_directories(dir / "blocked" / (all.front().name() + ".toml"));
   expect_clean_failure(run_tool("targets " + quote(dir / "blocked"), dir),
                        {all.front().name() + ".toml: cannot write: Is a directory"});
+  // An output folder that is a link to nowhere: said so, not "File exists".
+  fs::create_symlink(dir / "gone" / "targets", dir / "dangling");
+  const ToolResult dangling = run_tool("targets " + quote(dir / "dangling"), dir);
+  expect_clean_failure(dangling, {(dir / "dangling").string() + ": is a link to " +
+                                  (dir / "gone" / "targets").string() + ", which does not exist"});
 }
 
 // Without FILE, check-config reads the daemon's default file; where there is none the daemon runs its embedded

@@ -129,6 +129,12 @@ int main(int argc, char** argv) {
     std::string what = e.what();
     if (const std::string_view prefix = "filesystem error: "; what.starts_with(prefix)) what.erase(0, prefix.size());
     if (const std::size_t at = what.rfind(" ["); at != std::string::npos && !e.path1().empty()) what.erase(at);
+    // An output folder given as a link to nowhere: "File exists" names neither the link nor where it leads.
+    std::error_code ignored;
+    if (e.code() == std::errc::file_exists && std::filesystem::is_symlink(e.path1(), ignored) &&
+        !std::filesystem::exists(e.path1(), ignored)) {
+      what = "is a link to " + std::filesystem::read_symlink(e.path1(), ignored).string() + ", which does not exist";
+    }
     say_error((e.path1().empty() ? "" : e.path1().string() + ": ") + what);
     return 1;
   } catch (const std::exception& e) {
