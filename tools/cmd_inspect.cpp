@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -24,6 +25,7 @@
 #include "tools/finite_check.hpp"
 #include "tools/map_flags.hpp"
 #include "tools/number_tuple.hpp"
+#include "tools/progress_line.hpp"
 
 namespace ph::tools {
 namespace {
@@ -102,11 +104,14 @@ struct InspectPictures {
   std::optional<Grid<std::uint8_t>> contours;  // with a depth map
 };
 
+// `stage` is told what each step does, for a progress line: a large texture takes seconds a step.
 InspectPictures compute_pictures(const InspectOptions& o, const FieldSources& sources, const ImageSize& image,
-                                 bool from_depth, FieldLoadReport& report) {
+                                 bool from_depth, FieldLoadReport& report,
+                                 const std::function<void(const std::string&)>& stage) {
   InspectPictures p;
   p.width = o.size.size() == 2 ? o.size[0] : image.width;
   p.height = o.size.size() == 2 ? o.size[1] : image.height;
+  stage(fmt::format("reading the maps ({}x{} texels)", p.width, p.height));
   const RegionFields fields = load_region_fields(sources, p.width, p.height, {true, !o.depth_map.empty()}, report);
 
   p.bits = image.code_max == 255 ? 8 : 16;
@@ -114,14 +119,17 @@ InspectPictures compute_pictures(const InspectOptions& o, const FieldSources& so
   p.tolerances = ClassTolerances::recommended(p.bits);
   if (o.planar_curvedness) p.tolerances.planar_curvedness = *o.planar_curvedness;
   if (o.parabolic_ratio) p.tolerances.parabolic_ratio = *o.parabolic_ratio;
+  stage(fmt::format("curvature (filter radius {})", p.filter.radius));
   p.curvature =
       from_depth ? curvature_from_depth(*fields.depth, p.filter) : curvature_from_gradient(*fields.gradient, p.filter);
+  stage("classes and isophotes");
   p.classes = class_map(p.curvature, p.tolerances);
   IsophoteParams isophotes;
   if (o.light.size() == 3) isophotes.light = {o.light[0], o.light[1], o.light[2]};
   if (o.cos_alpha) isophotes.cos_alpha = *o.cos_alpha;
   p.isophotes = isophote_mask(*fields.gradient, isophotes);
   if (fields.depth) {
+    stage("contours");
     ContourParams contours;
     if (o.contours) contours.count = *o.contours;
     p.contours = contour_mask(*fields.depth, contours);
@@ -147,7 +155,16 @@ int run_inspect(const InspectOptions& o) {
   apply_map_flags(o.maps, sources);
   const ImageSize image = read_image_size(from_depth ? o.depth_map : o.normal_map);
   FieldLoadReport report;
-  const InspectPictures p = compute_pictures(o, sources, image, from_depth, report);
+  // On a terminal only: where standard error is a file the legend and the warnings say what was done.
+  ProgressLine progress;
+  const auto stage = [&progress](const std::string& what) {
+    if (progress.in_place()) progress.show("inspect: " + what);
+  };
+  // Erased before anything else is said, an error included.
+  const std::unique_ptr<ProgressLine, void (*)(ProgressLine*)> erase_progress(
+      &progress, [](ProgressLine* line) { line->finish(true); });
+  const InspectPictures p = compute_pictures(o, sources, image, from_depth, report, stage);
+  stage("writing the pictures");
 
   const std::filesystem::path out = o.outdir;
   std::filesystem::create_directories(out);
@@ -163,6 +180,7 @@ int run_inspect(const InspectOptions& o) {
     // Not one of this run's pictures: an older run's, with a depth map, would read as this texture's contours.
     std::filesystem::remove(out / "contours.png");
   }
+  progress.finish(true);
 
   fmt::print("{} x {} texels, curvature from the {} map ({}-bit), filter radius {}\n", p.width, p.height,
              from_depth ? "depth" : "normal", image.code_max == 0 ? 32 : p.bits, p.filter.radius);
