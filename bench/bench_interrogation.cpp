@@ -75,13 +75,12 @@ void BM_EdtContourMaskR64(benchmark::State& state) { edt(state, contour_mask(), 
 
 void BM_IsophoteMask(benchmark::State& state) {
   const ph::IsophoteParams params;
-  double f = 0.0;
   for (auto _ : state) {
     ph::Grid<std::uint8_t> m = ph::isophote_mask(relief_gradient(), params);
     benchmark::DoNotOptimize(m.values.data());
-    f = fraction(m);
   }
-  report(state, f, false);
+  // Counted outside the timed loop, as BM_ContourMask does (a count of the 2 M texels is about 4 % of the mask).
+  report(state, fraction(ph::isophote_mask(relief_gradient(), params)), false);
 }
 
 void BM_ContourMask(benchmark::State& state) {
