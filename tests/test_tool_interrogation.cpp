@@ -268,6 +268,13 @@ TEST(ToolInterrogation, InspectPaintsRoundingNoiseWhite) {
     // maps), also where every K is exactly 0 (it said +-1 there).
     EXPECT_NE(r.out.find("K.png: K in 1/px^2, blue < 0 < red, full colour at +-2.5e-09 "), std::string::npos) << r.out;
   }
+  // With no floor, a plane's K, 0 at every texel, is said to be so (not "full colour at +-0", nor at +-1).
+  const SurfaceSpec plane{SurfaceKind::plane, 64};
+  const ToolResult r = run_tool("inspect --planar-curvedness 0 --normal-map " +
+                                    quote(dir / (plane.name() + ".normal.png")) + " " + quote(dir / "no-floor"),
+                                dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("K.png: K in 1/px^2, 0 everywhere (all white)\n"), std::string::npos) << r.out;
 }
 
 // A light of huge or tiny components is a direction like any other: its length overflowed (1e300^2) or underflowed,

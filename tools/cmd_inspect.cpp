@@ -11,6 +11,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -80,13 +81,20 @@ void write_picture(const std::filesystem::path& path, const Grid<T>& grid, F col
 }
 
 // `floor`: the scale at least, so that a surface whose values are rounding noise (a plane's H, a cylinder's K) comes
-// out white, not painted in full colour as if it were curved.
+// out white, not painted in full colour as if it were curved. With a floor of 0 (--planar-curvedness 0) over values
+// nearly all 0, the largest |value| is the scale, so that the few others show; 0 where every value is 0 (all white).
 double write_diverging(const std::filesystem::path& path, const Grid<float>& values, double floor) {
-  const double scale = std::max(robust_scale(values), floor);
-  const double divisor = scale > 0.0 ? scale : 1.0;  // (a floor of 0 over values all 0: white either way)
+  double scale = std::max(robust_scale(values), floor);
+  if (scale <= 0.0) {
+    for (float v : values.values) scale = std::max(scale, static_cast<double>(std::abs(v)));
+  }
+  const double divisor = scale > 0.0 ? scale : 1.0;
   write_picture(path, values, [&](float v) { return diverging(v / divisor); });
   return scale;
 }
+
+// The legend's words for a diverging picture whose values were all 0: no colour at all.
+constexpr std::string_view kAllZero = "0 everywhere (all white)";
 
 void write_mask(const std::filesystem::path& path, const Grid<std::uint8_t>& mask) {
   write_picture(path, mask, [](std::uint8_t m) { return m ? Rgb{0, 0, 0} : Rgb{255, 255, 255}; });
@@ -184,11 +192,14 @@ int run_inspect(const InspectOptions& o) {
 
   fmt::print("{} x {} texels, curvature from the {} map ({}-bit), filter radius {}\n", p.width, p.height,
              from_depth ? "depth" : "normal", image.code_max == 0 ? 32 : p.bits, p.filter.radius);
-  fmt::print(
-      "K.png: K in 1/px^2, blue < 0 < red, full colour at +-{:.4g} (99th percentile of |K|, at least the planar "
-      "curvedness squared)\n",
-      k_scale);
-  fmt::print("H.png: H in 1/px, blue < 0 < red (a bump is blue), full colour at +-{:.4g}\n", h_scale);
+  fmt::print("K.png: K in 1/px^2, {}\n",
+             k_scale > 0.0 ? fmt::format("blue < 0 < red, full colour at +-{:.4g} (99th percentile of |K|, at least "
+                                         "the planar curvedness squared)",
+                                         k_scale)
+                           : std::string(kAllZero));
+  fmt::print("H.png: H in 1/px, {}\n",
+             h_scale > 0.0 ? fmt::format("blue < 0 < red (a bump is blue), full colour at +-{:.4g}", h_scale)
+                           : std::string(kAllZero));
   fmt::print("class.png: planar below curvedness {:g} /px, parabolic below |k_small|/|k_large| {:g}\n",
              p.tolerances.planar_curvedness, p.tolerances.parabolic_ratio);
   std::array<std::size_t, 4> counts{};
