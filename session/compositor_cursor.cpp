@@ -118,7 +118,7 @@ std::optional<Vec2> WayfireCursor::position() {
   return parse_wayfire_cursor_position(std::string_view(reply.data).substr(kWayfireHeader, length));
 }
 
-std::unique_ptr<CursorSource> cursor_source_from_environment() {
+std::unique_ptr<CursorSource> cursor_source_from_environment(std::string* unmet) {
   const auto env = [](const char* name) -> std::string_view {
     const char* value = std::getenv(name);
     return value != nullptr ? value : "";
@@ -127,13 +127,23 @@ std::unique_ptr<CursorSource> cursor_source_from_environment() {
     struct stat st {};
     return ::stat(path.c_str(), &st) == 0 && S_ISSOCK(st.st_mode);
   };
-  for (const std::string& path :
-       hyprland_socket_candidates(env("XDG_RUNTIME_DIR"), env("HYPRLAND_INSTANCE_SIGNATURE"))) {
+  std::string said;
+  const std::vector<std::string> hyprland =
+      hyprland_socket_candidates(env("XDG_RUNTIME_DIR"), env("HYPRLAND_INSTANCE_SIGNATURE"));
+  for (const std::string& path : hyprland) {
     if (is_socket(path)) return std::make_unique<HyprlandCursor>(path);
+  }
+  if (!hyprland.empty()) {
+    said = "HYPRLAND_INSTANCE_SIGNATURE is set, but no Hyprland socket is there (" + hyprland.front();
+    for (std::size_t i = 1; i < hyprland.size(); ++i) said += ", " + hyprland[i];
+    said += ")";
   }
   // Where the variable names no socket (left in the user manager by a Wayfire session that has ended), none.
   const std::string wayfire(env("WAYFIRE_SOCKET"));
   if (!wayfire.empty() && is_socket(wayfire)) return std::make_unique<WayfireCursor>(wayfire);
+  if (!wayfire.empty())
+    said += (said.empty() ? "" : "; ") + std::string("WAYFIRE_SOCKET names no socket (") + wayfire + ")";
+  if (unmet != nullptr) *unmet = said;
   return nullptr;
 }
 

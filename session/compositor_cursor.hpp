@@ -58,8 +58,10 @@ class WayfireCursor : public CursorSource {
 };
 
 // The compositor's cursor source that this session's environment names: Hyprland where
-// HYPRLAND_INSTANCE_SIGNATURE names a socket that exists, Wayfire where WAYFIRE_SOCKET is set; nullptr for
-// any other compositor (GNOME, KDE, sway, weston...; KWin's source is kwin_cursor.hpp).
-std::unique_ptr<CursorSource> cursor_source_from_environment();
+// HYPRLAND_INSTANCE_SIGNATURE names a socket that exists, Wayfire where WAYFIRE_SOCKET does; nullptr for
+// any other compositor (GNOME, KDE, sway, weston...; KWin's source is kwin_cursor.hpp). Where a variable is set but
+// names no socket (left in the user manager by a session that has ended, or mistyped), `unmet` (when given) says
+// which and where it looked; it is left empty otherwise.
+std::unique_ptr<CursorSource> cursor_source_from_environment(std::string* unmet = nullptr);
 
 }  // namespace ph::session

@@ -1,6 +1,6 @@
 // pseudohaptic-session: runs in the user's desktop session and tells pseudohapticd, over its control
 // socket, the desktop's layout and where the real cursor is: at start, when the layout changes, and
-// whenever the daemon asks. Reconnects when the daemon restarts; exits on SIGTERM or SIGINT (which unloads
+// whenever the daemon asks. Reconnects when the daemon restarts; exits on SIGTERM, SIGINT or SIGHUP (which unloads
 // the script KWin ran for it). Backends: X11 (x11_desktop.hpp) and Wayland (wayland_desktop.hpp), each
 // built where its libraries are found.
 #include <fmt/format.h>
@@ -15,6 +15,8 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
+#include <future>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -87,7 +89,7 @@ class Helper {
   Helper(std::string control, std::vector<std::string> passthrough, Desktop& desktop, const Log& log)
       : control_(std::move(control)), passthrough_(std::move(passthrough)), desktop_(desktop), log_(log) {}
 
-  // Runs until SIGTERM or SIGINT arrives on `signals`; returns the exit status.
+  // Runs until SIGTERM, SIGINT or SIGHUP arrives on `signals`; returns the exit status.
   int run(int signals) {
     for (;;) {
       if (!link_.connection && Clock::now() >= link_.next_attempt) connect();
@@ -241,7 +243,7 @@ std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::str
                                       const std::string& wayland_display, const Log& log) {
 #ifdef PH_SESSION_X11
   if (backend == "x11") {
-    auto desktop = std::make_unique<X11Desktop>(x_display);
+    auto desktop = std::make_unique<X11Desktop>(x_display, [&log](const std::string& why) { log.error(why); });
     if (!desktop->has_randr()) log.notice("X has no RandR 1.2: the layout is the root window's size");
     return desktop;
   }
@@ -250,15 +252,22 @@ std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::str
   if (backend == "wayland") {
     // A compositor that does not answer now (Wayfire without its ipc-rules plugin, a variable left from another
     // session) would leave every question of the daemon's unanswered, and the daemon waiting: not used.
-    const auto answering = [&log](std::unique_ptr<CursorSource> cursor) {
+    bool said_why = false;  // a notice already says why there is no position: not the generic one too
+    const auto answering = [&log, &said_why](std::unique_ptr<CursorSource> cursor) {
       if (cursor && !cursor->position()) {
         log.notice(fmt::format("{} did not say where the pointer is ({}){}", cursor->name(), cursor->socket(),
-                               cursor->name() == "wayfire" ? "; is its ipc-rules plugin enabled?" : ""));
+                               cursor->name() == "wayfire" ? "; is Wayfire running, with its ipc-rules plugin?" : ""));
+        said_why = true;
         cursor.reset();
       }
       return cursor;
     };
-    std::unique_ptr<CursorSource> cursor = answering(cursor_source_from_environment());
+    std::string unmet;
+    std::unique_ptr<CursorSource> cursor = answering(cursor_source_from_environment(&unmet));
+    if (!unmet.empty()) {
+      log.notice(unmet + ": its pointer position is not used");
+      said_why = true;
+    }
     const bool kwin = !cursor && kde_session(env("KDE_SESSION_VERSION"), env("XDG_CURRENT_DESKTOP"));
     if (kwin) cursor = answering(start_kwin(log));
     auto desktop = std::make_unique<WaylandDesktop>(wayland_display, std::move(cursor));
@@ -266,7 +275,7 @@ std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::str
       log.notice("the compositor has no xdg-output: the layout is each wl_output's mode divided by its scale");
     if (const CursorSource* cursor = desktop->cursor()) {
       log.info(fmt::format("the pointer's position from {} ({})", cursor->name(), cursor->socket()));
-    } else if (!kwin) {  // start_kwin said why
+    } else if (!kwin && !said_why) {  // start_kwin said why
       log.notice(
           "this compositor gives no pointer position (only Hyprland, Wayfire and KWin do): telling the daemon the "
           "layout only");
@@ -280,6 +289,26 @@ std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::str
   throw std::runtime_error("the " + backend + " backend is not built into this pseudohaptic-session");
 }
 
+// Opens the desktop (`open`) on a thread of its own while this one waits for a stop signal of `stop` (blocked): a
+// display server that takes the connection but never answers (a hung X server, a stale compositor socket) keeps
+// Xlib and libwayland waiting without a time limit, and the helper must still stop as its page says. A stop ends
+// the process at once (nothing of the desktop's to clean up yet, and the thread cannot be joined); an error of
+// the opening is thrown here.
+std::unique_ptr<Desktop> open_until_stopped(const sigset_t& stop, const Log& log,
+                                            std::function<std::unique_ptr<Desktop>()> open) {
+  std::future<std::unique_ptr<Desktop>> opened = std::async(std::launch::async, std::move(open));
+  while (opened.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+    const timespec wait{0, 20'000'000};  // 20 ms: the opening's answer is that much late at most
+    siginfo_t info{};
+    if (::sigtimedwait(&stop, &info, &wait) > 0) {
+      log.info(fmt::format("SIG{} while opening the desktop: stopping", ::sigabbrev_np(info.si_signo)));
+      std::fflush(stderr);
+      std::_Exit(0);
+    }
+  }
+  return opened.get();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -287,7 +316,7 @@ int main(int argc, char** argv) {
       "pseudohaptic-session: tells pseudohapticd where the desktop's real cursor is and how the desktop is laid\n"
       "out, over its control socket: at start, whenever the layout changes, and whenever the daemon asks.\n"
       "Runs in the user's graphical session (the systemd user unit pseudohaptic-session.service) until\n"
-      "SIGTERM or SIGINT; reconnects when the daemon restarts. On Wayland the position comes from Hyprland,\n"
+      "SIGTERM, SIGINT or SIGHUP; reconnects when the daemon restarts. On Wayland the position comes from Hyprland,\n"
       "Wayfire or KWin (through a script it loads); other compositors give only the layout. See "
       "pseudohaptic-session(1)."};
   std::string control = "/run/pseudohaptic/control";
@@ -318,21 +347,26 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   const Log log(verbose);
-  backend = choose_backend(backend, display, env("WAYLAND_DISPLAY"), env("DISPLAY"));
+  backend = choose_backend(backend, display, wayland_display, env("WAYLAND_DISPLAY"), env("DISPLAY"));
   if (backend.empty()) {
     log.error("no desktop this helper knows: neither WAYLAND_DISPLAY nor DISPLAY is set (see pseudohaptic-session(1))");
     return 1;
   }
+  if (backend == "wayland" && !display.empty())
+    log.notice("--display names an X display: the wayland backend ignores it");
+  if (backend == "x11" && !wayland_display.empty())
+    log.notice("--wayland-display names a Wayland display: the x11 backend ignores it");
   if (backend != "x11" && !passthrough.empty()) {
     log.notice("--passthrough needs the x11 backend (the focused window's WM_CLASS); ignored");
     passthrough.clear();
   }
 
-  // SIGTERM and SIGINT wait for the loop, which then exits cleanly.
+  // SIGTERM, SIGINT and SIGHUP (the terminal it ran in closed) wait for the loop, which then exits cleanly.
   sigset_t stop;
   sigemptyset(&stop);
   sigaddset(&stop, SIGTERM);
   sigaddset(&stop, SIGINT);
+  sigaddset(&stop, SIGHUP);
   sigprocmask(SIG_BLOCK, &stop, nullptr);
   const ph::UniqueFd signals(::signalfd(-1, &stop, SFD_CLOEXEC | SFD_NONBLOCK));
   if (!signals) {
@@ -340,7 +374,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   try {
-    const std::unique_ptr<Desktop> desktop = open_desktop(backend, display, wayland_display, log);
+    const std::unique_ptr<Desktop> desktop =
+        open_until_stopped(stop, log, [&] { return open_desktop(backend, display, wayland_display, log); });
     return Helper(control, passthrough, *desktop, log).run(signals.get());
   } catch (const std::runtime_error& e) {  // X11Error, WaylandError: no display, or it went away
     log.error(e.what());

@@ -56,8 +56,10 @@ std::optional<Rect> bounding_box(const std::vector<Rect>& outputs) {
 }
 
 std::string choose_backend(std::string_view requested, std::string_view x_display_option,
-                           std::string_view wayland_display_env, std::string_view display_env) {
+                           std::string_view wayland_display_option, std::string_view wayland_display_env,
+                           std::string_view display_env) {
   if (requested != "auto") return std::string(requested);
+  if (!wayland_display_option.empty()) return "wayland";
   if (!wayland_display_env.empty() && x_display_option.empty()) return "wayland";
   if (!display_env.empty() || !x_display_option.empty()) return "x11";
   return "";

@@ -30,11 +30,13 @@ bool is_listed(const std::vector<std::string>& applications, std::string_view in
 // The bounding box of the outputs with a positive size; nullopt when there is none.
 std::optional<Rect> bounding_box(const std::vector<Rect>& outputs);
 
-// The backend to use: `requested` ("x11", "wayland"), or for "auto" the session's own: wayland where
-// WAYLAND_DISPLAY is set (unless an X display was given with --display), else x11 where DISPLAY is set or
-// an X display was given; empty when none applies. The environment values are empty when unset.
+// The backend to use: `requested` ("x11", "wayland"), or for "auto" the one the options or the session name: wayland
+// where a Wayland display was given with --wayland-display, or WAYLAND_DISPLAY is set (unless an X display was
+// given with --display), else x11 where DISPLAY is set or an X display was given; empty when none applies. The
+// option and environment values are empty when not given or unset.
 std::string choose_backend(std::string_view requested, std::string_view x_display_option,
-                           std::string_view wayland_display_env, std::string_view display_env);
+                           std::string_view wayland_display_option, std::string_view wayland_display_env,
+                           std::string_view display_env);
 
 // How long to wait before the next connection attempt after `failures` failed ones in a row: 250 ms,
 // doubling, at most 5 s.

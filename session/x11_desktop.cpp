@@ -5,6 +5,7 @@
 #include <X11/extensions/Xrandr.h>
 
 #include <cstdlib>
+#include <utility>
 #include <vector>
 
 #include "session/protocol.hpp"
@@ -16,15 +17,31 @@ namespace {
 // Xlib's default handler ends the program on any protocol error.
 int ignore_protocol_error(Display*, XErrorEvent*) { return 0; }
 
+// Xlib's default handler of a lost connection prints "X connection to :0 broken ..." itself: the X11Desktop's
+// exit handler says it instead, in the helper's log. (Returning is allowed since libX11 1.7: the display's exit
+// handler is called next.)
+int quiet_io_error(Display*) { return 0; }
+
 }  // namespace
 
-X11Desktop::X11Desktop(const std::string& display)
-    : display_(XOpenDisplay(display.empty() ? nullptr : display.c_str())) {
+X11Desktop::X11Desktop(const std::string& display, std::function<void(const std::string&)> lost)
+    : display_(XOpenDisplay(display.empty() ? nullptr : display.c_str())), lost_(std::move(lost)) {
   if (!display_) {
     const char* name = display.empty() ? std::getenv("DISPLAY") : display.c_str();
     throw X11Error(std::string("cannot open the X display ") + (name != nullptr ? name : "(DISPLAY is not set)"));
   }
   XSetErrorHandler(ignore_protocol_error);
+  if (lost_) {
+    XSetIOErrorHandler(quiet_io_error);
+    XSetIOErrorExitHandler(
+        display_.get(),
+        [](Display* d, void* self) {
+          static_cast<X11Desktop*>(self)->lost_(std::string("the X server went away (the connection to ") +
+                                                DisplayString(d) + " is broken)");
+          std::exit(1);
+        },
+        this);
+  }
   int event_base = 0, error_base = 0, major = 0, minor = 0;
   if (XRRQueryExtension(display_.get(), &event_base, &error_base) && XRRQueryVersion(display_.get(), &major, &minor) &&
       (major > 1 || (major == 1 && minor >= 2))) {

@@ -5,6 +5,7 @@
 
 #include <X11/Xlib.h>
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -24,8 +25,10 @@ class X11Error : public std::runtime_error {
 class X11Desktop : public Desktop {
  public:
   // Opens `display` (empty: $DISPLAY). Throws X11Error when it cannot. X protocol errors (an output
-  // that went away between two requests) are ignored from then on: the next layout is asked afresh.
-  explicit X11Desktop(const std::string& display);
+  // that went away between two requests) are ignored from then on: the next layout is asked afresh. When the
+  // connection is lost (the X server ended), `lost` is told why and the process exits with status 1, as Xlib's
+  // own handler exits (it cannot be returned from); without `lost`, Xlib's message goes to stderr.
+  explicit X11Desktop(const std::string& display, std::function<void(const std::string&)> lost = {});
 
   std::string backend_name() const override { return "x11"; }
   int fd() const override;  // readable when X has sent events
@@ -50,6 +53,7 @@ class X11Desktop : public Desktop {
     void operator()(Display* d) const { XCloseDisplay(d); }
   };
   std::unique_ptr<Display, Closer> display_;
+  std::function<void(const std::string&)> lost_;
   int randr_event_base_ = -1;
   Atom active_window_ = None;
 };

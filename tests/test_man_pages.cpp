@@ -3,7 +3,10 @@
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <poll.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -12,11 +15,15 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "daemon/unique_fd.hpp"
 #include "tests/file_bytes.hpp"
 #include "tests/scratch_dir.hpp"
 
@@ -216,6 +223,147 @@ TEST(ManPages, TheSessionHelperRefusesASocketPathThatCannotBeAsTheCommandLineErr
     const std::string out = expect_command_line_error(fmt::format("'{}' --control '{}'", PH_SESSION_PATH, path));
     EXPECT_NE(out.find("--control: is "), std::string::npos) << out;
   }
+}
+
+// pseudohaptic-session(1): SIGTERM, SIGINT and SIGHUP stop the helper with status 0, also while a display server
+// that took the connection never answers (a hung X server, a stale compositor socket): Xlib and libwayland wait for
+// it without a time limit, and the helper ended only with SIGKILL. A socket that is listened on but never accepted
+// from stands in for such a Wayland compositor (its connect succeeds; the first roundtrip never returns).
+TEST(ManPages, TheSessionHelperStopsOnASignalWhileTheDisplayDoesNotAnswer) {
+  const ph::ScratchDir dir("mute-display");
+  const std::string mute = (dir / "wayland-mute").string(), log = (dir / "helper.log").string();
+  const ph::UniqueFd listener(::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0));
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  ASSERT_LT(mute.size(), sizeof(address.sun_path));
+  std::memcpy(address.sun_path, mute.c_str(), mute.size() + 1);
+  ASSERT_EQ(::bind(listener.get(), reinterpret_cast<const sockaddr*>(&address), sizeof(address)), 0);
+  ASSERT_EQ(::listen(listener.get(), 8), 0);
+  for (const int signal : {SIGTERM, SIGINT, SIGHUP}) {
+    SCOPED_TRACE(::strsignal(signal));
+    const pid_t helper = ::fork();
+    ASSERT_GE(helper, 0);
+    if (helper == 0) {
+      const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+      ::dup2(out, 1);
+      ::dup2(out, 2);
+      ::unsetenv("JOURNAL_STREAM");
+      ::execl(PH_SESSION_PATH, PH_SESSION_PATH, "--backend", "wayland", "--wayland-display", mute.c_str(), "--control",
+              (dir / "no-daemon").c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    ::usleep(300'000);  // connected by then, and waiting for the compositor's first answer
+    ::kill(helper, signal);
+    const auto sent = std::chrono::steady_clock::now();
+    int status = 0;
+    pid_t ended = 0;
+    while ((ended = ::waitpid(helper, &status, WNOHANG)) == 0 &&
+           std::chrono::steady_clock::now() - sent < std::chrono::seconds(5))
+      ::usleep(10'000);
+    if (ended == 0) {  // still waiting for the display: what the test is for
+      ::kill(helper, SIGKILL);
+      ::waitpid(helper, &status, 0);
+    }
+    const std::string said = ph::read_file_text(log);
+    if (said.find("backend is not built") != std::string::npos) GTEST_SKIP() << said;
+    EXPECT_NE(ended, 0) << "still running 5 s after the signal; it said: " << said;
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status << "; it said: " << said;
+    EXPECT_NE(said.find(fmt::format("SIG{} while opening the desktop: stopping", ::sigabbrev_np(signal))),
+              std::string::npos)
+        << said;
+  }
+}
+
+// A child process of the test, with standard output and error into `log` (or /dev/null) and `env` added to its
+// environment; killed at the end of the scope where it is still running.
+class Child {
+ public:
+  Child(const std::vector<std::string>& argv, const std::vector<std::string>& env, const std::string& log = "") {
+    pid_ = ::fork();
+    if (pid_ != 0) return;
+    const int out = ::open(log.empty() ? "/dev/null" : log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    ::dup2(out, 1);
+    ::dup2(out, 2);
+    for (const std::string& e : env) ::putenv(const_cast<char*>(e.c_str()));
+    std::vector<char*> args;
+    for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    ::execvp(args[0], args.data());
+    ::_exit(127);
+  }
+  ~Child() {
+    if (pid_ > 0 && !ended_) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+    }
+  }
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+  pid_t pid() const { return pid_; }
+  // Its wait status once it ends within `limit`; nullopt if it is still running then.
+  std::optional<int> wait_for(std::chrono::milliseconds limit) {
+    const auto start = std::chrono::steady_clock::now();
+    int status = 0;
+    while (std::chrono::steady_clock::now() - start < limit) {
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        ended_ = true;
+        return status;
+      }
+      ::usleep(10'000);
+    }
+    return std::nullopt;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  bool ended_ = false;
+};
+
+bool program_on_path(const std::string& name) {
+  return std::system(("command -v " + name + " >/dev/null 2>&1").c_str()) == 0;
+}
+
+// pseudohaptic-session(1): when the X server goes away the helper exits with status 1 and says so in its own log
+// (an error, with the journal's priority), not in Xlib's words ("X connection to :N broken"), which carried no
+// priority and no name. A real X server: Xwayland on a headless weston.
+TEST(ManPages, TheSessionHelperSaysTheXServerWentAway) {
+  if (!program_on_path("weston") || !program_on_path("Xwayland")) GTEST_SKIP() << "no weston or Xwayland here";
+  const ph::ScratchDir runtime("runtime");
+  std::filesystem::permissions(runtime.path(), std::filesystem::perms::owner_all);
+  const std::string runtime_env = "XDG_RUNTIME_DIR=" + runtime.path().string();
+  Child weston({"weston", "--backend=headless-backend.so", "--socket=ph-wl", "--width=640", "--height=480",
+                "--no-config", "--idle-time=0"},
+               {runtime_env});
+  for (int i = 0; i < 1000 && !std::filesystem::exists(runtime / "ph-wl"); ++i) ::usleep(10'000);
+  ASSERT_TRUE(std::filesystem::exists(runtime / "ph-wl")) << "weston did not start";
+  int fds[2];
+  ASSERT_EQ(::pipe(fds), 0);
+  const ph::UniqueFd display_read(fds[0]), display_write(fds[1]);
+  Child xwayland({"Xwayland", "-noreset", "-displayfd", std::to_string(display_write.get())},
+                 {runtime_env, "WAYLAND_DISPLAY=ph-wl"});
+  char number[16] = {};
+  pollfd wait{display_read.get(), POLLIN, 0};
+  ASSERT_EQ(::poll(&wait, 1, 10'000), 1) << "Xwayland gave no display number within 10 s";
+  ASSERT_GT(::read(display_read.get(), number, sizeof(number) - 1), 0);
+  const std::string display = ":" + std::string(number, std::strcspn(number, "\n"));
+  const std::string log = (runtime / "helper.log").string();
+  Child helper(
+      {PH_SESSION_PATH, "--backend", "x11", "--display", display, "--control", (runtime / "no-daemon").string()},
+      {runtime_env}, log);
+  // Connected once it looks for the daemon (after the desktop is open).
+  for (int i = 0; i < 500 && ph::read_file_text(log).find("no pseudohapticd") == std::string::npos; ++i)
+    ::usleep(10'000);
+  ::kill(xwayland.pid(), SIGKILL);
+  const std::optional<int> status = helper.wait_for(std::chrono::seconds(5));
+  const std::string said = ph::read_file_text(log);
+  if (said.find("backend is not built") != std::string::npos) GTEST_SKIP() << said;
+  ASSERT_TRUE(status.has_value()) << "still running 5 s after the X server went away; it said: " << said;
+  EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 1) << "status " << *status << "; it said: " << said;
+  EXPECT_NE(
+      said.find("pseudohaptic-session: error: the X server went away (the connection to " + display + " is broken)"),
+      std::string::npos)
+      << said;
+  EXPECT_EQ(said.find("X connection to"), std::string::npos) << said;
 }
 
 TEST(ManPages, TheSessionHelpersPageNamesEveryOption) {

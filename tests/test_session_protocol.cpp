@@ -44,13 +44,16 @@ TEST(SessionRequests, RefuseWhatTheDaemonWouldRefuse) {
 }
 
 TEST(SessionBackend, AutoPrefersWaylandThenX11) {
-  EXPECT_EQ(choose_backend("auto", "", "wayland-0", ":0"), "wayland");  // Xwayland sets both
-  EXPECT_EQ(choose_backend("auto", "", "wayland-0", ""), "wayland");
-  EXPECT_EQ(choose_backend("auto", "", "", ":0"), "x11");
-  EXPECT_EQ(choose_backend("auto", ":1", "wayland-0", ""), "x11");  // --display names an X display
-  EXPECT_EQ(choose_backend("auto", "", "", ""), "");
-  EXPECT_EQ(choose_backend("x11", "", "wayland-0", ""), "x11");  // asked for: taken as it is
-  EXPECT_EQ(choose_backend("wayland", "", "", ":0"), "wayland");
+  EXPECT_EQ(choose_backend("auto", "", "", "wayland-0", ":0"), "wayland");  // Xwayland sets both
+  EXPECT_EQ(choose_backend("auto", "", "", "wayland-0", ""), "wayland");
+  EXPECT_EQ(choose_backend("auto", "", "", "", ":0"), "x11");
+  EXPECT_EQ(choose_backend("auto", ":1", "", "wayland-0", ""), "x11");  // --display names an X display
+  EXPECT_EQ(choose_backend("auto", "", "", "", ""), "");
+  EXPECT_EQ(choose_backend("x11", "", "", "wayland-0", ""), "x11");  // asked for: taken as it is
+  EXPECT_EQ(choose_backend("wayland", "", "", "", ":0"), "wayland");
+  // --wayland-display names a Wayland display: taken, with or without WAYLAND_DISPLAY, and over DISPLAY.
+  EXPECT_EQ(choose_backend("auto", "", "wayland-1", "", ""), "wayland");
+  EXPECT_EQ(choose_backend("auto", "", "wayland-1", "", ":0"), "wayland");
 }
 
 TEST(SessionPassthrough, ListedApplicationsMatchEitherNameInAnyCase) {

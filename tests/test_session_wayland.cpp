@@ -258,7 +258,10 @@ TEST(CursorSourceFromEnvironment, FindsHyprlandsSocketOrWayfiresOrNone) {
   ScopedEnv wayfire("WAYFIRE_SOCKET", "");
   {
     ScopedEnv signature("HYPRLAND_INSTANCE_SIGNATURE", "sig_1");
-    EXPECT_EQ(cursor_source_from_environment(), nullptr);  // no socket there: not Hyprland after all
+    std::string unmet;
+    EXPECT_EQ(cursor_source_from_environment(&unmet), nullptr);  // no socket there: not Hyprland after all
+    EXPECT_EQ(unmet, "HYPRLAND_INSTANCE_SIGNATURE is set, but no Hyprland socket is there (" +
+                         (dir / "hypr/sig_1/.socket.sock").string() + ", /tmp/hypr/sig_1/.socket.sock)");
     std::filesystem::create_directories(dir / "hypr/sig_1");
     const std::string path = (dir / "hypr/sig_1/.socket.sock").string();
     FakeServer hyprland(path, [](int fd) {
@@ -272,12 +275,15 @@ TEST(CursorSourceFromEnvironment, FindsHyprlandsSocketOrWayfiresOrNone) {
     EXPECT_EQ(source->position(), (Vec2{5.5, 6.5}));
   }
   ScopedEnv signature("HYPRLAND_INSTANCE_SIGNATURE", "");
-  EXPECT_EQ(cursor_source_from_environment(), nullptr);
+  std::string unmet = "left over";
+  EXPECT_EQ(cursor_source_from_environment(&unmet), nullptr);
+  EXPECT_EQ(unmet, "");  // nothing named: nothing to say
   // A variable that names no socket (left in the user manager by a Wayfire session that has ended): none, so that
   // another source (KWin) is tried.
   const std::string wayfire_path = (dir / "wayfire-wayland-1-.socket").string();
   ScopedEnv wayfire_set("WAYFIRE_SOCKET", wayfire_path);
-  EXPECT_EQ(cursor_source_from_environment(), nullptr);
+  EXPECT_EQ(cursor_source_from_environment(&unmet), nullptr);
+  EXPECT_EQ(unmet, "WAYFIRE_SOCKET names no socket (" + wayfire_path + ")");
   FakeServer wayfire_server(wayfire_path, [](int) {});  // says nothing: position() has no answer
   const std::unique_ptr<CursorSource> source = cursor_source_from_environment();
   ASSERT_NE(source, nullptr);
