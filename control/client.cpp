@@ -1,5 +1,6 @@
 #include "control/client.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -13,14 +14,30 @@
 
 namespace ph::control {
 
-Client::Client(const std::string& path) : path_(path) {
+Client::Client(const std::string& path, std::chrono::milliseconds timeout) : path_(path) {
   sockaddr_un address{};
   address.sun_family = AF_UNIX;
   if (path.size() >= sizeof address.sun_path) throw ControlError(fmt::format("{}: path too long", path));
   std::memcpy(address.sun_path, path.c_str(), path.size() + 1);
-  fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  // Non-blocking: a Unix socket whose listener's queue is full (a daemon that has stopped accepting, a hung one)
+  // makes a blocking connect wait for ever, and a non-blocking one fail with EAGAIN, tried again until `timeout`.
+  fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
   if (fd_ < 0) throw ControlError(fmt::format("cannot create a socket: {}", std::strerror(errno)));
-  if (::connect(fd_, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  int connected = 0;
+  while ((connected = ::connect(fd_, reinterpret_cast<const sockaddr*>(&address), sizeof address)) != 0 &&
+         (errno == EAGAIN || errno == EINTR) && std::chrono::steady_clock::now() < deadline) {
+    ::usleep(20'000);
+  }
+  if (connected != 0 && errno == EAGAIN) {
+    ::close(fd_);
+    fd_ = -1;
+    throw ControlError(
+        fmt::format("pseudohapticd at {} takes no connection (its queue is full): is it hung? "
+                    "`systemctl status pseudohapticd`",
+                    path));
+  }
+  if (connected != 0) {
     const int error = errno;
     ::close(fd_);
     fd_ = -1;
@@ -33,12 +50,17 @@ Client::Client(const std::string& path) : path_(path) {
                       "says otherwise)",
                       path, S_ISDIR(st.st_mode) ? "a folder" : "a file", kDefaultSocket));
     }
+    // (The daemon's own rule, root and the active local session's user, is its answer once connected: a refusal
+    // by the file system is a folder's or the socket's mode.)
     const char* advice = error == ENOENT || error == ECONNREFUSED
                              ? " (is pseudohapticd running? `systemctl status pseudohapticd`)"
-                         : error == EACCES ? " (only root and the user of the active local session may use it)"
+                         : error == EACCES ? " (the file system's permissions: a folder on the path, or the socket's "
+                                             "mode; the daemon's own socket is open to every user)"
                                            : "";
     throw ControlError(fmt::format("cannot connect to {}: {}{}", path, std::strerror(error), advice));
   }
+  const int flags = ::fcntl(fd_, F_GETFL);
+  ::fcntl(fd_, F_SETFL, flags & ~O_NONBLOCK);
 }
 
 Client::~Client() {
@@ -72,7 +94,7 @@ std::optional<std::string> Client::read_line(std::chrono::milliseconds timeout) 
     std::array<char, 4096> buffer{};
     const ssize_t n = ::recv(fd_, buffer.data(), buffer.size(), 0);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) throw ControlError("pseudohapticd closed the connection");
+    if (n <= 0) throw ControlError(fmt::format("pseudohapticd at {} closed the connection", path_));
     if (!lines_.append({buffer.data(), static_cast<std::size_t>(n)}))
       throw ControlError("pseudohapticd sent a line longer than the protocol allows");
   }
@@ -98,6 +120,10 @@ Reply Client::request(std::string_view line, std::chrono::milliseconds timeout) 
     const std::optional<std::string> got = read_line(std::max(left, std::chrono::milliseconds(0)));
     if (!got) throw ControlError(fmt::format("pseudohapticd at {} did not answer in time", path_));
     if (auto reply = parse_reply(*got)) return *reply;
+    if (*got == "query") continue;  // the daemon's own question, to a helper
+    throw ControlError(
+        fmt::format("{} answered \"{}\", which is no reply of pseudohapticd's: is it its control socket?", path_,
+                    printable(got->substr(0, 80))));
   }
 }
 

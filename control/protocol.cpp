@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -80,15 +81,14 @@ std::variant<Request, std::string> parse_layout(const std::vector<std::string_vi
   return Request{LayoutRequest{desktop}};
 }
 
-// A path on one line: a control character in it (a newline would end the reply) shows as '?'.
-std::string printable_path(std::string path) {
-  for (char& c : path) {
+}  // namespace
+
+std::string printable(std::string text) {
+  for (char& c : text) {
     if (std::iscntrl(static_cast<unsigned char>(c))) c = '?';
   }
-  return path;
+  return text;
 }
-
-}  // namespace
 
 std::variant<Request, std::string> parse_request(std::string_view line) {
   if (line.size() > kMaxLine) return std::string("line too long");
@@ -150,12 +150,17 @@ std::string format_error(std::string_view reason) {
 }
 
 std::string format_status(const Status& s) {
-  return format_ok(
-      fmt::format("mode={} mice={} held_elsewhere={} regions={} desktop={},{},{},{} cursor={},{} helper={} "
-                  "passthrough={} scene={}",
-                  s.absolute ? "absolute" : "relative", s.mice, s.held_elsewhere, s.regions, s.desktop.x, s.desktop.y,
-                  s.desktop.w, s.desktop.h, s.cursor.x, s.cursor.y, s.helper ? "yes" : "no",
-                  s.passthrough ? "on" : "off", printable_path(s.scene.empty() ? "default" : s.scene)));
+  const std::string head = fmt::format(
+      "mode={} mice={} held_elsewhere={} regions={} desktop={},{},{},{} cursor={},{} helper={} "
+      "passthrough={} scene=",
+      s.absolute ? "absolute" : "relative", s.mice, s.held_elsewhere, s.regions, s.desktop.x, s.desktop.y, s.desktop.w,
+      s.desktop.h, s.cursor.x, s.cursor.y, s.helper ? "yes" : "no", s.passthrough ? "on" : "off");
+  std::string scene = printable(s.scene.empty() ? "default" : s.scene);
+  // The line stays within kMaxLine, which the reader holds the daemon to: a scene path too long for it (PATH_MAX is
+  // 4096) keeps its end, where the file's name is, after "...".
+  const std::size_t room = kMaxLine - std::string_view("ok ").size() - head.size();
+  if (scene.size() > room) scene = "..." + scene.substr(scene.size() - (room - 3));
+  return format_ok(head + scene);
 }
 
 std::string format_cursor(Vec2 cursor) { return format_ok(fmt::format("{} {}", cursor.x, cursor.y)); }
@@ -179,6 +184,7 @@ std::optional<Vec2> parse_cursor(std::string_view words) {
 std::optional<Status> parse_status(std::string_view words) {
   Status s;
   int seen = 0;
+  std::set<std::string> given;
   // The scene's path comes last and may hold spaces.
   const std::size_t scene_at = words.starts_with("scene=") ? 0 : words.find(" scene=");
   if (scene_at == std::string_view::npos) return std::nullopt;
@@ -196,16 +202,21 @@ std::optional<Status> parse_status(std::string_view words) {
       at = end + 1;
     }
     bool good = true;
+    // Each field once: a repeated one would stand in for one that is missing.
+    if (key == "mode" || key == "mice" || key == "regions" || key == "desktop" || key == "cursor" || key == "helper" ||
+        key == "held_elsewhere" || key == "passthrough") {
+      if (!given.insert(std::string(key)).second) return std::nullopt;
+    }
     if (key == "mode") {
       good = value == "absolute" || value == "relative";
       s.absolute = value == "absolute";
     } else if (key == "mice" || key == "regions") {
       const auto n = integer(value);
-      good = n.has_value();
+      good = n.has_value() && *n >= 0;
       (key == "mice" ? s.mice : s.regions) = n.value_or(0);
     } else if (key == "held_elsewhere") {
       const auto n = integer(value);
-      if (!n) return std::nullopt;
+      if (!n || *n < 0) return std::nullopt;
       s.held_elsewhere = *n;
       continue;  // optional: older daemons do not say
     } else if (key == "desktop") {
@@ -217,6 +228,7 @@ std::optional<Status> parse_status(std::string_view words) {
         v[i] = n.value_or(0);
       }
       s.desktop = {v[0], v[1], v[2], v[3]};
+      good = good && is_valid_desktop(s.desktop);
     } else if (key == "cursor") {
       good = parts.size() == 2 && number(parts[0]) && number(parts[1]);
       if (good) s.cursor = {*number(parts[0]), *number(parts[1])};
@@ -224,7 +236,7 @@ std::optional<Status> parse_status(std::string_view words) {
       good = value == "yes" || value == "no";
       s.helper = value == "yes";
     } else if (key == "passthrough") {
-      good = value == "on" || value == "off";
+      if (value != "on" && value != "off") return std::nullopt;
       s.passthrough = value == "on";
       continue;  // optional: older daemons do not say
     } else {
@@ -238,10 +250,16 @@ std::optional<Status> parse_status(std::string_view words) {
 }
 
 bool LineBuffer::append(std::string_view bytes) {
+  // Every line the bytes end or add, not only the last: a long line may come whole within one read.
+  std::size_t start = pending_.rfind('\n');
+  start = start == std::string::npos ? 0 : start + 1;
   pending_.append(bytes);
-  const std::size_t newline = pending_.rfind('\n');
-  const std::size_t tail = newline == std::string::npos ? pending_.size() : pending_.size() - newline - 1;
-  return tail <= kMaxLine;
+  for (std::size_t newline = pending_.find('\n', start); newline != std::string::npos;
+       newline = pending_.find('\n', start)) {
+    if (newline - start > kMaxLine) return false;
+    start = newline + 1;
+  }
+  return pending_.size() - start <= kMaxLine;
 }
 
 std::optional<std::string> LineBuffer::next_line() {

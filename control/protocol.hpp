@@ -67,6 +67,9 @@ struct Reply {
 };
 std::optional<Reply> parse_reply(std::string_view line);
 std::optional<Status> parse_status(std::string_view words);
+// `text` for one line of a reply or a terminal: each control character (a newline would end the reply; an escape
+// sequence would drive the terminal) shows as '?'.
+std::string printable(std::string text);
 std::optional<Vec2> parse_cursor(std::string_view words);
 
 // Splits a byte stream into lines of at most kMaxLine bytes.

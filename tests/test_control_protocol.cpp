@@ -110,6 +110,23 @@ TEST(ControlProtocol, StatusAndCursorRepliesRoundTrip) {
   EXPECT_FALSE(
       parse_status("mode=absolute mice=1 held_elsewhere=x regions=0 desktop=0,0,1,1 cursor=0,0 helper=no "
                    "scene=x"));
+  // What a daemon never says is no status: a field given twice (standing in for a missing one), an optional field
+  // of another value, a count below 0, a desktop that is none.
+  const std::string rest = " regions=0 desktop=0,0,1,1 cursor=0,0 helper=no scene=x";
+  EXPECT_FALSE(parse_status("mode=absolute mode=absolute mice=1 regions=0 desktop=0,0,1,1 cursor=0,0 scene=x"));
+  EXPECT_FALSE(parse_status("mode=absolute mice=1 passthrough=maybe" + rest));
+  EXPECT_FALSE(parse_status("mode=absolute mice=-7" + rest));
+  EXPECT_FALSE(parse_status("mode=absolute mice=1 held_elsewhere=-1" + rest));
+  EXPECT_FALSE(parse_status("mode=absolute mice=1 regions=0 desktop=0,0,-5,0 cursor=0,0 helper=no scene=x"));
+  EXPECT_TRUE(parse_status("mode=absolute mice=1 passthrough=on" + rest));
+  // A scene path too long for one line (PATH_MAX is 4096) keeps its end, after "...": the line stays readable.
+  s.scene = "/" + std::string(3000, 'd') + "/the scene.toml";
+  const std::string long_path = format_status(s);
+  EXPECT_EQ(long_path.size(), kMaxLine);
+  const std::optional<Status> shortened = parse_status(parse_reply(long_path)->text);
+  ASSERT_TRUE(shortened.has_value());
+  EXPECT_TRUE(shortened->scene.starts_with("...ddd")) << shortened->scene;
+  EXPECT_TRUE(shortened->scene.ends_with("d/the scene.toml")) << shortened->scene;
 
   const std::optional<Reply> cursor = parse_reply(format_cursor({0.25, 3}));
   ASSERT_TRUE(cursor && cursor->ok);
@@ -138,6 +155,14 @@ TEST(ControlProtocol, LinesAreSplitAndBounded) {
   EXPECT_FALSE(lines.next_line().has_value());
   EXPECT_TRUE(lines.append(std::string(kMaxLine - 3, '1')));  // "pos" + that = the longest line allowed
   EXPECT_FALSE(lines.append("1"));                            // one byte more without a newline
+  // A line too long that comes whole in one read, its newline and more after it, is caught too.
+  LineBuffer whole;
+  EXPECT_TRUE(whole.append("ok\n" + std::string(kMaxLine, 'x') + "\nok\n"));
+  LineBuffer over;
+  EXPECT_FALSE(over.append("ok\n" + std::string(kMaxLine + 1, 'x') + "\nok\n"));
+  LineBuffer split;  // and one that ends in a later read
+  EXPECT_TRUE(split.append(std::string(kMaxLine - 1, 'x')));
+  EXPECT_FALSE(split.append("yy\nok\n"));
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 // End-to-end tests of the `pseudohaptic` command-line tool (tools/): run the built binary, read what it writes.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <fmt/format.h>
 
@@ -354,6 +356,34 @@ TEST(Tool, StatusAndCursorNameTheSocketTheyCouldNotReach) {
     expect_clean_failure(r, {"cannot connect to " + (dir / name).string() + ": " + what + ", not a socket"});
     EXPECT_FALSE(contains(r.err, "is pseudohapticd running?")) << r.err;
   }
+  // A path no socket can have, and a position the daemon would refuse, are the command line's errors, naming the
+  // option (they reached the daemon, or the socket call, and exited 1).
+  const ToolResult long_path = run_tool("status --socket /tmp/" + std::string(110, 'a'), dir);
+  expect_clean_failure(long_path, {"--socket: is 115 bytes long"});
+  EXPECT_EQ(long_path.rc, 105) << long_path.err;
+  const ToolResult far = run_tool("cursor --socket " + quote(socket) + " --set 2000000,0", dir);
+  expect_clean_failure(far, {"--set"});
+  EXPECT_EQ(far.rc, 105) << far.err;
+  // With no daemon to ask and a reader of its output that has gone (`status | head`), the error is still said: only
+  // a failed write to that reader ends the tool quietly, as SIGPIPE would.
+  int ends[2];
+  ASSERT_EQ(::pipe(ends), 0);
+  ::close(ends[0]);  // the reader has gone before anything is written
+  const std::string err = (dir / "err.txt").string();
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::dup2(ends[1], 1);
+    const int to_err = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    ::dup2(to_err, 2);
+    ::execl(PH_TOOL_PATH, PH_TOOL_PATH, "status", "--socket", socket.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ::close(ends[1]);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << "status " << status << ": " << read_text(err);
+  EXPECT_TRUE(contains(read_text(err), "cannot connect to " + socket)) << read_text(err);
 }
 
 TEST(Tool, TraceTargetCurvature) {

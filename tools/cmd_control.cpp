@@ -26,7 +26,7 @@ struct ControlOptions {
 void add_socket_option(CLI::App& app, ControlOptions& o) {
   // --control as well: the daemon and the session helper call the same path by that name.
   app.add_option("--socket,--control", o.socket, "The daemon's control socket (pseudohapticd's --control)")
-      ->check(non_empty_path())
+      ->check(CLI::Validator([](std::string& path) { return control::socket_path_problem(path); }, ""))
       ->capture_default_str();
 }
 
@@ -34,20 +34,24 @@ void add_socket_option(CLI::App& app, ControlOptions& o) {
 std::string ask(const ControlOptions& o, const control::Request& request) {
   control::Client client(o.socket);
   const control::Reply reply = client.request(control::format_request(request));
-  if (!reply.ok) throw std::runtime_error("pseudohapticd: " + reply.text);
+  if (!reply.ok) throw std::runtime_error("pseudohapticd: " + control::printable(reply.text));
   return reply.text;
 }
 
 int run_status(const ControlOptions& o) {
   const std::string words = ask(o, control::StatusRequest{});
   const std::optional<control::Status> s = control::parse_status(words);
-  if (!s) throw std::runtime_error("pseudohapticd answered something this tool does not understand: " + words);
+  if (!s) {
+    throw std::runtime_error("pseudohapticd answered something this tool does not understand: " +
+                             control::printable(words));
+  }
   fmt::print("output:  {}\n", s->absolute ? "absolute" : "relative");
   fmt::print("mice:    {} taken{}\n", s->mice,
              s->held_elsewhere == 0
                  ? std::string()
                  : fmt::format("; {} held by another program (taken once it lets go)", s->held_elsewhere));
-  fmt::print("scene:   {} ({} regions)\n", s->scene == "default" ? "the embedded default scene" : s->scene, s->regions);
+  fmt::print("scene:   {} ({} regions)\n",
+             s->scene == "default" ? "the embedded default scene" : control::printable(s->scene), s->regions);
   fmt::print("desktop: {}x{} at {},{}\n", s->desktop.w, s->desktop.h, s->desktop.x, s->desktop.y);
   fmt::print("cursor:  {:.2f},{:.2f} (the daemon's model)\n", s->cursor.x, s->cursor.y);
   fmt::print("helper:  {}\n", s->helper ? "connected (the model follows the desktop's cursor)"
@@ -62,7 +66,10 @@ int run_cursor(const ControlOptions& o) {
   }
   const std::string words = ask(o, control::CursorRequest{});
   const std::optional<Vec2> at = control::parse_cursor(words);
-  if (!at) throw std::runtime_error("pseudohapticd answered something this tool does not understand: " + words);
+  if (!at) {
+    throw std::runtime_error("pseudohapticd answered something this tool does not understand: " +
+                             control::printable(words));
+  }
   fmt::print("{},{}\n", at->x, at->y);
   return 0;
 }
@@ -84,7 +91,9 @@ Run add_cursor_command(CLI::App& app) {
       "Print the daemon's cursor model as X,Y (px), or with --set move the model there first (with absolute\n"
       "output the desktop's cursor follows at the next motion of the mouse).");
   add_socket_option(app, *o);
-  add_number_tuple(app, "--set", o->set, "X,Y", "Move the cursor model here (px)", {finite_number()});
+  // The daemon's range (a layout's): beyond it the daemon refuses, and the error would not name --set.
+  add_number_tuple(app, "--set", o->set, "X,Y", "Move the cursor model here (px)",
+                   {finite_from(-static_cast<double>(kMaxDesktopCoordinate), kMaxDesktopCoordinate)});
   return [o] { return run_cursor(*o); };
 }
 

@@ -138,7 +138,10 @@ int main(int argc, char** argv) {
     say_error((e.path1().empty() ? "" : e.path1().string() + ": ") + what);
     return 1;
   } catch (const std::exception& e) {
-    if (stdout_reader_gone()) end_as_sigpipe();
+    // A failed write to a reader that has gone (EPIPE) ends as SIGPIPE would; any other error is said, whether or
+    // not the reader is still there (`status | head` with no daemon to ask).
+    if (stdout_reader_gone() && std::string_view(e.what()).find(std::strerror(EPIPE)) != std::string_view::npos)
+      end_as_sigpipe();
     say_error(e.what());
     return 1;
   }
