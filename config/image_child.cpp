@@ -84,17 +84,15 @@ ImageChild::ImageChild(fs::path reader, std::chrono::milliseconds timeout)
 ImageChild::~ImageChild() { stop(); }
 
 void ImageChild::start() {
-  int down[2], up[2];  // daemon -> child (its stdin), child -> daemon (its stdout)
-  if (::pipe2(down, O_CLOEXEC) < 0) throw FieldError(std::string("cannot make a pipe: ") + std::strerror(errno));
-  if (::pipe2(up, O_CLOEXEC) < 0) {
-    ::close(down[0]);
-    ::close(down[1]);
-    throw FieldError(std::string("cannot make a pipe: ") + std::strerror(errno));
-  }
+  int ends[2];  // daemon -> child (its stdin), child -> daemon (its stdout): each end closes itself
+  if (::pipe2(ends, O_CLOEXEC) < 0) throw FieldError(std::string("cannot make a pipe: ") + std::strerror(errno));
+  UniqueFd down_read(ends[0]), down_write(ends[1]);
+  if (::pipe2(ends, O_CLOEXEC) < 0) throw FieldError(std::string("cannot make a pipe: ") + std::strerror(errno));
+  UniqueFd up_read(ends[0]), up_write(ends[1]);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, down[0], 0);
-  posix_spawn_file_actions_adddup2(&actions, up[1], 1);
+  posix_spawn_file_actions_adddup2(&actions, down_read.get(), 0);
+  posix_spawn_file_actions_adddup2(&actions, up_write.get(), 1);
   // Nothing else of the daemon's (mice, /dev/uinput, sockets) reaches the child, CLOEXEC or not.
   posix_spawn_file_actions_addclosefrom_np(&actions, 3);
   // The child starts with no signal blocked or ignored (the daemon blocks SIGTERM, SIGINT and SIGHUP).
@@ -113,23 +111,16 @@ void ImageChild::start() {
   const int error = ::posix_spawn(&pid, program.c_str(), &actions, &attributes, argv, envp);
   posix_spawn_file_actions_destroy(&actions);
   posix_spawnattr_destroy(&attributes);
-  ::close(down[0]);
-  ::close(up[1]);
-  if (error != 0) {
-    ::close(down[1]);
-    ::close(up[0]);
-    throw FieldError("cannot start the image reader " + program + ": " + std::strerror(error));
-  }
+  if (error != 0) throw FieldError("cannot start the image reader " + program + ": " + std::strerror(error));
   pid_ = pid;
-  to_child_ = down[1];
-  from_child_ = up[0];
+  to_child_ = std::move(down_write);  // (the child's ends close here, at the end of the scope)
+  from_child_ = std::move(up_read);
 }
 
 void ImageChild::stop() {
   if (pid_ < 0) return;
-  ::close(to_child_);  // the child exits at end of input
-  ::close(from_child_);
-  to_child_ = from_child_ = -1;
+  to_child_.reset();  // the child exits at end of input
+  from_child_.reset();
   int status = 0;
   for (int i = 0; i < 200; ++i) {  // 2 s, then it is killed
     const pid_t done = ::waitpid(pid_, &status, WNOHANG);
@@ -149,9 +140,8 @@ void ImageChild::fail(const std::string& files, const std::string& what, bool ki
   std::string how;
   if (pid_ >= 0) {
     if (kill_now) ::kill(pid_, SIGKILL);
-    ::close(to_child_);
-    ::close(from_child_);
-    to_child_ = from_child_ = -1;
+    to_child_.reset();
+    from_child_.reset();
     // A crash is reported a moment after the pipe closes: a process with the image library's mappings
     // takes a while to go, under emulation more so.
     int status = 0;
@@ -177,14 +167,14 @@ image_wire::Answer ImageChild::ask(const image_wire::Request& request, const std
   try {
     try {
       const SigpipeHeld held;
-      image_wire::write_message(to_child_, image_wire::encode(request));
+      image_wire::write_message(to_child_.get(), image_wire::encode(request));
     } catch (const image_wire::WireError&) {
       fail(files, "ended before it took the request", false);  // a broken pipe: the child is gone
     }
     const auto deadline = std::chrono::steady_clock::now() + timeout_;
-    if (!wait_readable(from_child_, deadline))
+    if (!wait_readable(from_child_.get(), deadline))
       fail(files, "gave no answer within " + std::to_string(timeout_.count() / 1000) + " s", true);
-    if (!image_wire::read_message(from_child_, bytes, deadline))
+    if (!image_wire::read_message(from_child_.get(), bytes, deadline))
       fail(files, "ended without an answer while reading it", false);
     image_wire::Answer answer = image_wire::decode_answer(bytes, request);
     if (const auto* failure = std::get_if<image_wire::Failure>(&answer)) throw FieldError(failure->message);

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <string>
 
+#include "common/unique_fd.hpp"
 #include "config/field_reader.hpp"
 #include "config/image_wire.hpp"
 
@@ -44,7 +45,7 @@ class ImageChild final : public FieldReader {
   std::filesystem::path program_;
   std::chrono::milliseconds timeout_;
   pid_t pid_ = -1;
-  int to_child_ = -1, from_child_ = -1;
+  UniqueFd to_child_, from_child_;
 };
 
 }  // namespace ph

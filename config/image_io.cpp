@@ -1,4 +1,5 @@
 #include "config/image_io.hpp"
+#include "common/unique_fd.hpp"
 
 #include <dlfcn.h>
 #include <fcntl.h>
@@ -110,9 +111,8 @@ const image_backend::Table& backend(const fs::path& image) {
 
 // OpenImageIO says only "Could not open file" where the file cannot be made: the file system's reason, first.
 void check_writable(const fs::path& path) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0666);
-  if (fd < 0) throw image_file_error(path, std::string("cannot write: ") + std::strerror(errno));
-  ::close(fd);
+  const UniqueFd fd(::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0666));
+  if (!fd) throw image_file_error(path, std::string("cannot write: ") + std::strerror(errno));
 }
 
 // Code of a value in [0, 1] for the largest code `code_max`; a non-finite value writes 0.
@@ -159,11 +159,10 @@ void check_before_decoding(const fs::path& path, const ImageLimits& limits) {
 // Whether the file begins with the PNG signature, whatever its name says.
 bool starts_as_png(const fs::path& path) {
   constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return false;
+  const UniqueFd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  if (!fd) return false;
   unsigned char head[sizeof kSignature] = {};
-  const ssize_t n = ::read(fd, head, sizeof head);
-  ::close(fd);
+  const ssize_t n = ::read(fd.get(), head, sizeof head);
   return n == static_cast<ssize_t>(sizeof head) && std::memcmp(head, kSignature, sizeof head) == 0;
 }
 

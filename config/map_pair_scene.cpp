@@ -1,4 +1,5 @@
 #include "config/map_pair_scene.hpp"
+#include "common/unique_fd.hpp"
 
 #include <fmt/format.h>
 
@@ -25,15 +26,10 @@ void write_text_file(const std::filesystem::path& path, const std::string& text)
   const auto fail = [&path](const char* what) {
     throw std::runtime_error(fmt::format("{}: cannot {}: {}", path.string(), what, std::strerror(errno)));
   };
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  if (fd < 0) fail("write");
-  if (!write_all(fd, text.data(), text.size())) {
-    const int error = errno;
-    ::close(fd);
-    errno = error;
-    fail("write");
-  }
-  if (::close(fd) != 0) fail("write");
+  UniqueFd fd(::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666));
+  if (!fd) fail("write");
+  if (!write_all(fd.get(), text.data(), text.size())) fail("write");  // (closed on the way out, errno kept)
+  if (fd.close() != 0) fail("write");
 }
 
 std::string map_pair_scene_text(const MapPairScene& scene) {

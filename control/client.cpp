@@ -21,17 +21,15 @@ Client::Client(const std::string& path, std::chrono::milliseconds timeout) : pat
   std::memcpy(address.sun_path, path.c_str(), path.size() + 1);
   // Non-blocking: a Unix socket whose listener's queue is full (a daemon that has stopped accepting, a hung one)
   // makes a blocking connect wait for ever, and a non-blocking one fail with EAGAIN, tried again until `timeout`.
-  fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
-  if (fd_ < 0) throw ControlError(fmt::format("cannot create a socket: {}", std::strerror(errno)));
+  fd_ = UniqueFd(::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
+  if (!fd_) throw ControlError(fmt::format("cannot create a socket: {}", std::strerror(errno)));
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   int connected = 0;
-  while ((connected = ::connect(fd_, reinterpret_cast<const sockaddr*>(&address), sizeof address)) != 0 &&
+  while ((connected = ::connect(fd_.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address)) != 0 &&
          (errno == EAGAIN || errno == EINTR) && std::chrono::steady_clock::now() < deadline) {
     ::usleep(20'000);
   }
   if (connected != 0 && errno == EAGAIN) {
-    ::close(fd_);
-    fd_ = -1;
     throw ControlError(
         fmt::format("pseudohapticd at {} takes no connection (its queue is full): is it hung? "
                     "`systemctl status pseudohapticd`",
@@ -39,8 +37,6 @@ Client::Client(const std::string& path, std::chrono::milliseconds timeout) : pat
   }
   if (connected != 0) {
     const int error = errno;
-    ::close(fd_);
-    fd_ = -1;
     // A path that is there but is no socket (a folder, a file) refuses the connection too: not the daemon's
     // being down.
     struct stat st {};
@@ -59,12 +55,8 @@ Client::Client(const std::string& path, std::chrono::milliseconds timeout) : pat
                                            : "";
     throw ControlError(fmt::format("cannot connect to {}: {}{}", path, std::strerror(error), advice));
   }
-  const int flags = ::fcntl(fd_, F_GETFL);
-  ::fcntl(fd_, F_SETFL, flags & ~O_NONBLOCK);
-}
-
-Client::~Client() {
-  if (fd_ >= 0) ::close(fd_);
+  const int flags = ::fcntl(fd_.get(), F_GETFL);
+  ::fcntl(fd_.get(), F_SETFL, flags & ~O_NONBLOCK);
 }
 
 bool Client::send_line(std::string_view line) {
@@ -72,7 +64,7 @@ bool Client::send_line(std::string_view line) {
   text += '\n';
   std::size_t done = 0;
   while (done < text.size()) {
-    const ssize_t n = ::send(fd_, text.data() + done, text.size() - done, MSG_NOSIGNAL);
+    const ssize_t n = ::send(fd_.get(), text.data() + done, text.size() - done, MSG_NOSIGNAL);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) return false;
     done += static_cast<std::size_t>(n);
@@ -87,12 +79,12 @@ std::optional<std::string> Client::read_line(std::chrono::milliseconds timeout) 
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) return std::nullopt;
-    pollfd p{fd_, POLLIN, 0};
+    pollfd p{fd_.get(), POLLIN, 0};
     const int ready = ::poll(&p, 1, static_cast<int>(left.count()));
     if (ready < 0 && errno == EINTR) continue;
     if (ready <= 0) return std::nullopt;
     std::array<char, 4096> buffer{};
-    const ssize_t n = ::recv(fd_, buffer.data(), buffer.size(), 0);
+    const ssize_t n = ::recv(fd_.get(), buffer.data(), buffer.size(), 0);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) throw ControlError(fmt::format("pseudohapticd at {} closed the connection", path_));
     if (!lines_.append({buffer.data(), static_cast<std::size_t>(n)}))

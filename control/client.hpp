@@ -8,6 +8,7 @@
 #include <string>
 #include <string_view>
 
+#include "common/unique_fd.hpp"
 #include "control/protocol.hpp"
 
 namespace ph::control {
@@ -22,7 +23,6 @@ class Client {
   // Connects, waiting at most `timeout` for a daemon whose queue of connections is full (one that has stopped
   // accepting them); throws ControlError saying what to do (the daemon not running, no permission, hung).
   explicit Client(const std::string& path, std::chrono::milliseconds timeout = std::chrono::seconds(2));
-  ~Client();
   Client(const Client&) = delete;
   Client& operator=(const Client&) = delete;
 
@@ -34,11 +34,11 @@ class Client {
   // The next line, waiting at most `timeout`; nullopt on a time-out; throws ControlError at the end.
   std::optional<std::string> read_line(std::chrono::milliseconds timeout);
 
-  int fd() const { return fd_; }
+  int fd() const { return fd_.get(); }
 
  private:
   std::string path_;  // for the messages
-  int fd_ = -1;
+  UniqueFd fd_;
   LineBuffer lines_;
 };
 

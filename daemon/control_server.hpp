@@ -18,7 +18,7 @@
 #include "control/protocol.hpp"
 #include "daemon/control_access.hpp"
 #include "daemon/log.hpp"
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 
 namespace ph {
 

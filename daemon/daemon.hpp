@@ -23,7 +23,7 @@
 #include "daemon/scene_reloader.hpp"
 #include "daemon/service_notifier.hpp"
 #include "daemon/udev_watch.hpp"
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 #include "uinput/uinput_sink.hpp"
 
 namespace ph {

@@ -27,16 +27,14 @@ InputEvent to_event(const input_event& e) {
 }  // namespace
 
 EvdevDevice::EvdevDevice(const std::string& node) : node_(node) {
-  fd_ = ::open(node.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-  if (fd_ < 0) {
+  fd_ = UniqueFd(::open(node.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC));
+  if (!fd_) {
     const int error = errno;
     throw DeviceError(fmt::format("{}: cannot open: {}", node, std::strerror(error)), error);
   }
   libevdev* raw = nullptr;
-  const int rc = libevdev_new_from_fd(fd_, &raw);
+  const int rc = libevdev_new_from_fd(fd_.get(), &raw);
   if (rc < 0) {
-    ::close(fd_);
-    fd_ = -1;
     throw DeviceError(fmt::format("{}: not an evdev device: {}", node, std::strerror(-rc)), -rc);
   }
   dev_.reset(raw);
@@ -46,12 +44,11 @@ EvdevDevice::EvdevDevice(const std::string& node) : node_(node) {
 
 EvdevDevice::~EvdevDevice() {
   if (grabbed_) libevdev_grab(dev_.get(), LIBEVDEV_UNGRAB);
-  dev_.reset();
-  if (fd_ >= 0) ::close(fd_);
+  dev_.reset();  // (then fd_ closes itself)
 }
 
 bool EvdevDevice::hung_up() const {
-  pollfd p{fd_, POLLIN, 0};
+  pollfd p{fd_.get(), POLLIN, 0};
   return ::poll(&p, 1, 0) == 1 && (p.revents & (POLLHUP | POLLERR)) != 0;
 }
 
@@ -110,7 +107,7 @@ DeviceDescription EvdevDevice::description() const {
 
 bool EvdevDevice::any_key_held() const {
   std::array<unsigned char, KEY_MAX / 8 + 1> keys{};
-  if (::ioctl(fd_, EVIOCGKEY(keys.size()), keys.data()) < 0) return false;
+  if (::ioctl(fd_.get(), EVIOCGKEY(keys.size()), keys.data()) < 0) return false;
   for (unsigned char byte : keys) {
     if (byte != 0) return true;
   }
@@ -137,7 +134,7 @@ void EvdevDevice::ungrab() {
 EvdevDevice::KeyBits EvdevDevice::keys_down_now() const {
   std::array<unsigned char, kKeyCount / 8> bytes{};
   KeyBits down;
-  if (::ioctl(fd_, EVIOCGKEY(bytes.size()), bytes.data()) < 0) return down;
+  if (::ioctl(fd_.get(), EVIOCGKEY(bytes.size()), bytes.data()) < 0) return down;
   for (std::size_t code = 0; code < kKeyCount; ++code) {
     if ((bytes[code / 8] >> (code % 8)) & 1U) down.set(code);
   }
@@ -145,8 +142,8 @@ EvdevDevice::KeyBits EvdevDevice::keys_down_now() const {
 }
 
 void EvdevDevice::set_blocking(bool blocking) {
-  const int flags = ::fcntl(fd_, F_GETFL);
-  if (flags < 0 || ::fcntl(fd_, F_SETFL, blocking ? flags & ~O_NONBLOCK : flags | O_NONBLOCK) < 0)
+  const int flags = ::fcntl(fd_.get(), F_GETFL);
+  if (flags < 0 || ::fcntl(fd_.get(), F_SETFL, blocking ? flags & ~O_NONBLOCK : flags | O_NONBLOCK) < 0)
     throw DeviceError(
         fmt::format("{}: cannot set the node {}blocking: {}", node_, blocking ? "" : "non-", std::strerror(errno)),
         errno);
@@ -156,14 +153,14 @@ void EvdevDevice::set_blocking(bool blocking) {
 // Inline in read_batch, the frame's path: out of line it sat on a page of its own (core/engine/frame_path.hpp).
 [[gnu::always_inline]] inline ssize_t EvdevDevice::read_some(void* buffer, std::size_t size, Wait wait) {
   if (blocking_ && wait == Wait::no) {
-    pollfd queued{fd_, POLLIN, 0};
+    pollfd queued{fd_.get(), POLLIN, 0};
     if (::poll(&queued, 1, 0) == 0) {
       errno = EAGAIN;
       return -1;
     }
     // Readable, or an error (unplugged): either way read() does not wait.
   }
-  return ::read(fd_, buffer, size);
+  return ::read(fd_.get(), buffer, size);
 }
 
 // After SYN_DROPPED the kernel's buffer holds only part of the stream: everything still in it is dropped

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/unique_fd.hpp"
 #include "core/engine/device.hpp"
 #include "core/engine/event.hpp"
 #include "uinput/uinput_sink.hpp"  // LibevdevPtr
@@ -39,7 +40,7 @@ class EvdevDevice {
   EvdevDevice& operator=(const EvdevDevice&) = delete;
 
   const std::string& node() const { return node_; }
-  int fd() const { return fd_; }
+  int fd() const { return fd_.get(); }
   // Whether the device has gone (unplugged): its node hangs up.
   bool hung_up() const;
   std::string name() const;
@@ -86,7 +87,7 @@ class EvdevDevice {
   void resync(std::vector<InputEvent>& events, TimeUs time);
 
   std::string node_;
-  int fd_ = -1;
+  UniqueFd fd_;  // closed after dev_ is freed (members go in reverse order)
   LibevdevPtr dev_;
   bool grabbed_ = false;
   bool blocking_ = false;

@@ -15,7 +15,7 @@
 
 #include "daemon/configuration.hpp"
 #include "daemon/reload_queue.hpp"
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 
 namespace ph {
 

@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 #include "session/compositor_answers.hpp"
 
 namespace ph::session {

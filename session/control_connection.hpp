@@ -6,7 +6,7 @@
 #include <string>
 #include <string_view>
 
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 
 namespace ph::session {
 

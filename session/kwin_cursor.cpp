@@ -15,7 +15,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 
 namespace ph::session {
 

@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "control/protocol.hpp"
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 #include "session/control_connection.hpp"
 #include "session/desktop.hpp"
 #include "session/protocol.hpp"

@@ -15,7 +15,7 @@
 #include <thread>
 
 #include "control/client.hpp"
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 #include "tests/as_nobody.hpp"
 #include "tests/scratch_dir.hpp"
 

@@ -18,7 +18,7 @@
 #include "daemon/configuration.hpp"
 #include "daemon/log.hpp"
 #include "daemon/service_notifier.hpp"
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 #include "tests/as_nobody.hpp"
 #include "tests/geometry_printers.hpp"
 #include "tests/scoped_env.hpp"

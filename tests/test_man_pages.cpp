@@ -23,7 +23,7 @@
 #include <utility>
 #include <vector>
 
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 #include "tests/file_bytes.hpp"
 #include "tests/scratch_dir.hpp"
 

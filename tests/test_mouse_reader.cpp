@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "daemon/mouse_reader.hpp"
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 
 namespace ph {
 namespace {

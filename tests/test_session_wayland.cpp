@@ -15,7 +15,7 @@
 #include <string>
 #include <thread>
 
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 #include "session/compositor_answers.hpp"
 #include "session/compositor_cursor.hpp"
 #include "tests/geometry_printers.hpp"

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "common/unique_fd.hpp"
 #include "config/daemon_config.hpp"
 #include "config/scene_file.hpp"
 #include "config/write_all.hpp"
@@ -112,20 +113,20 @@ class OutputFile {
     if (!renamed_) return;
     const std::filesystem::path target(path_);
     const std::filesystem::path dir = target.has_parent_path() ? target.parent_path() : ".";
-    int fd = -1;
-    for (int attempt = 0; fd < 0; ++attempt) {
+    UniqueFd fd;
+    for (int attempt = 0; !fd; ++attempt) {
       temp_ = (dir / fmt::format(".{}.{}.{}.partial", target.filename().string(), ::getpid(), attempt)).string();
-      fd = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);  // the umask applies
-      if (fd < 0 && (errno != EEXIST || attempt >= 100)) {
+      fd = UniqueFd(::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666));  // the umask applies
+      if (!fd && (errno != EEXIST || attempt >= 100)) {
         const int error = errno;
         temp_.clear();
         fail_errno(fmt::format("{}: cannot create a temporary file beside it", path_), error);
       }
     }
     // A replaced file keeps its permissions.
-    const bool ok = (!replaced_mode_ || ::fchmod(fd, *replaced_mode_) == 0) && write_all(fd, text_);
+    const bool ok = (!replaced_mode_ || ::fchmod(fd.get(), *replaced_mode_) == 0) && write_all(fd.get(), text_);
     const int error = errno;
-    if (::close(fd) != 0 && ok) fail_errno(fmt::format("{}: write failed", path_), errno);
+    if (fd.close() != 0 && ok) fail_errno(fmt::format("{}: write failed", path_), errno);
     if (!ok) fail_errno(fmt::format("{}: write failed", path_), error);
   }
 
@@ -141,15 +142,15 @@ class OutputFile {
       if (!write_all(fd_, text_)) fail_errno(fmt::format("{}: write failed", name()), errno);
       return;
     }
-    const int fd = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOCTTY, 0666);
-    if (fd < 0) fail_errno(fmt::format("{}: cannot open for writing", path_), errno);
-    const bool ok = write_all(fd, text_);
+    UniqueFd fd(::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOCTTY, 0666));
+    if (!fd) fail_errno(fmt::format("{}: cannot open for writing", path_), errno);
+    const bool ok = write_all(fd.get(), text_);
     const int error = errno;
     if (!ok) {
       struct stat st {};
-      if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) (void)!::ftruncate(fd, 0);  // nothing that looks valid
+      if (::fstat(fd.get(), &st) == 0 && S_ISREG(st.st_mode)) (void)!::ftruncate(fd.get(), 0);  // nothing valid
     }
-    if (::close(fd) != 0 && ok) fail_errno(fmt::format("{}: write failed", path_), errno);
+    if (fd.close() != 0 && ok) fail_errno(fmt::format("{}: write failed", path_), errno);
     if (!ok) fail_errno(fmt::format("{}: write failed", path_), error);
   }
 

@@ -44,7 +44,7 @@
 #include "control/client.hpp"
 #include "control/protocol.hpp"
 #include "core/engine/event.hpp"
-#include "daemon/unique_fd.hpp"
+#include "common/unique_fd.hpp"
 #include "tests/vm/vm_check.hpp"
 #include "uinput/uinput_sink.hpp"
 
@@ -118,7 +118,7 @@ inline int ms_until(Clock::time_point deadline, std::chrono::milliseconds cap = 
   return static_cast<int>(std::clamp(left, 0ms, cap).count());
 }
 
-using Fd = UniqueFd;  // daemon/unique_fd.hpp
+using Fd = UniqueFd;  // common/unique_fd.hpp
 
 // The kernel's uevents (NETLINK_KOBJECT_UEVENT): something to wait on while input devices come and go.
 class UeventMonitor {

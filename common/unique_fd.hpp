@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <utility>
 
 namespace ph {
@@ -25,9 +26,19 @@ class UniqueFd {
 
   int get() const { return fd_; }
   explicit operator bool() const { return fd_ >= 0; }
+  // Closes it, leaving errno as it was: an error being reported keeps its reason.
   void reset() {
-    if (fd_ >= 0) ::close(fd_);
+    if (fd_ >= 0) {
+      const int saved = errno;
+      ::close(fd_);
+      errno = saved;
+    }
     fd_ = -1;
+  }
+  // Closes it now, for a file whose close may fail (a full disk, NFS): close(2)'s result, errno as it leaves it.
+  int close() {
+    const int fd = std::exchange(fd_, -1);
+    return fd >= 0 ? ::close(fd) : 0;
   }
 
  private:
