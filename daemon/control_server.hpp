@@ -15,10 +15,10 @@
 #include <variant>
 #include <vector>
 
+#include "common/unique_fd.hpp"
 #include "control/protocol.hpp"
 #include "daemon/control_access.hpp"
 #include "daemon/log.hpp"
-#include "common/unique_fd.hpp"
 
 namespace ph {
 

@@ -13,6 +13,7 @@
 #include <set>
 #include <string>
 
+#include "common/unique_fd.hpp"
 #include "core/engine/pipeline.hpp"
 #include "daemon/configuration.hpp"
 #include "daemon/control_server.hpp"
@@ -23,7 +24,6 @@
 #include "daemon/scene_reloader.hpp"
 #include "daemon/service_notifier.hpp"
 #include "daemon/udev_watch.hpp"
-#include "common/unique_fd.hpp"
 #include "uinput/uinput_sink.hpp"
 
 namespace ph {

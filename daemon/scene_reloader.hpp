@@ -13,9 +13,9 @@
 #include <string>
 #include <thread>
 
+#include "common/unique_fd.hpp"
 #include "daemon/configuration.hpp"
 #include "daemon/reload_queue.hpp"
-#include "common/unique_fd.hpp"
 
 namespace ph {
 

@@ -24,8 +24,8 @@
 #include <string_view>
 #include <vector>
 
-#include "control/protocol.hpp"
 #include "common/unique_fd.hpp"
+#include "control/protocol.hpp"
 #include "session/control_connection.hpp"
 #include "session/desktop.hpp"
 #include "session/protocol.hpp"

@@ -14,8 +14,8 @@
 #include <string>
 #include <thread>
 
-#include "control/client.hpp"
 #include "common/unique_fd.hpp"
+#include "control/client.hpp"
 #include "tests/as_nobody.hpp"
 #include "tests/scratch_dir.hpp"
 

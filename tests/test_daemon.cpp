@@ -13,12 +13,12 @@
 #include <limits>
 #include <string>
 
+#include "common/unique_fd.hpp"
 #include "config/image_io.hpp"
 #include "config/scene_file.hpp"
 #include "daemon/configuration.hpp"
 #include "daemon/log.hpp"
 #include "daemon/service_notifier.hpp"
-#include "common/unique_fd.hpp"
 #include "tests/as_nobody.hpp"
 #include "tests/geometry_printers.hpp"
 #include "tests/scoped_env.hpp"

@@ -17,8 +17,8 @@
 #include <thread>
 #include <vector>
 
-#include "daemon/mouse_reader.hpp"
 #include "common/unique_fd.hpp"
+#include "daemon/mouse_reader.hpp"
 
 namespace ph {
 namespace {

@@ -41,10 +41,10 @@
 #include <utility>
 #include <vector>
 
+#include "common/unique_fd.hpp"
 #include "control/client.hpp"
 #include "control/protocol.hpp"
 #include "core/engine/event.hpp"
-#include "common/unique_fd.hpp"
 #include "tests/vm/vm_check.hpp"
 #include "uinput/uinput_sink.hpp"
 
