@@ -119,6 +119,7 @@ std::optional<Vec2> WayfireCursor::position() {
 }
 
 std::unique_ptr<CursorSource> cursor_source_from_environment(std::string* unmet) {
+  if (unmet != nullptr) unmet->clear();
   const auto env = [](const char* name) -> std::string_view {
     const char* value = std::getenv(name);
     return value != nullptr ? value : "";

@@ -291,9 +291,10 @@ std::unique_ptr<Desktop> open_desktop(const std::string& backend, const std::str
 
 // Opens the desktop (`open`) on a thread of its own while this one waits for a stop signal of `stop` (blocked): a
 // display server that takes the connection but never answers (a hung X server, a stale compositor socket) keeps
-// Xlib and libwayland waiting without a time limit, and the helper must still stop as its page says. A stop ends
-// the process at once (nothing of the desktop's to clean up yet, and the thread cannot be joined); an error of
-// the opening is thrown here.
+// Xlib and libwayland waiting without a time limit, and the helper must still stop as its page says. On a stop the
+// opening is given a few seconds more (on KWin it loads a script, then waits up to 2 s for its first position): a
+// desktop opened by then is closed at once, which unloads that script, and nullptr is returned; one still opening
+// is left, and the process ends (the thread cannot be joined). An error of the opening is thrown here.
 std::unique_ptr<Desktop> open_until_stopped(const sigset_t& stop, const Log& log,
                                             std::function<std::unique_ptr<Desktop>()> open) {
   std::future<std::unique_ptr<Desktop>> opened = std::async(std::launch::async, std::move(open));
@@ -302,6 +303,13 @@ std::unique_ptr<Desktop> open_until_stopped(const sigset_t& stop, const Log& log
     siginfo_t info{};
     if (::sigtimedwait(&stop, &info, &wait) > 0) {
       log.info(fmt::format("SIG{} while opening the desktop: stopping", ::sigabbrev_np(info.si_signo)));
+      if (opened.wait_for(std::chrono::seconds(3)) == std::future_status::ready) {
+        try {
+          opened.get();                    // closed here, its KWin script unloaded
+        } catch (const std::exception&) {  // it did not open: nothing to close
+        }
+        return nullptr;
+      }
       std::fflush(stderr);
       std::_Exit(0);
     }
@@ -327,8 +335,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Validator([](std::string& path) { return ph::control::socket_path_problem(path); }, ""))
       ->capture_default_str();
   app.add_option("--backend", backend,
-                 "How to ask the desktop: auto (wayland when WAYLAND_DISPLAY is set, else x11 when DISPLAY is), "
-                 "x11 or wayland")
+                 "How to ask the desktop: auto (wayland when --wayland-display is given or WAYLAND_DISPLAY is set "
+                 "without --display, else x11 when DISPLAY or --display is), x11 or wayland")
       ->check(CLI::IsMember({"auto", "x11", "wayland"}))
       ->capture_default_str();
   app.add_option("--display", display, "The X display (x11 backend; default: $DISPLAY)");
@@ -376,6 +384,7 @@ int main(int argc, char** argv) {
   try {
     const std::unique_ptr<Desktop> desktop =
         open_until_stopped(stop, log, [&] { return open_desktop(backend, display, wayland_display, log); });
+    if (!desktop) return 0;  // stopped while it opened
     return Helper(control, passthrough, *desktop, log).run(signals.get());
   } catch (const std::runtime_error& e) {  // X11Error, WaylandError: no display, or it went away
     log.error(e.what());

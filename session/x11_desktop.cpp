@@ -25,7 +25,7 @@ int quiet_io_error(Display*) { return 0; }
 }  // namespace
 
 X11Desktop::X11Desktop(const std::string& display, std::function<void(const std::string&)> lost)
-    : display_(XOpenDisplay(display.empty() ? nullptr : display.c_str())), lost_(std::move(lost)) {
+    : lost_(std::move(lost)), display_(XOpenDisplay(display.empty() ? nullptr : display.c_str())) {
   if (!display_) {
     const char* name = display.empty() ? std::getenv("DISPLAY") : display.c_str();
     throw X11Error(std::string("cannot open the X display ") + (name != nullptr ? name : "(DISPLAY is not set)"));
@@ -52,6 +52,12 @@ X11Desktop::X11Desktop(const std::string& display, std::function<void(const std:
   active_window_ = XInternAtom(display_.get(), "_NET_ACTIVE_WINDOW", False);
   XSelectInput(display_.get(), DefaultRootWindow(display_.get()), PropertyChangeMask);
   XFlush(display_.get());
+}
+
+X11Desktop::~X11Desktop() {
+  if (lost_ && display_)
+    XSetIOErrorExitHandler(
+        display_.get(), [](Display*, void*) {}, nullptr);
 }
 
 int X11Desktop::fd() const { return ConnectionNumber(display_.get()); }

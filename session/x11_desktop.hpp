@@ -29,6 +29,8 @@ class X11Desktop : public Desktop {
   // connection is lost (the X server ended), `lost` is told why and the process exits with status 1, as Xlib's
   // own handler exits (it cannot be returned from); without `lost`, Xlib's message goes to stderr.
   explicit X11Desktop(const std::string& display, std::function<void(const std::string&)> lost = {});
+  // A server already gone when the display is closed (logout: the X server ends as SIGTERM comes) is no error then.
+  ~X11Desktop() override;
 
   std::string backend_name() const override { return "x11"; }
   int fd() const override;  // readable when X has sent events
@@ -52,8 +54,8 @@ class X11Desktop : public Desktop {
   struct Closer {
     void operator()(Display* d) const { XCloseDisplay(d); }
   };
+  std::function<void(const std::string&)> lost_;  // (declared first: it outlives the display)
   std::unique_ptr<Display, Closer> display_;
-  std::function<void(const std::string&)> lost_;
   int randr_event_base_ = -1;
   Atom active_window_ = None;
 };

@@ -346,14 +346,31 @@ TEST(ManPages, TheSessionHelperSaysTheXServerWentAway) {
   ASSERT_EQ(::poll(&wait, 1, 10'000), 1) << "Xwayland gave no display number within 10 s";
   ASSERT_GT(::read(display_read.get(), number, sizeof(number) - 1), 0);
   const std::string display = ":" + std::string(number, std::strcspn(number, "\n"));
-  const std::string log = (runtime / "helper.log").string();
+  const std::string log = (runtime / "helper.log").string(), stopping_log = (runtime / "stopping.log").string();
   Child helper(
       {PH_SESSION_PATH, "--backend", "x11", "--display", display, "--control", (runtime / "no-daemon").string()},
       {runtime_env}, log);
+  // A second helper is told to stop as the server goes (logout): it stops as it was told, status 0, without an
+  // error of the server's going when it closes the display.
+  Child stopping(
+      {PH_SESSION_PATH, "--backend", "x11", "--display", display, "--control", (runtime / "no-daemon").string()},
+      {runtime_env}, stopping_log);
   // Connected once it looks for the daemon (after the desktop is open).
-  for (int i = 0; i < 500 && ph::read_file_text(log).find("no pseudohapticd") == std::string::npos; ++i)
-    ::usleep(10'000);
+  for (const std::string& l : {log, stopping_log}) {
+    for (int i = 0; i < 500 && ph::read_file_text(l).find("no pseudohapticd") == std::string::npos; ++i)
+      ::usleep(10'000);
+  }
+  ::kill(stopping.pid(), SIGSTOP);
   ::kill(xwayland.pid(), SIGKILL);
+  ::usleep(200'000);
+  ::kill(stopping.pid(), SIGTERM);
+  ::kill(stopping.pid(), SIGCONT);
+  const std::optional<int> stopped = stopping.wait_for(std::chrono::seconds(5));
+  const std::string stopping_said = ph::read_file_text(stopping_log);
+  ASSERT_TRUE(stopped.has_value()) << stopping_said;
+  EXPECT_TRUE(WIFEXITED(*stopped) && WEXITSTATUS(*stopped) == 0) << "status " << *stopped << ": " << stopping_said;
+  EXPECT_NE(stopping_said.find("info: stopping"), std::string::npos) << stopping_said;
+  EXPECT_EQ(stopping_said.find("went away"), std::string::npos) << stopping_said;
   const std::optional<int> status = helper.wait_for(std::chrono::seconds(5));
   const std::string said = ph::read_file_text(log);
   if (said.find("backend is not built") != std::string::npos) GTEST_SKIP() << said;

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -338,6 +339,31 @@ TEST(Tool, AWriteThatFailsIsAnErrorNotASuccess) {
       << read_text(dir / "stderr.txt");
 }
 
+// The tool run with `args`, its standard output a pipe whose reader has gone before anything is written (`| head`
+// that has read enough), SIGPIPE's action the default as a shell leaves it: its wait status and standard error.
+std::pair<int, std::string> run_with_the_reader_gone(const ScratchDir& dir, const std::vector<std::string>& args) {
+  int ends[2];
+  if (::pipe(ends) != 0) return {-1, "pipe failed"};
+  ::close(ends[0]);
+  const std::string err = (dir / "reader-gone-err.txt").string();
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::dup2(ends[1], 1);
+    const int to_err = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    ::dup2(to_err, 2);
+    ::signal(SIGPIPE, SIG_DFL);
+    std::vector<char*> argv{const_cast<char*>(PH_TOOL_PATH)};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(PH_TOOL_PATH, argv.data());
+    ::_exit(127);
+  }
+  ::close(ends[1]);
+  int status = -1;
+  ::waitpid(child, &status, 0);
+  return {status, read_text(err)};
+}
+
 // status and cursor take the socket as --socket or, as pseudohapticd and pseudohaptic-session name it, --control;
 // without a daemon there the error names the path and says what to check.
 TEST(Tool, StatusAndCursorNameTheSocketTheyCouldNotReach) {
@@ -365,25 +391,17 @@ TEST(Tool, StatusAndCursorNameTheSocketTheyCouldNotReach) {
   expect_clean_failure(far, {"--set"});
   EXPECT_EQ(far.rc, 105) << far.err;
   // With no daemon to ask and a reader of its output that has gone (`status | head`), the error is still said: only
-  // a failed write to that reader ends the tool quietly, as SIGPIPE would.
-  int ends[2];
-  ASSERT_EQ(::pipe(ends), 0);
-  ::close(ends[0]);  // the reader has gone before anything is written
-  const std::string err = (dir / "err.txt").string();
-  const pid_t child = ::fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
-    ::dup2(ends[1], 1);
-    const int to_err = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-    ::dup2(to_err, 2);
-    ::execl(PH_TOOL_PATH, PH_TOOL_PATH, "status", "--socket", socket.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  ::close(ends[1]);
-  int status = 0;
-  ASSERT_EQ(::waitpid(child, &status, 0), child);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << "status " << status << ": " << read_text(err);
-  EXPECT_TRUE(contains(read_text(err), "cannot connect to " + socket)) << read_text(err);
+  // a failed write to that reader ends the tool quietly, as SIGPIPE would (check-config's own write, which said
+  // "<stdout>: write failed", too).
+  const auto [status, err] = run_with_the_reader_gone(dir, {"status", "--socket", socket});
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << "status " << status << ": " << err;
+  EXPECT_TRUE(contains(err, "cannot connect to " + socket)) << err;
+  std::ofstream(dir / "flat.toml") << "[daemon]\noutput = \"relative\"\n";
+  const auto [config_status, config_err] =
+      run_with_the_reader_gone(dir, {"check-config", (dir / "flat.toml").string()});
+  EXPECT_TRUE(WIFSIGNALED(config_status) && WTERMSIG(config_status) == SIGPIPE)
+      << "status " << config_status << ": " << config_err;
+  EXPECT_EQ(config_err, "");
 }
 
 TEST(Tool, TraceTargetCurvature) {

@@ -22,10 +22,20 @@ TEST(UniqueFd, ClosesWhatItOwnsOnceAndKeepsErrno) {
     UniqueFd moved(std::move(owner));
     EXPECT_FALSE(owner);
     EXPECT_EQ(moved.get(), fd);
+  }
+  EXPECT_FALSE(is_open(fd));
+  // A close that fails (here EBADF: the number no longer open, nothing opened since in this thread) leaves errno as
+  // it was, the reason of the error being reported.
+  fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+  ASSERT_EQ(::close(fd), 0);
+  {
+    UniqueFd stale(fd);
     errno = ENOSPC;  // as after a failed write, about to be reported
   }
   EXPECT_EQ(errno, ENOSPC);
-  EXPECT_FALSE(is_open(fd));
+  UniqueFd stale(fd);
+  EXPECT_EQ(stale.close(), -1);  // close() says so
+  EXPECT_EQ(errno, EBADF);
 
   fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
   UniqueFd closing(fd);

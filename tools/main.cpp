@@ -12,6 +12,7 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <system_error>
 
 #include "tools/commands.hpp"
 
@@ -138,10 +139,13 @@ int main(int argc, char** argv) {
     say_error((e.path1().empty() ? "" : e.path1().string() + ": ") + what);
     return 1;
   } catch (const std::exception& e) {
-    // A failed write to a reader that has gone (EPIPE) ends as SIGPIPE would; any other error is said, whether or
-    // not the reader is still there (`status | head` with no daemon to ask).
-    if (stdout_reader_gone() && std::string_view(e.what()).find(std::strerror(EPIPE)) != std::string_view::npos)
-      end_as_sigpipe();
+    // A failed write to standard output whose reader has gone ends as SIGPIPE would: the commands name standard
+    // output "<stdout>" in their errors, and fmt's print throws a system_error. Any other error is said, whether or
+    // not the reader is still there (`status | head` with no daemon to ask, or a failed send to the daemon).
+    const auto* system = dynamic_cast<const std::system_error*>(&e);
+    const bool a_write_to_stdout = std::string_view(e.what()).starts_with("<stdout>") ||
+                                   (system != nullptr && system->code() == std::errc::broken_pipe);
+    if (a_write_to_stdout && stdout_reader_gone()) end_as_sigpipe();
     say_error(e.what());
     return 1;
   }
