@@ -179,8 +179,33 @@ void Daemon::take_present_mice() {
   for (const std::string& node : udev_.event_nodes()) consider(node);
 }
 
-[[gnu::hot]] int Daemon::run() {
+int Daemon::run() {
   notifier_.ready(status_line());
+  int status = 0;
+  try {
+    loop();
+  } catch (const std::exception& e) {
+    // (udev failing while the mice are taken again, a reader thread that cannot be made, epoll out of memory): the
+    // mice are let go of as on a stop, and a load under way is not waited for, as on a stop (it may never end).
+    log_.error("{}; stopping", e.what());
+    notifier_.status(std::string("failed: ") + e.what());
+    status = 1;
+  }
+  const std::lock_guard lock(state_);
+  notifier_.stopping();
+  let_go_of_all("stopping");
+  if (reloader_.loading()) {
+    stopped_during_a_load_ = true;
+    retired_.wait_until_empty();  // the releases read, the virtual devices gone
+    control_.reset();             // the socket removed
+    log_.info("stopped (the scene load under way is not waited for)");
+    return status;
+  }
+  log_.info("stopped");
+  return status;
+}
+
+[[gnu::hot]] void Daemon::loop() {
   std::array<epoll_event, 16> events{};
   while (!stop_) {
     const int n = ::epoll_wait(epoll_.get(), events.data(), static_cast<int>(events.size()), -1);
@@ -231,18 +256,6 @@ void Daemon::take_present_mice() {
       }
     }
   }
-  const std::lock_guard lock(state_);
-  notifier_.stopping();
-  let_go_of_all("stopping");
-  if (reloader_.loading()) {
-    stopped_during_a_load_ = true;
-    retired_.wait_until_empty();  // the releases read, the virtual devices gone
-    control_.reset();             // the socket removed
-    log_.info("stopped (the scene load under way is not waited for)");
-    return 0;
-  }
-  log_.info("stopped");
-  return 0;
 }
 
 void Daemon::consider(const std::string& node) {
@@ -312,7 +325,8 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
     device.set_blocking(true);  // its reader waits in read()
   } catch (const DeviceError& e) {
     if (e.error() == EBUSY) {
-      mouse.sink.reset();  // here, not on the retiring thread: a mouse not taken has no virtual device
+      // A mouse not taken has no virtual device: destroyed off the lock (the compositor may have opened it).
+      retired_.keep(std::move(mouse.sink));
       log_.warning("{}; taking it once that program lets go", e.what());
       wait_for_release_elsewhere(node, mouse);
       return;
@@ -329,7 +343,7 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
   }
   if (device.any_key_held()) {  // pressed between the check and the grab: the desktop has the press
     device.ungrab();
-    mouse.sink.reset();
+    retired_.keep(std::move(mouse.sink));  // off the lock
     update_retry_timer();
     return;
   }
@@ -633,6 +647,12 @@ void Daemon::release_held() {
 }
 
 void Daemon::watch_untaken(const std::string& node, std::unique_ptr<EvdevDevice> device) {
+  // A repeated udev "add" (coldplug after the start-up listing) replaces the node watched: closed off the lock.
+  if (const auto old = untaken_.find(node); old != untaken_.end()) {
+    ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, old->second->fd(), nullptr);
+    retired_.keep(std::move(old->second));
+    untaken_.erase(old);
+  }
   watch(epoll_.get(), device->fd());
   log_.debug("{} {}: watched without a grab; its motion makes the daemon ask where the cursor is", node,
              quoted_name(*device));

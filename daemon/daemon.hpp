@@ -54,7 +54,8 @@ class Daemon final : private ControlHandler {
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
 
-  // Runs until SIGTERM or SIGINT; then lets go of every mouse. Returns the exit status.
+  // Runs until SIGTERM or SIGINT, or an error it cannot go on from (then exit status 1, said); then lets go of every
+  // mouse. Returns the exit status.
   int run();
   // After run(): a reload's load was under way at the stop. It may take long yet (a large image, a FIFO named as the
   // scene file), and destroying the daemon would wait for it: the caller ends the process instead (std::_Exit), run()
@@ -62,6 +63,8 @@ class Daemon final : private ControlHandler {
   bool stopped_during_a_load() const { return stopped_during_a_load_; }
 
  private:
+  // The event loop, until stop_; throws what it cannot go on from.
+  void loop();
   // A mouse the daemon has opened: waiting for its buttons to be released or for another program's grab to
   // end, or taken (grabbed, with its virtual device and frame assembler). Let go of, its reader stops, then its
   // virtual devices release held buttons and go to `retired_`, then the grab and the node (to `retired_` too when the
