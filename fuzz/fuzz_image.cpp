@@ -5,7 +5,9 @@
 // (which reader reads it), whether it is read as a normal map or a depth map and, for a PNG, whether every chunk's
 // CRC is set right before it is read (so that mutated chunks reach the inflating and unfiltering of
 // config/png_whole.cpp and libpng instead of failing their CRC); the rest is the file. Any input must give fields the
-// daemon accepts or a Failure; a crash here is one the child would have had (and only the child, in the daemon).
+// daemon accepts or a Failure; a crash here is one the child would have had (and only the child, in the daemon). An
+// exception other than the refusals (FieldError, bad_alloc), which the reader answers as a Failure in the daemon,
+// escapes in fuzz builds (FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION) and counts as a crash.
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -26,12 +28,19 @@
 
 namespace {
 
-// A file in a tmpfs, rewritten for each input.
+// Files in a tmpfs, rewritten for each input, removed when the process ends (libFuzzer's fork mode starts a process
+// per job: they piled up in /dev/shm).
+struct ScratchFiles {
+  std::string base = "/dev/shm/ph-fuzz-image-" + std::to_string(::getpid());
+  std::string paths[3] = {base + ".png", base + ".tif", base + ".exr"};
+  ~ScratchFiles() {
+    for (const std::string& path : paths) ::unlink(path.c_str());
+  }
+};
 const std::string& scratch(const char* extension) {
-  static const std::string base = "/dev/shm/ph-fuzz-image-" + std::to_string(::getpid());
-  static std::string paths[3] = {base + ".png", base + ".tif", base + ".exr"};
+  static const ScratchFiles files;
   const int i = extension[1] == 'p' ? 0 : extension[1] == 't' ? 1 : 2;
-  return paths[i];
+  return files.paths[i];
 }
 
 // Sets the CRC of every whole chunk of a PNG file (after the 8-byte signature: length, type, data, CRC).
