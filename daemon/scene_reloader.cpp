@@ -18,17 +18,27 @@ SceneReloader::SceneReloader(Load load) : load_(std::move(load)), done_(::eventf
 
 SceneReloader::~SceneReloader() {
   if (worker_.joinable()) worker_.join();
-  if (disposer_.joinable()) disposer_.join();
+  for (Disposer& d : disposers_) d.thread.join();
 }
 
 void SceneReloader::dispose(std::shared_ptr<const Scene> scene) {
-  if (disposer_.joinable()) disposer_.join();  // the scene before: freed long since (a reload apart)
-  disposer_ = std::thread([scene = std::move(scene)]() mutable {
+  // The threads that have freed their scene are joined (at once); one still freeing is left to it: joining it here
+  // would wait, under the daemon's state lock, for a thread at idle priority on a busy CPU (a desktop change soon
+  // after another lays the scene out twice).
+  std::erase_if(disposers_, [](Disposer& d) {
+    if (!d.done->load()) return false;
+    d.thread.join();
+    return true;
+  });
+  auto done = std::make_shared<std::atomic<bool>>(false);
+  std::thread thread([scene = std::move(scene), done]() mutable {
     const sched_param no_priority{};
     pthread_setschedparam(pthread_self(), SCHED_IDLE, &no_priority);
     scene.reset();
+    done->store(true);
   });
-  ::pthread_setname_np(disposer_.native_handle(), "ph-scene-free");
+  ::pthread_setname_np(thread.native_handle(), "ph-scene-free");
+  disposers_.push_back({std::move(thread), std::move(done)});
 }
 
 bool SceneReloader::request() {

@@ -5,6 +5,7 @@
 // (ReloadQueue). docs/SERVICE.md, "Reloads".
 #pragma once
 
+#include <atomic>
 #include <exception>
 #include <functional>
 #include <memory>
@@ -12,6 +13,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "common/unique_fd.hpp"
 #include "daemon/configuration.hpp"
@@ -59,7 +61,11 @@ class SceneReloader {
   UniqueFd done_;
   ReloadQueue queue_;
   std::thread worker_;
-  std::thread disposer_;
+  struct Disposer {
+    std::thread thread;
+    std::shared_ptr<std::atomic<bool>> done;  // its scene is freed: joining it waits for nothing
+  };
+  std::vector<Disposer> disposers_;
   std::mutex mutex_;  // guards result_ and error_ between the worker and collect()
   std::optional<Configuration> result_;
   std::string error_;

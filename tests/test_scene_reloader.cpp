@@ -4,7 +4,9 @@
 #include <poll.h>
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
+#include <future>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -138,6 +140,35 @@ TEST(SceneReloader, AReplacedSceneIsFreedOffTheCallingThread) {
   }  // the reloader waits for its threads
   EXPECT_NE(freed_on, std::thread::id());
   EXPECT_NE(freed_on, std::this_thread::get_id());
+}
+
+// A scene replaced while the one before is still being freed (slowly, at idle priority on a busy CPU) does not wait
+// for it: dispose() is called under the daemon's state lock, which every mouse's reader takes.
+TEST(SceneReloader, DisposingDoesNotWaitForTheSceneBefore) {
+  std::promise<void> let_go;
+  std::shared_future<void> released = let_go.get_future().share();
+  std::atomic<int> freed{0};
+  // The first free ends after 1 s whatever happens (a dispose() that waited for it would wait that long, not hang).
+  std::thread releaser([&] {
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    let_go.set_value();
+  });
+  {
+    SceneReloader reloader([] { return Configuration{}; });
+    reloader.dispose(std::shared_ptr<const Scene>(new Scene(), [&, released](const Scene* scene) {
+      released.wait();  // a free that takes its time
+      delete scene;
+      ++freed;
+    }));
+    const auto start = std::chrono::steady_clock::now();
+    reloader.dispose(std::shared_ptr<const Scene>(new Scene(), [&](const Scene* scene) {
+      delete scene;
+      ++freed;
+    }));
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::milliseconds(500));
+    releaser.join();
+  }  // the reloader waits for both
+  EXPECT_EQ(freed.load(), 2);
 }
 
 }  // namespace
