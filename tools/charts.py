@@ -18,7 +18,10 @@ Writes speed_vs_accuracy.png, fig5_traces.png and fig2_cd_surface.png. Python 3 
 
 import argparse
 import csv
+import errno
+import io
 import math
+import os
 import random
 import re
 import sys
@@ -58,7 +61,52 @@ class InputError(Exception):
     pass
 
 
+def warn(message):
+    """A warning on stderr, in the scripts' style: `SCRIPT: message`."""
+    print(f"{Path(sys.argv[0]).name}: {message}", file=sys.stderr)
+
+
+def make_outdir(path):
+    """Creates the output folder (and its parents); InputError naming it when it cannot be one."""
+    if path.exists() and not path.is_dir():
+        raise InputError(f"{path}: not a folder")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise InputError(f"{e.filename or path}: {e.strerror}") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise InputError(f"{path}: {os.strerror(errno.EACCES)}")
+
+
+def os_error_text(e, fallback):
+    """`PATH: reason` for an OSError raised while writing `fallback` (or a file in it)."""
+    return f"{e.filename or fallback}: {e.strerror or e}"
+
+
 # ---------------------------------------------------------------------------------------------------- input
+
+class Rows(list):
+    """The rows of a CSV file, with the file (`path`) and, per numeric column, the lines whose cell was written
+    but is not a finite number (`nonfinite`: column -> [(line, text)])."""
+
+    def __init__(self, path):
+        super().__init__()
+        self.path = path
+        self.nonfinite = {}
+
+    def report_nonfinite(self, columns, what):
+        """Warns once per column of `columns` that has written non-finite cells: the file, the first line, the
+        column, how many, and `what` became of them. Returns whether any was reported."""
+        any_reported = False
+        for c in columns:
+            where = self.nonfinite.get(c)
+            if where:
+                texts = sorted({t for _, t in where})
+                warn(f"{self.path}:{where[0][0]}: column {c}: {len(where)} value(s) not finite "
+                     f"({', '.join(texts)}), {what}")
+                any_reported = True
+        return any_reported
+
 
 def parse_number(text, path, line, column, required):
     """The cell as a float; NaN for an empty optional cell; InputError for anything else unparsable."""
@@ -73,13 +121,35 @@ def parse_number(text, path, line, column, required):
         raise InputError(f"{path}:{line}: column {column}: not a number: {s!r}") from None
 
 
+def read_text(path):
+    """The file's text (UTF-8, a byte order mark dropped); InputError naming the file, and the line of a byte
+    that is not UTF-8."""
+    try:
+        data = path.read_bytes()
+    except OSError as e:
+        raise InputError(f"{path}: {e.strerror or e}") from None
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        line = data[:e.start].count(b"\n") + 1
+        column = e.start - (data.rfind(b"\n", 0, e.start) + 1) + 1
+        raise InputError(f"{path}:{line}: not UTF-8 (byte 0x{data[e.start]:02x} at column {column})") from None
+    if "\0" in text:
+        at = text.index("\0")
+        raise InputError(f"{path}:{text.count(chr(10), 0, at) + 1}: a NUL byte (not a text file)")
+    return text
+
+
 def read_table(path, required, numeric_required, numeric_optional=(), command="accuracy"):
-    """Rows of a CSV file as dicts (numbers parsed); InputError naming the file when it or a column is missing.
-    `command`: the pseudohaptic command that writes the file, for the message when it is missing."""
+    """Rows of a CSV file as dicts (numbers parsed, "_line" the line), a Rows list; InputError naming the file
+    when it or a column is missing. `command`: the pseudohaptic command that writes the file, for the message
+    when it is missing."""
+    if path.exists() and not path.is_file():
+        raise InputError(f"{path}: not a file")
     if not path.is_file():
         raise InputError(f"{path}: no such file (written by `pseudohaptic {command} {path.parent}`)")
-    with path.open(newline="") as f:
-        reader = csv.reader(f)
+    reader = csv.reader(io.StringIO(read_text(path), newline=""))
+    try:
         header = next(reader, None)
         if header is None:
             raise InputError(f"{path}: empty file, expected a header line")
@@ -88,7 +158,8 @@ def read_table(path, required, numeric_required, numeric_optional=(), command="a
         if missing:
             raise InputError(f"{path}: missing required column(s) {', '.join(missing)} "
                              f"(the header has: {', '.join(header)})")
-        rows = []
+        rows = Rows(path)
+        checked = [(c, header.index(c)) for c in list(numeric_required) + list(numeric_optional) if c in header]
         for line, cells in enumerate(reader, start=2):
             if not cells or all(not c.strip() for c in cells):
                 continue
@@ -102,7 +173,13 @@ def read_table(path, required, numeric_required, numeric_optional=(), command="a
                     row[c] = parse_number(row[c], path, line, c, False)
                 else:
                     row[c] = math.nan
+            for c, i in checked:
+                if not math.isfinite(row[c]) and cells[i].strip():
+                    rows.nonfinite.setdefault(c, []).append((line, cells[i].strip()))
+            row["_line"] = line
             rows.append(row)
+    except csv.Error as e:
+        raise InputError(f"{path}:{reader.line_num}: not CSV: {e}") from None
     if not rows:
         raise InputError(f"{path}: no data rows")
     return rows, header
@@ -167,20 +244,88 @@ def fronts_for(variants, ykey):
 COST_KEYS = ("ns_per_frame_median", "bytes_per_texel", "precompute_ms")
 
 
+def cost_value(v, k):
+    """v's value of k for the fronts of all costs: None where it has none (an empty cell, NaN or -inf); +inf is a
+    value, the worst one."""
+    x = v.get(k)
+    if not isinstance(x, float) or math.isnan(x) or x == -math.inf:
+        return None
+    return x
+
+
 def cost_front(group, ykey):
     """Names of the variants no other variant of the group dominates on every cost counted as speed
-    (time per frame, memory per texel, precompute time) and on ykey at once."""
-    keys = [k for k in COST_KEYS if all(finite(v.get(k)) for v in group)] + [ykey]
-    ok = [v for v in group if all(finite(v.get(k)) for k in keys)]
+    (time per frame, memory per texel, precompute time) and on ykey at once. Each variant is judged over the
+    costs it has, against the variants that have every one of those: a variant that lacks a cost cannot put
+    another off the front, and does not change the costs another is judged on. One whose ykey is missing, or
+    whose cost or ykey is infinite, is on no front."""
+    keys = list(COST_KEYS) + [ykey]
+    values = [{k: cost_value(v, k) for k in keys} for v in group]
+    front = set()
+    for i, v in enumerate(group):
+        mine = values[i]
+        if mine[ykey] is None:
+            continue
+        own = [k for k in keys if mine[k] is not None]
+        if any(math.isinf(mine[k]) for k in own):
+            continue
 
-    def dominates(a, b):
-        return all(a[k] <= b[k] for k in keys) and any(a[k] < b[k] for k in keys)
-    return {v["variant"] for v in ok if not any(dominates(u, v) for u in ok)}
+        def dominates(theirs):
+            if any(theirs[k] is None for k in own):
+                return False
+            return all(theirs[k] <= mine[k] for k in own) and any(theirs[k] < mine[k] for k in own)
+        if not any(dominates(values[j]) for j in range(len(group)) if j != i):
+            front.add(v["variant"])
+    return front
+
+
+def warn_costs(variants, header, path):
+    """Warns which variants lack which cost of the fronts of all costs (and which have an infinite one)."""
+    for k in COST_KEYS:
+        if k not in header:
+            warn(f"{path}: no column {k}: the fronts of all costs leave it out")
+            continue
+        lacking = [v for v in variants if cost_value(v, k) is None]
+        if lacking:
+            warn(f"{path}:{lacking[0]['_line']}: column {k}: no value (empty, NaN or -inf) for "
+                 f"{', '.join(v['variant'] for v in lacking)}: on the front of all costs each is judged without "
+                 f"it, and puts no variant that has it off that front (the table marks with '?' where it might)")
+        infinite = [v for v in variants if cost_value(v, k) == math.inf]
+        if infinite:
+            warn(f"{path}:{infinite[0]['_line']}: column {k}: infinite for "
+                 f"{', '.join(v['variant'] for v in infinite)}: on no front of all costs")
+
+
+def cost_front_doubts(group, ykey, front):
+    """{name: [names]}: for each member of the front (cost_front), the variants that lack a cost it has and would
+    put it off the front were that cost low enough (they are at least as good on every cost they have)."""
+    keys = list(COST_KEYS) + [ykey]
+    values = {v["variant"]: {k: cost_value(v, k) for k in keys} for v in group}
+    doubts = {}
+    for name in front:
+        mine = values[name]
+        own = [k for k in keys if mine[k] is not None]
+        for v in group:
+            theirs = values[v["variant"]]
+            if v["variant"] == name or theirs[ykey] is None:
+                continue
+            shared = [k for k in own if theirs[k] is not None]
+            if len(shared) < len(own) and all(theirs[k] <= mine[k] for k in shared):
+                doubts.setdefault(name, []).append(v["variant"])
+    return doubts
 
 
 def cost_fronts_for(variants, ykey):
     """{<method>: set of names} of the fronts over all costs against ykey, among each method's variants."""
     return {m: cost_front([v for v in variants if v["method"] == m], ykey) for m in methods_of(variants)}
+
+
+def cost_doubts_for(variants, ykey, fronts):
+    """{name: [names]} of cost_front_doubts over every method's front."""
+    out = {}
+    for m, front in fronts.items():
+        out.update(cost_front_doubts([v for v in variants if v["method"] == m], ykey, front))
+    return out
 
 
 def methods_of(rows):
@@ -461,17 +606,46 @@ def target_order(names):
     return sorted(names, key=lambda n: (key(n), names.index(n)))
 
 
+HALO_WIDTH, HALO_ALPHA = 3.4, 0.45  # a trace drawn under another it coincides with: wide and pale
+
+
+def coinciding(series, targets, methods):
+    """{method: earlier method} for each method whose measured trace, in some target, is the same as an earlier
+    method's at half its points or more: drawn over it in the same way, it would hide it. Such a method is drawn
+    wide and pale under the other."""
+    out = {}
+    for i, m in enumerate(methods):
+        for e in methods[:i]:
+            if e in out:
+                continue
+            for t in targets:
+                if (t, m) not in series or (t, e) not in series:
+                    continue
+                theirs = dict(zip(series[(t, e)][0], series[(t, e)][1]))
+                mine = [(x, c) for x, c in zip(series[(t, m)][0], series[(t, m)][1]) if finite(x) and finite(c)]
+                same = sum(1 for x, c in mine if theirs.get(x) == c)
+                if mine and 2 * same >= len(mine):
+                    out[m] = e
+                    break
+            if m in out:
+                break
+    return out
+
+
 def chart_fig5(rows, header, outdir, fake):
     has_truth = "cd_truth" in header
+    name = getattr(rows, "path", "fig5_traces.csv")
+    if isinstance(rows, Rows):
+        rows.report_nonfinite(["x", "cd", "cd_truth"], "left out of the chart (a gap in the trace)")
     targets = []
     series = {}
     for r in rows:
         if r["target"] not in targets:
             targets.append(r["target"])
         s = series.setdefault((r["target"], r["method"]), ([], [], []))
-        s[0].append(r["x"])
-        s[1].append(r["cd"])
-        s[2].append(r["cd_truth"] if has_truth else math.nan)
+        s[0].append(r["x"] if finite(r["x"]) else math.nan)
+        s[1].append(r["cd"] if finite(r["cd"]) and finite(r["x"]) else math.nan)
+        s[2].append(r["cd_truth"] if has_truth and finite(r["cd_truth"]) and finite(r["x"]) else math.nan)
     targets = target_order(targets)
     methods = methods_of(rows)
     ncols = 4
@@ -481,6 +655,16 @@ def chart_fig5(rows, header, outdir, fake):
         raise InputError("fig5_traces.csv: no positive finite C/D value to draw")
     ylo, yhi = min(values), max(values)
     log = yhi / ylo > 8
+    if log:
+        for column, k in (("cd", 1), ("cd_truth", 2)):
+            lines = [r["_line"] for r in rows if finite(r.get(column)) and r[column] <= 0]
+            if lines:
+                warn(f"{name}:{lines[0]}: column {column}: {len(lines)} "
+                     f"value(s) not above 0, left out of the chart (its C/D axis is logarithmic)")
+                for s in series.values():
+                    s[k][:] = [c if not finite(c) or c > 0 else math.nan for c in s[k]]
+    under = coinciding(series, targets, methods)
+    drawn, truth_drawn, rim_drawn = set(), False, False
     fig, axes = plt.subplots(nrows, ncols, figsize=(3.4 * ncols, 2.35 * nrows + 1.0), sharex=True, sharey=True,
                              squeeze=False)
     for k, ax in enumerate(axes.flat):
@@ -492,15 +676,23 @@ def chart_fig5(rows, header, outdir, fake):
         if m:  # the rim of the bump or hole
             for x in (250 - float(m[4]), 250 + float(m[4])):
                 ax.axvline(x, color="grey", linewidth=0.6, alpha=0.5)
+            rim_drawn = True
         ax.axhline(1.0, color="black", linewidth=0.5, alpha=0.4)
         for method in methods:
             if (t, method) not in series:
                 continue
             xs, cds, truths = series[(t, method)]
             colour = method_colour(method, methods)
-            ax.plot(xs, cds, color=colour, linewidth=1.1, drawstyle="steps-post")
+            if any(finite(c) for c in cds):
+                drawn.add(method)
+            if method in under:
+                ax.plot(xs, cds, color=colour, linewidth=HALO_WIDTH, alpha=HALO_ALPHA, drawstyle="steps-post",
+                        zorder=1.9)
+            else:
+                ax.plot(xs, cds, color=colour, linewidth=1.1, drawstyle="steps-post")
             if any(finite(c) for c in truths):
                 ax.plot(xs, truths, color=colour, linewidth=1.0, linestyle=(0, (4, 2.5)), alpha=0.9)
+                truth_drawn = True
         ax.set_title(t, fontsize=9)
         ax.tick_params(labelsize=8)
         ax.grid(True, alpha=0.25)
@@ -511,18 +703,28 @@ def chart_fig5(rows, header, outdir, fake):
         axes[0][0].set_yticklabels([f"{t:g}" for t in ticks])
         axes[0][0].yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         axes[0][0].set_ylim(ylo / 1.25, yhi * 1.25)
-    xs_all = [x for s in series.values() for x in s[0]]
+    xs_all = [x for s in series.values() for x, c, ct in zip(*s) if finite(x) and (finite(c) or finite(ct))]
     axes[0][0].set_xlim(min(xs_all), max(xs_all))
     for ax in axes[-1]:
         ax.set_xlabel("x in the target (px)", fontsize=9)
     for row in axes:
         row[0].set_ylabel("C/D ratio" + (" (log)" if log else ""), fontsize=9)
-    handles = [Line2D([], [], color=method_colour(m, methods), linewidth=1.5, label=f"{m} (measured)")
-               for m in methods]
-    if has_truth:
+    handles = []
+    for m in methods:
+        if m not in drawn:
+            warn(f"{name}: method {m} has no finite C/D value: not drawn, not in the legend")
+        elif m in under:
+            handles.append(Line2D([], [], color=method_colour(m, methods), linewidth=HALO_WIDTH, alpha=HALO_ALPHA,
+                                  label=f"{m} (measured; wide, under {under[m]} where equal)"))
+        else:
+            handles.append(Line2D([], [], color=method_colour(m, methods), linewidth=1.5, label=f"{m} (measured)"))
+    if truth_drawn:
         handles += [Line2D([], [], color="black", linestyle=(0, (4, 2.5)), label="ground truth (dashed, "
                            "the method's colour)")]
-    handles += [Line2D([], [], color="grey", alpha=0.5, label="rim of the bump or hole")]
+    elif has_truth:
+        warn(f"{name}: column cd_truth has no finite value: no ground truth drawn, none in the legend")
+    if rim_drawn:
+        handles += [Line2D([], [], color="grey", alpha=0.5, label="rim of the bump or hole")]
     fig.legend(handles=handles, loc="upper center", ncol=len(handles), fontsize=9, frameon=False,
                bbox_to_anchor=(0.5, 1 - 0.45 / fig.get_figheight()))
     fig.suptitle("C/D ratio along a horizontal stroke through the centre of each target (the paper's Fig. 5)",
@@ -552,6 +754,8 @@ def grid_of(rows):
 
 
 def chart_fig2(rows, outdir, fake):
+    if isinstance(rows, Rows):
+        rows.report_nonfinite(FIG2_REQUIRED, "those rows are left out of the chart")
     rows = [r for r in rows if finite(r["cos_alpha"]) and finite(r["delta_beta_deg"]) and finite(r["cd"])]
     if len(rows) < 3:
         raise InputError("fig2_grid.csv: fewer than 3 rows with finite values")
@@ -603,6 +807,8 @@ def contour_levels(lo, hi):
 # ---------------------------------------------------------------------------------------------------- table
 
 def fmt_num(v):
+    if isinstance(v, float) and math.isinf(v):
+        return "inf" if v > 0 else "-inf"
     if not finite(v):
         return "-"
     a = abs(v)
@@ -634,10 +840,16 @@ def markdown_table(variants, header, defaults, fake):
         out.append("**FAKE DATA** (charts.py --fake-data): not measurements.\n")
     end_costs = cost_fronts_for(variants, "end_err_rms_px")
     cd_costs = cost_fronts_for(variants, "cd_err_rms")
+    end_doubts = cost_doubts_for(variants, "end_err_rms_px", end_costs)
+    cd_doubts = cost_doubts_for(variants, "cd_err_rms", cd_costs)
 
     def on_cost_fronts(v):
-        tags = [what for what, fronts in (("end", end_costs), ("C/D", cd_costs))
+        tags = [what + ("?" if v["variant"] in doubts else "")
+                for what, fronts, doubts in (("end", end_costs, end_doubts), ("C/D", cd_costs, cd_doubts))
                 if v["variant"] in fronts.get(v["method"], set())]
+        lacking = [k for k in COST_KEYS if k in header and cost_value(v, k) is None]
+        if tags and lacking:
+            return "+".join(tags) + f" (without {', '.join(lacking)})"
         return "+".join(tags) or "no"
     out.append("| variant | on the Pareto front (time) | on the front of all costs | " +
                " | ".join(t for _, t in columns) + " |")
@@ -658,6 +870,15 @@ def markdown_table(variants, header, defaults, fake):
                "\"all\": over every variant; \"own method\": among the variants of its method. \"All costs\": "
                "among the variants of its method, no other is at least as good in time per frame, memory per "
                "texel, precompute time and the error together (and better in one).")
+    if any(k in header and cost_value(v, k) is None for v in variants for k in COST_KEYS):
+        out.append("A variant that lacks a cost (\"without\") is judged over the costs it has, and puts no variant "
+                   "that has that cost off a front of all costs.")
+    shown = [v["variant"] for v, _ in rows]
+    for what, doubts in (("end", end_doubts), ("C/D", cd_doubts)):
+        if any(n in doubts for n in shown):
+            out.append(f"\"{what}?\": on that front unless a variant that lacks one of its costs is as good there: " +
+                       "; ".join(f"`{n}` (" + ", ".join(f"`{d}`" for d in doubts[n]) + ")" for n in shown
+                                 if n in doubts) + ".")
     for v in variants:
         if is_default(v, defaults):
             on_end = v["variant"] in end.get(v["method"], [])
@@ -666,7 +887,10 @@ def markdown_table(variants, header, defaults, fake):
             all_cd = v["variant"] in cd_costs.get(v["method"], set())
             out.append(f"Default `{v['variant']}`: on its method's end-error front: {'yes' if on_end else 'NO'}; "
                        f"on its method's C/D-error front: {'yes' if on_cd else 'NO'}; over all costs: "
-                       f"end error {'yes' if all_end else 'NO'}, C/D error {'yes' if all_cd else 'NO'}.")
+                       f"end error {'yes' if all_end else 'NO'}{'?' if v['variant'] in end_doubts else ''}, "
+                       f"C/D error {'yes' if all_cd else 'NO'}{'?' if v['variant'] in cd_doubts else ''}" +
+                       "".join(f" (without {k})" for k in COST_KEYS if k in header and cost_value(v, k) is None) +
+                       ".")
     return "\n".join(out)
 
 
@@ -783,7 +1007,11 @@ def main(argv):
     if args.fake_data:
         if args.outdir is not None:
             p.error("--fake-data takes only CSVDIR")
-        write_fake(args.csvdir)
+        try:
+            write_fake(args.csvdir)
+        except OSError as e:
+            print(f"charts.py: {os_error_text(e, args.csvdir)}", file=sys.stderr)
+            return 1
         print(f"charts.py: wrote fake CSV files to {args.csvdir}", file=sys.stderr)
         return 0
     if args.outdir is None:
@@ -798,12 +1026,18 @@ def main(argv):
         if unknown:
             raise InputError(f"--default {', '.join(unknown)}: no such variant in variants.csv")
         fake = (args.csvdir / "FAKE").exists()
-        args.outdir.mkdir(parents=True, exist_ok=True)
+        make_outdir(args.outdir)
+        variants.report_nonfinite([c for c in VARIANT_NUMERIC if c not in COST_KEYS],
+                                  "shown as inf or - in the table; not drawn, and on no front, where it is the error")
+        warn_costs(variants, vheader, variants.path)
         written = [chart_speed(variants, args.outdir, args.default, fake),
                    chart_fig5(fig5_rows, fig5_header, args.outdir, fake),
                    chart_fig2(fig2_rows, args.outdir, fake)]
     except InputError as e:
         print(f"charts.py: {e}", file=sys.stderr)
+        return 1
+    except OSError as e:
+        print(f"charts.py: {os_error_text(e, args.outdir)}", file=sys.stderr)
         return 1
     no_value = [v["variant"] for v in variants if not finite(v["ns_per_frame_median"]) or
                 not finite(v["end_err_rms_px"])]

@@ -43,14 +43,36 @@ LOG_X = {"grating-a0.5", "grating-a4", "fbm", "thin", "quantised"}
 
 
 def read_inputs(csvdir):
-    rows, _ = charts.read_table(csvdir / "stability.csv", STABILITY_REQUIRED, ["severity"],
-                                [c for c in NUMERIC if c != "severity"], command="stability")
+    """(rows, modes, the metrics that have a value): refuses a severity that is not a finite number; warns of
+    written values that are not finite numbers, and of a metric column that is missing or has no value (its
+    chart is left out)."""
+    path = csvdir / "stability.csv"
+    rows, header = charts.read_table(path, STABILITY_REQUIRED, ["severity"],
+                                     [c for c in NUMERIC if c != "severity"], command="stability")
+    bad = rows.nonfinite.get("severity")
+    if bad:
+        raise InputError(f"{path}:{bad[0][0]}: column severity: not a finite number: {bad[0][1]!r}")
     modes, _ = charts.read_table(csvdir / "modes.csv", ["mode", "family", "severity"], [], command="stability")
     order = [m["mode"] for m in modes]
     unknown = sorted({r["mode"] for r in rows} - set(order))
     if unknown:
-        raise InputError(f"{csvdir / 'stability.csv'}: modes not in modes.csv: {', '.join(unknown)}")
-    return rows, modes
+        raise InputError(f"{path}: modes not in modes.csv: {', '.join(unknown)}")
+    rows.report_nonfinite([m[0] for m in METRICS], "drawn as a triangle at the top of its panel where infinite, "
+                          "left out where NaN; the tables show them")
+    rows.report_nonfinite([c for c in NUMERIC if c not in [m[0] for m in METRICS] and c != "severity"],
+                          "left out (the tables show them)")
+    metrics = []
+    for metric in METRICS:
+        column = metric[0]
+        if column not in header:
+            charts.warn(f"{path}: no column {column}: stability_{column}.png is not drawn"
+                        + ("; its tables' cells show –" if column in BOUNDED else ""))
+        elif not any(not math.isnan(r[column]) for r in rows):
+            charts.warn(f"{path}: column {column} has no value: stability_{column}.png is not drawn"
+                        + ("; its tables' cells show –" if column in BOUNDED else ""))
+        else:
+            metrics.append(metric)
+    return rows, modes, metrics
 
 
 def severities_of(rows, mode):
@@ -63,26 +85,33 @@ def severities_of(rows, mode):
 
 
 def panel(ax, mode, rows, methods, variants, metric):
+    """Draws one mode's panel; returns what it drew: {(method, variant)}, whether an exact input's line, and
+    whether an infinite value (a triangle at the top)."""
     column, _, log, floor, truth_column = metric
     sev = severities_of(rows, mode["mode"])
-    drawn = False
+    drawn, truth_drawn, inf_drawn = set(), False, False
     for method in methods:
         colour = charts.method_colour(method, methods)
         for variant in variants:
-            pts = [(r["severity"], r[column]) for r in rows
-                   if r["mode"] == mode["mode"] and r["method"] == method and r["variant"] == variant]
-            pts = [(x, max(y, floor) if log else y) for x, y in pts if finite(y)]
+            sel = [r for r in rows if r["mode"] == mode["mode"] and r["method"] == method and r["variant"] == variant]
+            pts = [(r["severity"], max(r[column], floor) if log else r[column]) for r in sel if finite(r[column])]
+            infinite = [r["severity"] for r in sel if r[column] == math.inf]
+            if infinite:
+                ax.plot(infinite, [1.0] * len(infinite), linestyle="none", marker="^", markersize=6, color=colour,
+                        transform=ax.get_xaxis_transform(), clip_on=False, zorder=5)
+                drawn.add((method, variant))
+                inf_drawn = True
             if not pts:
                 continue
             ax.plot([p[0] for p in pts], [p[1] for p in pts], VARIANT_STYLES.get(variant, "-"), color=colour,
                     marker="o", markersize=3, linewidth=1.4)
-            drawn = True
+            drawn.add((method, variant))
             if truth_column and variant == variants[0]:
-                tp = [(r["severity"], r[truth_column]) for r in rows if r["mode"] == mode["mode"] and
-                      r["method"] == method and r["variant"] == variant and finite(r[truth_column])]
+                tp = [(r["severity"], r[truth_column]) for r in sel if finite(r[truth_column])]
                 if tp:
                     ax.plot([p[0] for p in tp], [max(p[1], floor) if log else p[1] for p in tp], ":",
                             color=colour, linewidth=0.9, alpha=0.8)
+                    truth_drawn = True
     ax.set_title(f"{mode['mode']} ({mode['family']})", fontsize=9)
     ax.set_xlabel(mode["severity"], fontsize=8)
     ax.tick_params(labelsize=7)
@@ -99,6 +128,7 @@ def panel(ax, mode, rows, methods, variants, metric):
     if not drawn:
         ax.text(0.5, 0.5, "no feature" if metric[0] == "contrast" else "no data", transform=ax.transAxes,
                 ha="center", va="center", fontsize=8, color="0.5")
+    return drawn, truth_drawn, inf_drawn
 
 
 def chart_metric(rows, modes, methods, variants, metric, outdir):
@@ -108,16 +138,35 @@ def chart_metric(rows, modes, methods, variants, metric, outdir):
     nrows = math.ceil((len(modes) + 1) / cols)
     fig, axes = plt.subplots(nrows, cols, figsize=(4.0 * cols, 3.0 * nrows), squeeze=False)
     flat = [a for row in axes for a in row]
+    drawn, truth_drawn, inf_drawn = set(), False, False
     for ax, mode in zip(flat, modes):
-        panel(ax, mode, rows, methods, variants, metric)
+        d, t, i = panel(ax, mode, rows, methods, variants, metric)
+        drawn |= d
+        truth_drawn |= t
+        inf_drawn |= i
     legend_ax = flat[len(modes)]
     for ax in flat[len(modes):]:
         ax.axis("off")
-    handles = [plt.Line2D([], [], color=charts.method_colour(m, methods), linewidth=2, label=m) for m in methods]
+    name = f"stability_{metric[0]}.png"
+    shown_methods = [m for m in methods if any((m, v) in drawn for v in variants)]
+    shown_variants = [v for v in variants if any((m, v) in drawn for m in methods)]
+    for what, left in (("method", [m for m in methods if m not in shown_methods]),
+                       ("variant", [v for v in variants if v not in shown_variants])):
+        if left:
+            charts.warn(f"{name}: no value of {metric[0]} for {what}(s) {', '.join(left)}: not drawn, not in "
+                        f"the legend")
+    handles = [plt.Line2D([], [], color=charts.method_colour(m, methods), linewidth=2, label=m)
+               for m in shown_methods]
     handles += [plt.Line2D([], [], color="0.3", linestyle=VARIANT_STYLES.get(v, "-"), label=f"engine: {v}")
-                for v in variants]
-    if metric[4]:
+                for v in shown_variants]
+    if metric[4] and truth_drawn:
         handles.append(plt.Line2D([], [], color="0.3", linestyle=":", linewidth=0.9, label="the exact input"))
+    elif metric[4] and drawn:
+        charts.warn(f"{name}: no value of {metric[4]} for the variant {variants[0]}: the exact input's line is "
+                    f"not drawn, not in the legend")
+    if inf_drawn:
+        handles.append(plt.Line2D([], [], color="0.3", linestyle="none", marker="^", markersize=6,
+                                  label="infinite (at the top)"))
     legend_ax.legend(handles=handles, loc="center", fontsize=9, frameon=False)
     fig.suptitle(metric[1], fontsize=12)
     fig.tight_layout(rect=(0, 0, 1, 0.97))
@@ -128,6 +177,8 @@ def chart_metric(rows, modes, methods, variants, metric, outdir):
 
 
 def fmt(v, digits=2):
+    if isinstance(v, float) and math.isinf(v):
+        return "inf" if v > 0 else "-inf"
     if not finite(v):
         return "–"
     if v == 0:
@@ -156,7 +207,8 @@ def summary_table(rows, modes, methods, variant):
             if r is None:
                 cells.append("–")
                 continue
-            contrast = (f" · {fmt(r['contrast'])} ({fmt(r['contrast_truth'])})" if finite(r["contrast"]) else "")
+            contrast = (f" · {fmt(r['contrast'])} ({fmt(r['contrast_truth'])})" if not math.isnan(r["contrast"])
+                        else "")
             cells.append(f"{fmt(r['cd_err_rms'])} · {fmt(r['jitter_rms'])} ({fmt(r['jitter_truth_rms'])}) · "
                          f"{fmt(r['travel_sens_pct'])} · {fmt(r['iso_pct'])}{contrast}")
         lines.append(f"| {mode['mode']} | {fmt(worst, 3)} | " + " | ".join(cells) + " |")
@@ -191,9 +243,9 @@ def worse_than_every_other(rows, modes, methods, variant):
                 for sev in severities_of(rows, mode["mode"]):
                     mine = at.get((mode["mode"], sev, method))
                     theirs = [at.get((mode["mode"], sev, m)) for m in others]
-                    if mine is None or None in theirs or not finite(mine[metric]):
+                    if mine is None or None in theirs or math.isnan(mine[metric]):
                         continue
-                    values = [r[metric] for r in theirs if finite(r[metric])]
+                    values = [r[metric] for r in theirs if not math.isnan(r[metric])]
                     if not values:
                         continue
                     worst = max(values)
@@ -234,9 +286,9 @@ def against_better_parent(rows, modes, methods, variant):
                 for sev in severities_of(rows, mode["mode"]):
                     mine = at.get((mode["mode"], sev, method))
                     theirs = [at.get((mode["mode"], sev, p)) for p in parents]
-                    if mine is None or None in theirs or not finite(mine[metric]):
+                    if mine is None or None in theirs or math.isnan(mine[metric]):
                         continue
-                    values = [(r[metric], p) for r, p in zip(theirs, parents) if finite(r[metric])]
+                    values = [(r[metric], p) for r, p in zip(theirs, parents) if not math.isnan(r[metric])]
                     if not values:
                         continue
                     best, who = min(values)
@@ -259,7 +311,9 @@ FLOOR = 1e-3  # no bound below this: values under it are rounding, and may diffe
 
 
 def round_up(v):
-    """v rounded up to two significant digits, at least FLOOR."""
+    """v rounded up to two significant digits, at least FLOOR (an infinite v stays infinite)."""
+    if v == math.inf:
+        return v
     if not finite(v) or v <= FLOOR:
         return FLOOR
     scale = 10 ** (math.floor(math.log10(v)) - 1)
@@ -268,14 +322,14 @@ def round_up(v):
 
 def bounds_of(rows, modes, methods, variant):
     """[(mode, method, [bound per BOUNDED metric])]: each metric's worst value over the mode's severities plus a
-    quarter, rounded up."""
+    quarter, rounded up; None where the metric has no value there (an infinite value gives an infinite bound)."""
     out = []
     for mode in modes:
         for method in methods:
             sel = [r for r in rows if r["mode"] == mode["mode"] and r["method"] == method and r["variant"] == variant]
             if sel:
-                out.append((mode["mode"], method,
-                            [round_up(1.25 * max(r[c] for r in sel if finite(r[c]))) for c in BOUNDED]))
+                values = [[r[c] for r in sel if not math.isnan(r[c])] for c in BOUNDED]
+                out.append((mode["mode"], method, [round_up(1.25 * max(v)) if v else None for v in values]))
     return out
 
 
@@ -284,12 +338,18 @@ def bounds_table(bounds, variant):
              f"x 1.25, rounded up (at least {FLOOR:g}).", "",
              "| mode | method | " + " | ".join(BOUNDED) + " |", "|---|---|" + "---:|" * len(BOUNDED)]
     for mode, method, values in bounds:
-        lines.append(f"| {mode} | {method} | " + " | ".join(f"{v:.2g}" for v in values) + " |")
+        lines.append(f"| {mode} | {method} | " + " | ".join("–" if v is None else f"{v:.2g}" for v in values) + " |")
     return "\n".join(lines)
 
 
 def bounds_cpp(bounds):
-    """The same as the initialiser list tests/test_tool_stability.cpp holds."""
+    """The same as the initialiser list tests/test_tool_stability.cpp holds; InputError where a bound is missing
+    or infinite (no test can hold it)."""
+    for mode, method, values in bounds:
+        for c, v in zip(BOUNDED, values):
+            if v is None or not math.isfinite(v):
+                raise InputError(f"--bounds-cpp: the bound of {c} for {mode}, {method} is "
+                                 f"{'missing' if v is None else 'infinite'}; nothing written")
     return "\n".join(f'{{"{mode}", "{method}", {{' + ", ".join(f"{v:.2g}" for v in values) + "}},"
                      for mode, method, values in bounds)
 
@@ -300,35 +360,58 @@ def main(argv):
                                 epilog="\n".join(__doc__.split("\n")[1:]))
     p.add_argument("csvdir", type=Path, help="folder with stability.csv and modes.csv")
     p.add_argument("outdir", type=Path, help="folder to write the PNG files into (created if needed)")
-    p.add_argument("--variants", default=",".join(DEFAULT_VARIANTS),
+    p.add_argument("--variants",
                    help=f"engine variants to draw, comma-separated (default: {','.join(DEFAULT_VARIANTS)})")
     p.add_argument("--bounds-cpp", type=Path, metavar="FILE",
                    help="also write the bounds as the C++ initialiser list of tests/test_tool_stability.cpp")
     args = p.parse_args(argv)
     try:
-        rows, modes = read_inputs(args.csvdir)
+        rows, modes, metrics = read_inputs(args.csvdir)
         methods = charts.methods_of(rows)
-        present = {r["variant"] for r in rows}
-        variants = [v for v in args.variants.split(",") if v in present]
-        if not variants:
-            raise InputError(f"--variants {args.variants}: none of them in stability.csv")
-        args.outdir.mkdir(parents=True, exist_ok=True)
-        written = [chart_metric(rows, modes, methods, variants, m, args.outdir) for m in METRICS]
+        present = []
+        for r in rows:
+            if r["variant"] not in present:
+                present.append(r["variant"])
+        if args.variants is None:
+            variants = [v for v in DEFAULT_VARIANTS if v in present]
+            if not variants:
+                raise InputError(f"{args.csvdir / 'stability.csv'}: none of the default variants "
+                                 f"({', '.join(DEFAULT_VARIANTS)}); it has: {', '.join(present)} (see --variants)")
+        else:
+            variants = [v.strip() for v in args.variants.split(",") if v.strip()]
+            unknown = [v for v in variants if v not in present]
+            if unknown or not variants:
+                raise InputError(f"--variants {args.variants}: no such variant in stability.csv: "
+                                 f"{', '.join(unknown) or '(none named)'}; it has: {', '.join(present)}")
+        # Everything is computed, and every output folder checked, before anything is written or printed.
+        tables = [summary_table(rows, modes, methods, variants[0]),
+                  worse_than_every_other(rows, modes, methods, variants[0])]
+        parents = against_better_parent(rows, modes, methods, variants[0])
+        if parents:
+            tables.append(parents)
+        bounds = bounds_of(rows, modes, methods, variants[0])
+        tables.append(bounds_table(bounds, variants[0]))
+        cpp = bounds_cpp(bounds) + "\n" if args.bounds_cpp else None
+        if args.bounds_cpp:
+            folder = args.bounds_cpp.parent
+            if args.bounds_cpp.is_dir():
+                raise InputError(f"{args.bounds_cpp}: a folder (--bounds-cpp names a file)")
+            if not folder.is_dir():
+                raise InputError(f"{args.bounds_cpp}: no folder {folder} (--bounds-cpp)")
+        charts.make_outdir(args.outdir)
+        written = [chart_metric(rows, modes, methods, variants, m, args.outdir) for m in metrics]
+        if args.bounds_cpp:
+            try:
+                args.bounds_cpp.write_text(cpp)
+            except OSError as e:
+                raise InputError(charts.os_error_text(e, args.bounds_cpp)) from None
     except InputError as e:
         print(f"stability_charts.py: {e}", file=sys.stderr)
         return 1
-    print(summary_table(rows, modes, methods, variants[0]))
-    print()
-    print(worse_than_every_other(rows, modes, methods, variants[0]))
-    parents = against_better_parent(rows, modes, methods, variants[0])
-    if parents:
-        print()
-        print(parents)
-    bounds = bounds_of(rows, modes, methods, variants[0])
-    print()
-    print(bounds_table(bounds, variants[0]))
-    if args.bounds_cpp:
-        args.bounds_cpp.write_text(bounds_cpp(bounds) + "\n")
+    except OSError as e:
+        print(f"stability_charts.py: {charts.os_error_text(e, args.outdir)}", file=sys.stderr)
+        return 1
+    print("\n\n".join(tables))
     for path in written:
         print(f"stability_charts.py: wrote {path}", file=sys.stderr)
     return 0

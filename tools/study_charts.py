@@ -16,7 +16,8 @@ from collections import defaultdict
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from charts import DPI, EXTRA_COLOURS, METHOD_COLOURS, SAVE_META, InputError, plt, read_table  # noqa: E402
+from charts import (DPI, EXTRA_COLOURS, METHOD_COLOURS, SAVE_META, InputError, make_outdir, os_error_text,  # noqa: E402
+                    plt, read_table, warn)
 
 SUMMARY_REQUIRED = ["technique", "grouping", "group", "error_pct", "error_lo", "error_hi", "time_s", "time_lo",
                     "time_hi"]
@@ -48,6 +49,34 @@ def techniques_of(summary):
     return out
 
 
+def check_summary(summary):
+    """Refuses what no chart can show: an infinite value, no `overall` row at all. Warns of NaN values (left
+    out) and of a 95 % interval that does not hold its value."""
+    path = getattr(summary, "path", "summary.csv")
+    for r in summary:
+        for c in SUMMARY_NUMERIC + SUMMARY_OPTIONAL:
+            v = r.get(c, math.nan)
+            if isinstance(v, float) and math.isinf(v):
+                raise InputError(f"{path}:{r['_line']}: column {c}: infinite")
+        for value, lo, hi in (("error_pct", "error_lo", "error_hi"), ("time_s", "time_lo", "time_hi")):
+            if r[lo] > r[value] + 1e-9 or r[hi] < r[value] - 1e-9:
+                warn(f"{path}:{r['_line']}: {value} {r[value]:g} is outside its interval [{r[lo]:g}, {r[hi]:g}] "
+                     f"({lo}, {hi}): its error bar stops at the value on that side")
+    overall = [r for r in summary if r["grouping"] == "overall"]
+    if not overall:
+        raise InputError(f"{path}: no row of grouping `overall` (the techniques' overall error and time)")
+    if not any(finite(r["error_pct"]) and finite(r["time_s"]) for r in overall):
+        raise InputError(f"{path}: no row of grouping `overall` has a finite error_pct and time_s")
+    if hasattr(summary, "report_nonfinite"):
+        summary.report_nonfinite(SUMMARY_NUMERIC, "not drawn")
+
+
+def interval(value, bound):
+    """The length of an error bar from value to bound; NaN (no bar) where either is NaN."""
+    d = value - bound
+    return math.nan if math.isnan(d) else max(0.0, d)
+
+
 def chart_errors(summary, outdir):
     every = techniques_of(summary)
     techniques = [t for t in every if t != CHANCE]
@@ -55,22 +84,28 @@ def chart_errors(summary, outdir):
     groups = ["all"] + [g for g in HEIGHT_RADIUS if any((t, g) in rows for t in techniques)]
     fig, ax = plt.subplots(figsize=(9.5, 4.6))
     width = 0.8 / max(1, len(techniques))
+    paper_labelled = False
     for i, t in enumerate(techniques):
         xs, ys, lo, hi = [], [], [], []
         for gi, g in enumerate(groups):
             r = rows.get((t, g))
-            if r is None:
+            if r is None or not finite(r["error_pct"]):
                 continue
             xs.append(gi + (i - (len(techniques) - 1) / 2) * width)
             ys.append(r["error_pct"])
-            lo.append(max(0.0, r["error_pct"] - r["error_lo"]))
-            hi.append(r["error_hi"] - r["error_pct"])
+            lo.append(interval(r["error_pct"], r["error_lo"]))
+            hi.append(interval(r["error_hi"], r["error_pct"]))
+        if not xs:
+            warn(f"study_errors.png: technique {t} has no error rate: not drawn, not in the legend")
+            continue
         ax.bar(xs, ys, width * 0.92, color=colour_of(t, every), label=t, yerr=[lo, hi], capsize=2,
                error_kw={"elinewidth": 0.8})
         paper = rows.get((t, "all"), {}).get("paper_error_pct", math.nan)
-        if t in PAPER_TECHNIQUES and finite(paper):
+        overall = rows.get((t, "all"), {}).get("error_pct", math.nan)
+        if t in PAPER_TECHNIQUES and finite(paper) and finite(overall):
             ax.plot([xs[0]], [paper], marker="D", color="black", markersize=6, zorder=5,
-                    label="paper (overall)" if t == PAPER_TECHNIQUES[0] else None)
+                    label=None if paper_labelled else "paper (overall)")
+            paper_labelled = True
     ax.set_xticks(range(len(groups)))
     ax.set_xticklabels(["overall"] + [g.replace("h", "height ").replace("-r", ", radius ") for g in groups[1:]])
     ax.set_ylabel("misclassified targets (%)")
@@ -98,11 +133,19 @@ def chart_times(trials, summary, outdir):
     # Per participant, the mean time of its scored trials in each cell: what the paper's boxplots show.
     sums = defaultdict(lambda: [0.0, 0])
     for r in trials:
-        if r["scored"] != "1" or r["technique"] not in techniques:
+        if r["scored"] != "1" or r["technique"] not in techniques or not finite(r["time_s"]):
             continue
         a = sums[(r["technique"], (r["profile"], r["radius"], r["height"]), r["participant"])]
         a[0] += r["time_s"]
         a[1] += 1
+    scored = {t for t, _, _ in sums}
+    for t in techniques:
+        if t not in scored:
+            warn(f"study_times.png: technique {t} has no scored trial with a time: not drawn, not in the legend")
+    techniques = [t for t in techniques if t in scored]
+    if not techniques:
+        raise InputError("trials.csv has no scored trial with a time of the paper's techniques ("
+                         + ", ".join(PAPER_TECHNIQUES) + ")")
     fig, ax = plt.subplots(figsize=(11, 4.8))
     width = 0.8 / len(techniques)
     for i, t in enumerate(techniques):
@@ -119,13 +162,15 @@ def chart_times(trials, summary, outdir):
         ax.plot([], [], color=colour_of(t, techniques), linewidth=6, alpha=0.6, label=t)
     paper = {r["technique"]: r.get("paper_time_s", math.nan) for r in summary
              if r["grouping"] == "height_radius" and r["group"] == "h0.25-r200"}
+    paper_labelled = False
     for i, t in enumerate(techniques):
         p = paper.get(t, math.nan)
         if finite(p):
             xs = [ci + (i - (len(techniques) - 1) / 2) * width for ci, c in enumerate(cells)
                   if c[1] == "200" and c[2] == "0.25"]
             ax.plot(xs, [p] * len(xs), linestyle="none", marker="D", color="black", markersize=5,
-                    label="paper, height 0.25 radius 200 (mean over profiles)" if i == 0 else None)
+                    label=None if paper_labelled else "paper, height 0.25 radius 200 (mean over profiles)")
+            paper_labelled = True
     ax.set_xticks(range(len(cells)))
     ax.set_xticklabels([f"{p[:4]}\nr{r} h{h}" for p, r, h in cells], fontsize=8)
     ax.set_ylabel("mean decision time per participant (s)")
@@ -146,10 +191,14 @@ def chart_techniques(summary, outdir):
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
     marked = set()
     for t in techniques:
-        r = overall[t]
+        r = overall.get(t)
+        if r is None or not finite(r["time_s"]) or not finite(r["error_pct"]):
+            warn(f"study_techniques.png: technique {t} has no overall "
+                 f"{'row' if r is None else 'error and time'}: not drawn, not in the legend")
+            continue
         ax.errorbar([r["time_s"]], [r["error_pct"]],
-                    xerr=[[r["time_s"] - r["time_lo"]], [r["time_hi"] - r["time_s"]]],
-                    yerr=[[max(0.0, r["error_pct"] - r["error_lo"])], [r["error_hi"] - r["error_pct"]]],
+                    xerr=[[interval(r["time_s"], r["time_lo"])], [interval(r["time_hi"], r["time_s"])]],
+                    yerr=[[interval(r["error_pct"], r["error_lo"])], [interval(r["error_hi"], r["error_pct"])]],
                     marker="o", color=colour_of(t, techniques), label=t, capsize=3)
         method = t.split(":")[0]
         if method not in marked and finite(r.get("paper_error_pct", math.nan)) and finite(
@@ -181,11 +230,22 @@ def main(argv):
         summary, _ = read_table(args.csvdir / "summary.csv", SUMMARY_REQUIRED, SUMMARY_NUMERIC, SUMMARY_OPTIONAL,
                                 command="study")
         trials, _ = read_table(args.csvdir / "trials.csv", TRIALS_REQUIRED, ["time_s"], command="study")
-        args.outdir.mkdir(parents=True, exist_ok=True)
+        check_summary(summary)
+        infinite = [t for t in trials if math.isinf(t["time_s"])]
+        if infinite:
+            raise InputError(f"{trials.path}:{infinite[0]['_line']}: column time_s: infinite")
+        trials.report_nonfinite(["time_s"], "left out of study_times.png")
+        if not any(r["technique"] in PAPER_TECHNIQUES and r["scored"] == "1" and finite(r["time_s"]) for r in trials):
+            raise InputError(f"{trials.path}: no scored trial with a time of the paper's techniques ("
+                             + ", ".join(PAPER_TECHNIQUES) + ")")
+        make_outdir(args.outdir)
         written = [chart_errors(summary, args.outdir), chart_times(trials, summary, args.outdir),
                    chart_techniques(summary, args.outdir)]
     except InputError as e:
         print(f"study_charts.py: {e}", file=sys.stderr)
+        return 1
+    except OSError as e:
+        print(f"study_charts.py: {os_error_text(e, args.outdir)}", file=sys.stderr)
         return 1
     for path in written:
         print(f"study_charts.py: wrote {path}", file=sys.stderr)

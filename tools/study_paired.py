@@ -11,6 +11,7 @@ table of the comparisons docs/STUDY.md discusses; a comparison whose techniques 
 
 import argparse
 import csv
+import io
 import math
 import signal
 import sys
@@ -86,31 +87,54 @@ def signed(value, digits):
 REQUIRED = ["participant", "technique", "scored", "correct", "time_s", "shape", "height", "radius"]
 
 
+def fail(message):
+    sys.exit(f"study_paired.py: {message}")
+
+
+def read_text(path):
+    """The file's text (UTF-8, a byte order mark dropped); exits naming the file, and the line of a byte that is
+    not UTF-8."""
+    try:
+        with open(path, "rb") as f:
+            data = f.read()
+    except OSError as e:
+        fail(f"{e.filename}: {e.strerror}")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        line = data[:e.start].count(b"\n") + 1
+        column = e.start - (data.rfind(b"\n", 0, e.start) + 1) + 1
+        fail(f"{path}:{line}: not UTF-8 (byte 0x{data[e.start]:02x} at column {column})")
+
+
 def read_trials(path):
     """The rows of trials.csv, time_s as a float; exits naming the file (and line) where it is not what
     `pseudohaptic study` writes."""
     try:
-        with open(path, newline="") as f:
-            reader = csv.DictReader(f)
-            missing = [c for c in REQUIRED if c not in (reader.fieldnames or [])]
-            if missing:
-                sys.exit(f"study_paired.py: {path}: missing column(s) {', '.join(missing)} "
-                         f"(written by `pseudohaptic study`)")
-            rows = []
-            for row in reader:
-                if any(row[c] is None for c in REQUIRED):
-                    sys.exit(f"study_paired.py: {path}:{reader.line_num}: fewer cells than the header has")
-                try:
-                    row["time_s"] = float(row["time_s"])
-                except ValueError:
-                    sys.exit(f"study_paired.py: {path}:{reader.line_num}: time_s: not a number: {row['time_s']!r}")
-                if not math.isfinite(row["time_s"]):
-                    sys.exit(f"study_paired.py: {path}:{reader.line_num}: time_s: not finite: {row['time_s']}")
-                rows.append(row)
-    except OSError as e:
-        sys.exit(f"study_paired.py: {e.filename}: {e.strerror}")
-    except (csv.Error, UnicodeDecodeError) as e:
-        sys.exit(f"study_paired.py: {path}: not a CSV file: {e}")
+        reader = csv.DictReader(io.StringIO(read_text(path), newline=""))
+        if reader.fieldnames is None:
+            fail(f"{path}: empty file, expected a header line (written by `pseudohaptic study`)")
+        missing = [c for c in REQUIRED if c not in reader.fieldnames]
+        if missing:
+            fail(f"{path}: missing column(s) {', '.join(missing)} (written by `pseudohaptic study`)")
+        rows = []
+        for row in reader:
+            if any(row[c] is None for c in REQUIRED):
+                fail(f"{path}:{reader.line_num}: fewer cells than the header has")
+            try:
+                row["time_s"] = float(row["time_s"])
+            except ValueError:
+                fail(f"{path}:{reader.line_num}: time_s: not a number: {row['time_s']!r}")
+            if not math.isfinite(row["time_s"]):
+                fail(f"{path}:{reader.line_num}: time_s: not finite: {row['time_s']}")
+            for c in ("correct", "scored"):
+                if row[c] not in ("0", "1"):
+                    fail(f"{path}:{reader.line_num}: {c}: not 0 or 1: {row[c]!r}")
+            rows.append(row)
+    except csv.Error as e:
+        fail(f"{path}:{reader.line_num}: not a CSV file: {e}")
+    if not rows:
+        fail(f"{path}: no data rows")
     return rows
 
 
@@ -119,10 +143,17 @@ def main():
     parser.add_argument("outdir", help="what `pseudohaptic study OUTDIR` wrote")
     args = parser.parse_args()
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # `| head`: end quietly, as the C++ tool does
-    rows = read_trials(f"{args.outdir}/trials.csv")
-    techniques = {row["technique"] for row in rows}
-    print("| paired difference | error, percentage points | decision time, s |")
-    print("|---|---|---|")
+    path = f"{args.outdir}/trials.csv"
+    rows = read_trials(path)
+    techniques = []
+    for row in rows:
+        if row["technique"] not in techniques:
+            techniques.append(row["technique"])
+    if len(techniques) < 2:
+        fail(f"{path}: one technique only ({techniques[0]}): nothing to compare")
+    if not any(row["scored"] == "1" for row in rows):
+        fail(f"{path}: no scored trials: nothing to compare")
+    lines = []
     for a, b, label, keep in COMPARISONS:
         if a not in techniques or b not in techniques:
             continue
@@ -132,8 +163,15 @@ def main():
             continue
         errors = mean_ci([pa[p][0] - pb[p][0] for p in both])
         times = mean_ci([pa[p][1] - pb[p][1] for p in both])
-        print(f"| {a} \u2212 {b}, {label} | {signed(errors[0], 2)} \u00b1 {errors[1]:.2f} | "
-              f"{signed(times[0], 2)} \u00b1 {times[1]:.2f} |")
+        lines.append(f"| {a} \u2212 {b}, {label} | {signed(errors[0], 2)} \u00b1 {errors[1]:.2f} | "
+                     f"{signed(times[0], 2)} \u00b1 {times[1]:.2f} |")
+    if not lines:
+        fail(f"{path}: no comparison docs/STUDY.md discusses has scored trials of both its techniques from one "
+             f"participant (the run has: {', '.join(techniques)})")
+    print("| paired difference | error, percentage points | decision time, s |")
+    print("|---|---|---|")
+    for line in lines:
+        print(line)
 
 
 if __name__ == "__main__":
