@@ -325,8 +325,10 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
     device.set_blocking(true);  // its reader waits in read()
   } catch (const DeviceError& e) {
     if (e.error() == EBUSY) {
-      // A mouse not taken has no virtual device: destroyed off the lock (the compositor may have opened it).
-      retired_.keep(std::move(mouse.sink));
+      // Here, not on the retiring thread: a mouse held elsewhere has no virtual device once that is said (status,
+      // and the VM case "[6] a mouse another program holds" looks for none), at the cost of destroying it under
+      // the lock.
+      mouse.sink.reset();
       log_.warning("{}; taking it once that program lets go", e.what());
       wait_for_release_elsewhere(node, mouse);
       return;
@@ -343,7 +345,7 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
   }
   if (device.any_key_held()) {  // pressed between the check and the grab: the desktop has the press
     device.ungrab();
-    retired_.keep(std::move(mouse.sink));  // off the lock
+    mouse.sink.reset();  // as above: a mouse not taken has no virtual device
     update_retry_timer();
     return;
   }
