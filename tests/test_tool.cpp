@@ -492,6 +492,22 @@ TEST(Tool, TraceFilesMatchTarget) {
   }
 }
 
+// "--option=" with nothing after the '=' (a variable left empty in a script) is the command line's error, naming the
+// option: CLI11 took the next argument as its value (replay's --method took the recording) or said a value was
+// missing.
+TEST(Tool, AnEmptyOptionValueIsNamed) {
+  ScratchDir dir;
+  for (const std::string& command :
+       {"replay --method= " + quote(dir / "in.evemu") + " " + quote(dir / "out.evemu"),
+        "stability " + quote(dir / "out") + " --small --mode=", "trace --target= -o " + quote(dir / "x.csv")}) {
+    SCOPED_TRACE(command);
+    const ToolResult r = run_tool(command, dir);
+    expect_clean_failure(r, {"an empty value: give one, or leave the option out"});
+    EXPECT_EQ(r.rc, 105) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out")) << r.err;
+  }
+}
+
 TEST(Tool, TraceErrors) {
   ScratchDir dir;
   const std::string out = " -o " + quote(dir / "x.csv");

@@ -112,6 +112,16 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
+    // "--method=" (a variable left empty in a script): CLI11 takes the next argument as its value, or says a value
+    // is missing. An empty value is no option's: said as the command line's error, naming the option.
+    for (int i = 1; i < argc; ++i) {
+      const std::string_view arg = argv[i];
+      if (arg == "--") break;
+      if (arg.size() > 3 && arg.starts_with("--") && arg.ends_with("=")) {
+        throw CLI::ValidationError(std::string(arg.substr(0, arg.size() - 1)),
+                                   "an empty value: give one, or leave the option out");
+      }
+    }
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
