@@ -54,6 +54,12 @@ GradientField load_gradient(const std::filesystem::path& path, const NormalDecod
 
 }  // namespace
 
+MapsOpened maps_opened(const FieldSources& sources, FieldNeeds needs) {
+  const bool gradient_from_depth_map = needs.gradient && !sources.normal_map;
+  return {needs.gradient && sources.normal_map.has_value(),
+          sources.depth_map.has_value() && (needs.reads_depth(true) || gradient_from_depth_map)};
+}
+
 RegionFields load_region_fields(const FieldSources& sources, std::int32_t width, std::int32_t height, FieldNeeds needs,
                                 FieldLoadReport& report, const ImageLimits& limits) {
   report = {};
@@ -61,8 +67,7 @@ RegionFields load_region_fields(const FieldSources& sources, std::int32_t width,
   // Depth is read once, for the depth itself or for normals when there is no normal map; nothing else is read.
   const bool gradient_from_depth_map = needs.gradient && !sources.normal_map;
   std::optional<DepthField> depth;
-  const bool wants_depth = needs.reads_depth(sources.depth_map.has_value());
-  if (wants_depth || gradient_from_depth_map) {
+  if (maps_opened(sources, needs).depth_map) {
     depth = load_depth(*sources.depth_map, sources.depth_options, width, height, report.depth, limits);
   }
 
@@ -76,7 +81,7 @@ RegionFields load_region_fields(const FieldSources& sources, std::int32_t width,
     fields.gradient_rounding = gradient_from_depth_map ? gradient_rounding_of_depth(report.depth.value_step)
                                                        : gradient_rounding_of_normals(report.normals.value_step);
   }
-  if (wants_depth) {
+  if (needs.reads_depth(sources.depth_map.has_value())) {  // kept: the heights are the method's or an effect's
     fields.depth = std::move(depth);
     fields.depth_rounding = height_rounding_of_depth(report.depth.value_step);
   }

@@ -26,6 +26,14 @@ struct FieldLoadReport {
   DecodeReport depth;
 };
 
+// Which of a region's maps load_region_fields opens for `needs`: the normal map for slopes; the depth map for its
+// heights, or for slopes where there is no normal map. A map the region names but nothing reads is not opened.
+struct MapsOpened {
+  bool normal_map = false;
+  bool depth_map = false;
+};
+MapsOpened maps_opened(const FieldSources& sources, FieldNeeds needs);
+
 // Throws FieldError naming the file, or naming what is missing (e.g. the depth method with only a normal map).
 RegionFields load_region_fields(const FieldSources& sources, std::int32_t width, std::int32_t height, FieldNeeds needs,
                                 FieldLoadReport& report, const ImageLimits& limits = {});

@@ -714,13 +714,10 @@ FieldNeeds region_needs(const RegionSpec& r, const Method& method) {
   return needs;
 }
 
-// Whether the loader opens the map `key` names (config/field_loader.cpp): the depth map for its heights or for
-// slopes where there is no normal map, the normal map for slopes. One the region names but nothing reads is not
-// opened at all.
+// Whether the loader opens the map `key` names (config/field_loader.hpp, maps_opened).
 bool map_is_read(std::string_view key, const RegionSpec& r, FieldNeeds needs) {
-  if (key == "normal_map") return needs.gradient && r.sources.normal_map.has_value();
-  return r.sources.depth_map.has_value() &&
-         (needs.reads_depth(true) || (needs.gradient && !r.sources.normal_map.has_value()));
+  const MapsOpened opened = maps_opened(r.sources, needs);
+  return key == "normal_map" ? opened.normal_map : opened.depth_map;
 }
 
 // `path` (absolute) with the links on it followed as far as they can be read: reading a link needs no access to where

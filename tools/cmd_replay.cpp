@@ -378,20 +378,13 @@ Run add_replay_command(CLI::App& app) {
       ->each([o](const std::string&) { o->dpi_given = true; });
   // As a scene file's desktop: larger ones overflowed absolute output's axis ranges. Checked with the other
   // options, before the recording and the scene are read.
-  add_number_tuple(app, "--desktop", o->desktop, "X,Y,W,H",
-                   "Desktop rectangle the cursor model is kept in (default 0,0,1920,1080)")
-      ->check(
-          [](const std::string& text) -> std::string {
-            // (A check runs before the option's own function, which says what is not four integers.)
-            std::vector<std::int32_t> d(4);
-            const std::vector<std::string> parts = split_at_commas(text);
-            for (std::size_t i = 0; i < parts.size(); ++i)
-              if (parts.size() != d.size() || !parse_tuple_number(parts[i], d[i])) return "";
-            if (is_valid_desktop(Rect{d[0], d[1], d[2], d[3]})) return "";
-            return fmt::format("W and H must be from 1 to {}, X and Y within ±{}", kMaxDesktopCoordinate,
-                               kMaxDesktopCoordinate);
-          },
-          "");
+  add_number_tuple<std::int32_t>(app, "--desktop", o->desktop, "X,Y,W,H",
+                                 "Desktop rectangle the cursor model is kept in (default 0,0,1920,1080)", {},
+                                 [](const std::vector<std::int32_t>& d) -> std::string {
+                                   if (is_valid_desktop(Rect{d[0], d[1], d[2], d[3]})) return "";
+                                   return fmt::format("W and H must be from 1 to {}, X and Y within ±{}",
+                                                      kMaxDesktopCoordinate, kMaxDesktopCoordinate);
+                                 });
   app.add_option("--gain", o->gain, "Screen px per device count at C/D 1 (the base pointer speed)")
       ->check(finite_from(kMinPointerSpeed, kMaxPointerSpeed))  // the scene file's pointer_speed's range
       ->capture_default_str()

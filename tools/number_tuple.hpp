@@ -11,6 +11,7 @@
 #include <array>
 #include <charconv>
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <system_error>
 #include <type_traits>
@@ -72,14 +73,18 @@ std::vector<T> parse_number_tuple(const std::string& name, const std::string& fo
 }
 
 // Registers option `name` on `app`, taking one argument of the numbers `form` names ("X,Y"), into `values`; `each`
-// checks every number as ->check() would.
+// checks every number as ->check() would, and `whole` the numbers together (its message, or empty where they go).
 template <typename T>
 CLI::Option* add_number_tuple(CLI::App& app, const std::string& name, std::vector<T>& values, const std::string& form,
-                              const std::string& description, std::vector<CLI::Validator> each = {}) {
+                              const std::string& description, std::vector<CLI::Validator> each = {},
+                              std::function<std::string(const std::vector<T>&)> whole = {}) {
   CLI::Option* option = app.add_option_function<std::string>(
       name,
-      [&values, name, form, each = std::move(each)](const std::string& text) {
+      [&values, name, form, each = std::move(each), whole = std::move(whole)](const std::string& text) {
         values = parse_number_tuple<T>(name, form, text, each);
+        if (whole) {
+          if (std::string problem = whole(values); !problem.empty()) throw CLI::ValidationError(name, problem);
+        }
       },
       description);
   return option->type_name(form);
