@@ -316,7 +316,9 @@ void Daemon::try_take(const std::string& node, Mouse& mouse) {
   }
   try {
     mouse.sink = std::make_unique<UinputSink>(output_device(device.description(), pipeline_->config()));
-    // What was queued before the grab went to the desktop as well: read it and let it go.
+    // What was queued before the grab went to the desktop as well: read it and let it go. (Motion reported while the
+    // grab itself is under way, which waits for the kernel, may reach both: the kernel does not say to which of its
+    // readers it gave an event. A press there is seen held by the check after the grab, which lets go again.)
     if (device.read_available([](const InputEvent&) {}) == ReadStatus::gone) {
       let_go(node, "unplugged");
       return;
@@ -398,6 +400,9 @@ bool Daemon::on_released_elsewhere(int fd) {
 }
 
 void Daemon::let_go(const std::string& node, std::string_view why) {
+  // Frames of this mouse held for the session helper's answer go out first, in order with the other mice's.
+  if (holding_ && std::any_of(held_events_.begin(), held_events_.end(), [&](const auto& e) { return e.first == node; }))
+    release_held();
   if (const auto u = untaken_.find(node); u != untaken_.end()) {
     ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, u->second->fd(), nullptr);
     retired_.keep(std::move(u->second));  // not grabbed: closed off the lock
@@ -419,11 +424,12 @@ void Daemon::let_go(const std::string& node, std::string_view why) {
   update_retry_timer();
 }
 
-// Its reader stopped, a mouse's virtual devices release what they hold and go to `retired_`: one that wrote a
-// button's release lately (its own, or the mouse's: the kernel releases what an unplugged mouse held) stays
-// kReleaseGrace for its readers to read it. Here, under the state lock, either wait would stall every other mouse's
-// reader (at 8 kHz a mouse's kernel buffer overflows in 50 ms).
+// Its reader stopped and what the grab kept emitted, a mouse's virtual devices release what they hold and go to
+// `retired_`: one that wrote a button's release lately (its own, or the mouse's: the kernel releases what an unplugged
+// mouse held) stays kReleaseGrace for its readers to read it. Here, under the state lock, either wait would stall every
+// other mouse's reader (at 8 kHz a mouse's kernel buffer overflows in 50 ms).
 void Daemon::retire_virtual_devices(Mouse& mouse) {
+  if (mouse.reader) emit_what_the_grab_kept(mouse, mouse.reader->stop());
   mouse.reader.reset();
   mouse.frames.reset();
   const SteadyTime now = std::chrono::steady_clock::now();
@@ -648,6 +654,31 @@ void Daemon::release_held() {
   remember_emitted(std::chrono::steady_clock::now());
 }
 
+// A taken mouse let go of (the daemon stopping, the mice taken again after a reload, a device that went away): what its
+// grab kept from the desktop and is not emitted yet (the batch its reader held, what the kernel still queues for the
+// grab) goes out through its virtual device before that releases the buttons it holds, so that a click made at that
+// moment reaches the desktop.
+void Daemon::emit_what_the_grab_kept(Mouse& mouse, std::vector<InputEvent> events) {
+  if (!mouse.ending.empty() || !mouse.frames || !mouse.device) return;  // its reader saw it go, or its device failed
+  std::vector<InputEvent> queued;
+  try {
+    mouse.device->read_batch(queued, Wait::no);  // (gone: what was read, if anything)
+  } catch (const DeviceError& e) {
+    log_.debug("{}", e.what());
+  }
+  events.insert(events.end(), queued.begin(), queued.end());
+  if (events.empty()) return;
+  try {
+    for (const InputEvent& e : events) route(mouse, e);
+  } catch (const UinputError& e) {
+    log_.error("{}", e.what());
+    return;
+  }
+  remember_emitted(std::chrono::steady_clock::now());
+  log_.debug("{} {}: {} events its grab kept emitted as it is let go of", mouse.device->node(),
+             quoted_name(*mouse.device), events.size());
+}
+
 void Daemon::watch_untaken(const std::string& node, std::unique_ptr<EvdevDevice> device) {
   // A repeated udev "add" (coldplug after the start-up listing) replaces the node watched: closed off the lock.
   if (const auto old = untaken_.find(node); old != untaken_.end()) {
@@ -818,8 +849,8 @@ void Daemon::helper_changed(bool present) {
 }
 
 void Daemon::restart_devices(std::string_view why) {
-  const Vec2 cursor = pipeline_->cursor().position;
   let_go_of_all(why);
+  const Vec2 cursor = pipeline_->cursor().position;  // (after the motion that letting go emits)
   // The old virtual devices go before new ones of the same names come: whoever finds a device by its name (the
   // desktop's configuration, a test) would find either. No mouse's reader runs now: the wait costs no frame.
   retired_.wait_until_empty();

@@ -36,7 +36,10 @@ MouseReader::MouseReader(Read read, std::timed_mutex& state, OnBatch on_batch)
   ::pthread_setname_np(thread_.native_handle(), "ph-mouse-reader");  // for ps -L, top -H and /proc
 }
 
-MouseReader::~MouseReader() {
+MouseReader::~MouseReader() { stop(); }
+
+std::vector<InputEvent> MouseReader::stop() {
+  if (!thread_.joinable()) return {};
   stopping_ = true;
   std::unique_lock lock(sync_mutex_);
   while (!ended_) {
@@ -44,7 +47,10 @@ MouseReader::~MouseReader() {
     synced_.wait_for(lock, kRecheck);
   }
   lock.unlock();
-  thread_.join();
+  thread_.join();  // (after which the thread's members are the caller's)
+  if (!kept_) return {};
+  kept_ = false;
+  return std::move(events_);
 }
 
 void MouseReader::sync() {
@@ -97,9 +103,12 @@ void MouseReader::interrupt() { ::pthread_kill(thread_.native_handle(), wake_sig
   if (status == ReadStatus::ok && events_.empty()) return true;  // interrupted, or nothing queued
   std::unique_lock lock(state_, std::try_to_lock);  // (try_lock_for reads the clock even when the lock is free)
   while (!lock.owns_lock() && !lock.try_lock_for(kRecheck)) {
-    if (stopping_) return false;
+    if (stopping_) break;
   }
-  if (stopping_) return false;
+  if (stopping_) {  // the batch is stop()'s (a mouse gone meanwhile: its caller finds the node hung up)
+    kept_ = !events_.empty();
+    return false;
+  }
   on_batch_(events_, status, error);
   return status == ReadStatus::ok;
 }

@@ -36,7 +36,11 @@ class MouseReader {
 
   // Starts the thread. `state` must outlive the reader.
   MouseReader(Read read, std::timed_mutex& state, OnBatch on_batch);
-  // Stops the thread and waits for it; the caller may hold the state lock (the thread gives up waiting for it).
+  // Stops the thread and waits for it; the caller may hold the state lock (the thread gives up waiting for it). Returns
+  // the events it had read and not handed on (a batch that waited for the lock): read from a grabbed mouse, they
+  // reached no one, and the caller that lets go of the mouse emits them. Empty once stopped.
+  std::vector<InputEvent> stop();
+  // stop(), dropping what it returns.
   ~MouseReader();
   MouseReader(const MouseReader&) = delete;
   MouseReader& operator=(const MouseReader&) = delete;
@@ -57,6 +61,7 @@ class MouseReader {
   std::timed_mutex& state_;
   OnBatch on_batch_;
   std::vector<InputEvent> events_;  // the thread's
+  bool kept_ = false;               // events_ were read and not handed on: the thread stopped first (stop() takes them)
   std::atomic<bool> stopping_{false};
   std::mutex sync_mutex_;
   std::condition_variable synced_;

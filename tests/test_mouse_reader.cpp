@@ -1,6 +1,6 @@
 // The reader thread of a taken mouse, on a pipe standing in for the evdev node: it hands on batches only under
 // the state lock, sync() waits for what was queued before it, and it stops promptly whether it waits in read()
-// or for the lock, and after its mouse went away.
+// or for the lock (stop() then gives back the batch in hand), and after its mouse went away.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>
@@ -11,10 +11,12 @@
 #include <chrono>
 #include <csignal>
 #include <cstring>
+#include <future>
 #include <mutex>
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "common/unique_fd.hpp"
@@ -136,6 +138,47 @@ TEST(MouseReader, StopsWhileTheCallerHoldsTheStateLock) {
     std::this_thread::sleep_for(20ms);  // read, and waiting for the lock
   }
   EXPECT_TRUE(handed.values.empty());
+}
+
+// ... and that batch, read from a grabbed mouse, reached no one: stop() gives it to the caller, which emits it. Once.
+TEST(MouseReader, StopReturnsTheBatchThatWaitedForTheLock) {
+  PipeMouse mouse;
+  std::timed_mutex state;
+  Handed handed;
+  std::promise<void> read_once;
+  bool said = false;
+  std::unique_lock lock(state);
+  MouseReader reader(
+      [&](std::vector<InputEvent>& events, Wait wait) {
+        const ReadStatus status = mouse.read(events, wait);
+        if (!events.empty() && !std::exchange(said, true)) read_once.set_value();
+        return status;
+      },
+      state,
+      [&handed](const std::vector<InputEvent>& events, ReadStatus, const std::string&) {
+        for (const InputEvent& e : events) handed.values.push_back(e.value);
+      });
+  mouse.send(4);
+  ASSERT_EQ(read_once.get_future().wait_for(10s), std::future_status::ready);  // read: now waiting for the lock
+  const std::vector<InputEvent> kept = reader.stop();
+  ASSERT_EQ(kept.size(), 2U);
+  EXPECT_EQ(kept[0].type, 2);
+  EXPECT_EQ(kept[0].value, 4);
+  EXPECT_TRUE(handed.values.empty());
+  EXPECT_TRUE(reader.stop().empty());  // stopped: nothing more, and no second wait
+}
+
+// A reader stopped while it waits in read() has nothing in hand.
+TEST(MouseReader, StopReturnsNothingWhenNothingWasRead) {
+  PipeMouse mouse;
+  std::timed_mutex state;
+  Handed handed;
+  MouseReader reader = make_reader(mouse, state, handed);
+  mouse.send(5);
+  reader.sync();  // handed on
+  EXPECT_TRUE(reader.stop().empty());
+  const std::lock_guard lock(state);
+  EXPECT_EQ(handed.values, std::vector<int>{5});
 }
 
 TEST(MouseReader, AMouseThatWentAwayIsSaidOnceAndSyncStillReturns) {
