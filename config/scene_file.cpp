@@ -78,6 +78,19 @@ std::int32_t get_int(const Reporter& rep, const toml::table& t, std::string_view
   return static_cast<std::int32_t>(*v);
 }
 
+// direction_lut's table: 8 or 16 directions, said as such (a range would suggest the counts between).
+std::int32_t get_lut_directions(const Reporter& rep, const toml::table& t, std::string_view where,
+                                std::int32_t fallback) {
+  const toml::node* node = t.get("lut_directions");
+  if (node == nullptr) return fallback;
+  const auto count = node->value_exact<std::int64_t>();
+  if (!count || (*count != 8 && *count != 16)) {
+    rep.fail(node, fmt::format("{}lut_directions", where),
+             count ? fmt::format("must be 8 or 16 (got {})", *count) : std::string("must be 8 or 16"));
+  }
+  return static_cast<std::int32_t>(*count);
+}
+
 std::optional<std::string> get_string(const Reporter& rep, const toml::table& t, std::string_view key,
                                       std::string_view where) {
   const toml::node* node = t.get(key);
@@ -384,10 +397,7 @@ void parse_region_engine(const Reporter& rep, const toml::table& t, const std::s
                              "exact, unit_steps, frame_midpoint, direction_lut, auto");
   }
   e.sampling = get_choice(rep, t, "sampling", where, e.sampling, parse_sampling, "nearest, bilinear");
-  e.lut_directions = get_int(rep, t, "lut_directions", where, e.lut_directions, 8, 16);
-  check_key(
-      rep, t, "lut_directions", where, [&] { return e.lut_directions == 8 || e.lut_directions == 16; },
-      "must be 8 or 16");
+  e.lut_directions = get_lut_directions(rep, t, where, e.lut_directions);
   r.own_lut_directions = t.get("lut_directions") != nullptr;
   if (r.engine_auto && e.sampling == Sampling::bilinear) {
     // "auto" chooses among the nearest-sampling variants: a bilinear [daemon] table is the others' default, not
@@ -537,11 +547,10 @@ DaemonSettings parse_daemon(const Reporter& rep, const toml::table& t) {
   d.engine.traversal = get_choice(rep, t, "traversal", where, d.engine.traversal, parse_traversal,
                                   "exact, unit_steps, frame_midpoint, direction_lut");
   d.engine.sampling = get_choice(rep, t, "sampling", where, d.engine.sampling, parse_sampling, "nearest, bilinear");
-  d.engine.lut_directions = get_int(rep, t, "lut_directions", where, d.engine.lut_directions, 8, 16);
-  check_key(
-      rep, t, "lut_directions", where, [&] { return d.engine.lut_directions == 8 || d.engine.lut_directions == 16; },
-      "must be 8 or 16");
-  if (const std::string problem = validate(d.engine); !problem.empty()) rep.fail(&t, "daemon", problem);
+  d.engine.lut_directions = get_lut_directions(rep, t, where, d.engine.lut_directions);
+  // (Only direction_lut with bilinear sampling is refused: said at the sampling line, which asked for it.)
+  if (const std::string problem = validate(d.engine); !problem.empty())
+    rep.fail(key_or_table(t, "sampling"), "daemon.sampling", problem);
 
   if (const toml::node* node = t.get("devices")) {
     const char* allowed =
@@ -583,7 +592,10 @@ DaemonSettings parse_daemon(const Reporter& rep, const toml::table& t) {
       std::int64_t v[4] = {};
       for (std::size_t i = 0; i < 4; ++i) {
         const auto n = (*arr)[i].value_exact<std::int64_t>();
-        if (!n) rep.fail(node, "daemon.desktop", allowed);
+        constexpr std::array<const char*, 4> kNames = {"x", "y", "width", "height"};
+        if (!n)
+          rep.fail(&(*arr)[i], fmt::format("daemon.desktop[{}]", i),
+                   fmt::format("{} must be a whole number of px; {}", kNames[i], allowed));
         v[i] = *n;
       }
       if (v[0] < -kMaxCoordinate || v[0] > kMaxCoordinate || v[1] < -kMaxCoordinate || v[1] > kMaxCoordinate)
@@ -637,7 +649,10 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
   try {
     root = toml::parse(text, origin.string());
   } catch (const toml::parse_error& e) {
-    throw ConfigError(fmt::format("{}:{}: {}", origin.string(), e.source().begin.line, e.description()));
+    // toml++'s words for a bare word where a value goes, the likeliest slip in a hand-written file: said plainly.
+    const bool bare_word = e.description().find("could not determine value type") != std::string_view::npos;
+    throw ConfigError(fmt::format("{}:{}: {}{}", origin.string(), e.source().begin.line, e.description(),
+                                  bare_word ? " (text needs quotes: key = \"value\")" : ""));
   }
   reject_unknown_keys(rep, root, {"daemon", "region"}, "");
   SceneSpec spec;
@@ -822,8 +837,15 @@ std::vector<std::string> service_path_warnings(const SceneSpec& spec) {
   constexpr std::string_view kRunsAs =
       "pseudohapticd.service runs as a user of its own (DynamicUser=yes), which cannot read it: chmod a+r the file, "
       "a+x the folders on its path";
-  if (const std::optional<std::string> why = unreadable_by_others(spec.file))
+  if (const std::optional<HiddenFolder> hidden = hidden_from_the_service(spec.file)) {
+    out.push_back(
+        fmt::format("{} lies under {}, which pseudohapticd.service cannot read ({}; the daemon run by hand "
+                    "can): the service reads /etc/pseudohaptic/scene.toml; keep a scene file of its own "
+                    "under /etc/pseudohaptic",
+                    spec.file.string(), hidden->folder, hidden->setting));
+  } else if (const std::optional<std::string> why = unreadable_by_others(spec.file)) {
     out.push_back(fmt::format("{}: {}; {}", spec.file.string(), *why, kRunsAs));
+  }
   for (const RegionSpec& r : spec.regions) {
     const FieldNeeds needs = region_needs(r, *make_method(r, spec.methods));
     for (const auto& [key, path, line] : map_keys(r)) {

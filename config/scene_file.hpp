@@ -191,7 +191,7 @@ std::optional<std::string> unreadable_by_others(const std::filesystem::path& pat
 
 // One line per region and map that lies where the service cannot read it (hidden_from_the_service, at its key's line:
 // "FILE:LINE: region 'NAME': " and the map, the folder and where to keep images instead) or that its user may not
-// read (unreadable_by_others), and one for the scene file itself if so; none where every file can be read.
+// read (unreadable_by_others), and one for the scene file itself if either is so; none where every file can be read.
 // pseudohapticd run by hand reads them; under systemd its load fails.
 std::vector<std::string> service_path_warnings(const SceneSpec& spec);
 

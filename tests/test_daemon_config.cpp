@@ -75,6 +75,17 @@ TEST(DeviceMatches, NameGlobs) {
   EXPECT_FALSE(device_matches(s, "Razer Basilisk", 1, 2));
 }
 
+// A bracket in a device's name is a glob's bracket expression unless escaped, as pseudohapticd(8) says; the man page's
+// example, as TOML's double quotes give it to the matcher.
+TEST(DeviceMatches, ABracketInTheNameIsMatchedByItselfOnlyEscaped) {
+  const std::string name = "Foo [USB] Mouse";
+  EXPECT_FALSE(device_matches(with({"name:Foo [USB] Mouse"}), name, 1, 2));
+  EXPECT_TRUE(device_matches(with({"name:Foo \\[USB\\]*"}), name, 1, 2));
+  const SceneSpec spec = parse_scene_text("[daemon]\ndevices = [\"name:Foo \\\\[USB\\\\]*\"]\n", kOrigin);
+  EXPECT_TRUE(device_matches(spec.daemon, name, 1, 2));
+  EXPECT_FALSE(device_matches(spec.daemon, "Foo U Mouse", 1, 2));
+}
+
 TEST(DeviceMatches, VendorProductIds) {
   const DaemonSettings s = with({"usb:046d:c077", "id:1532:00A5"});
   EXPECT_TRUE(device_matches(s, "whatever", 0x046d, 0xc077));
@@ -215,6 +226,8 @@ TEST(DaemonTableErrors, Devices) {
 TEST(DaemonTableErrors, Output) {
   expect_error("[daemon]\noutput = \"abs\"\n", 2, "daemon.output", {"\"relative\"", "\"absolute\""});
   expect_error("[daemon]\noutput = 1\n", 2, "daemon.output", {"must be a string"});
+  // Unquoted: TOML cannot tell what it is; the message says what to write.
+  expect_error("[daemon]\noutput = absolute\n", 2, "", {"text needs quotes: key = \"value\""});
 }
 
 TEST(DaemonTableErrors, Desktop) {
@@ -223,7 +236,10 @@ TEST(DaemonTableErrors, Desktop) {
   expect_error("[daemon]\ndesktop = 1920\n", 2, "daemon.desktop", shape);
   expect_error("[daemon]\ndesktop = [0, 0, 1920]\n", 2, "daemon.desktop", shape);
   expect_error("[daemon]\ndesktop = [0, 0, 1920.5, 1080]\n", 2, "daemon.desktop", shape);
-  expect_error("[daemon]\ndesktop = [0, 0, \"1920\", 1080]\n", 2, "daemon.desktop", shape);
+  expect_error("[daemon]\ndesktop = [0, 0, \"1920\", 1080]\n", 2, "daemon.desktop[2]", shape);
+  // Over several lines: the line of the element that is wrong, and which it is.
+  expect_error("[daemon]\ndesktop = [\n  0,\n  0,\n  1920,\n  \"1080\",\n]\n", 6, "daemon.desktop[3]",
+               {"height must be a whole number"});
   expect_error("[daemon]\ndesktop = [0, 0, 0, 1080]\n", 2, "daemon.desktop", {"width and height", "between 1 and"});
   expect_error("[daemon]\ndesktop = [0, 0, 1920, -1080]\n", 2, "daemon.desktop", {"width and height", "-1080"});
   expect_error("[daemon]\ndesktop = [0, 0, 1920, 1080000000]\n", 2, "daemon.desktop", {"width and height"});

@@ -574,18 +574,19 @@ TEST(SceneFileErrors, FilesOthersCannotReadAreWarnedOf) {
   in_scratch.regions[0].sources.normal_map = dir / "mine.png";
   in_scratch.regions[0].sources.depth_map = dir / "private/n.png";
   const std::string said = fmt::format("{}", fmt::join(service_path_warnings(in_scratch), "\n"));
-  EXPECT_TRUE(contains(said, (dir / "private/scene.toml").string() + ": the folder " + (dir / "private").string() +
-                                 " (mode 700) does not let others through; pseudohapticd.service runs as a user of "
-                                 "its own (DynamicUser=yes)"))
-      << said;
   // (The scratch folder lies under /tmp, which the service does not see: that warning comes first where it does.)
   if (!hidden_from_the_service(dir.path())) {
+    EXPECT_TRUE(contains(said, (dir / "private/scene.toml").string() + ": the folder " + (dir / "private").string() +
+                                   " (mode 700) does not let others through; pseudohapticd.service runs as a user of "
+                                   "its own (DynamicUser=yes)"))
+        << said;
     EXPECT_TRUE(contains(said, (dir / "private/scene.toml").string() + ":6: region 'p': normal_map " +
                                    (dir / "mine.png").string() + ": its mode 600"))
         << said;
     EXPECT_TRUE(contains(said, ":7: region 'p': depth_map ")) << said;
     EXPECT_TRUE(contains(said, "DynamicUser=yes")) << said;
   } else {
+    EXPECT_TRUE(contains(said, (dir / "private/scene.toml").string() + " lies under ")) << said;
     EXPECT_TRUE(contains(said, ":6: region 'p': normal_map " + (dir / "mine.png").string() + " lies under")) << said;
   }
 }
@@ -741,6 +742,13 @@ TEST(SceneFileErrors, FilesTheServiceCannotReadAreWarnedOfAndNamedWhenMissing) {
       EXPECT_TRUE(contains(e.what(), "No such file or directory")) << e.what();
       EXPECT_EQ(contains(e.what(), "(/run/user is hidden from pseudohapticd.service"), under_systemd) << e.what();
     }
+  }
+  // The scene file itself, where a drop-in's -c would point the service: warned of as its images are.
+  for (const char* file : {"/tmp/scene.toml", "/home/ph-test-no-such-user/scene.toml"}) {
+    const std::vector<std::string> scene_hidden = service_path_warnings(parse_scene_text("", file));
+    ASSERT_EQ(scene_hidden.size(), 1u) << file;
+    EXPECT_EQ(scene_hidden[0].rfind(std::string(file) + " lies under /", 0), 0u) << scene_hidden[0];
+    EXPECT_TRUE(contains(scene_hidden[0], "which pseudohapticd.service cannot read")) << scene_hidden[0];
   }
   const std::vector<std::string> in_tmp = service_path_warnings(
       parse_scene_text("[[region]]\nname = \"tried\"\nwidth = 2\nheight = 2\nnormal_map = \"/tmp/targets/n.png\"\n",
@@ -1028,8 +1036,21 @@ TEST(SceneFileEngine, TraversalAndSamplingAreDaemonKeysAppliedByTheLoader) {
   EXPECT_TRUE(parse_scene_text("[daemon]\n", kOrigin).daemon.engine.is_default());
   expect_error("[daemon]\ntraversal = \"fast\"\n", 2, "daemon.traversal",
                {"unknown 'fast'", "exact, unit_steps, frame_midpoint, direction_lut"});
-  expect_error("[daemon]\nlut_directions = 12\n", 2, "daemon.lut_directions", {"8"});
-  expect_error("[daemon]\ntraversal = \"direction_lut\"\nsampling = \"bilinear\"\n", 1, "daemon", {"nearest"});
+  // Two counts, said as two: a range would suggest the counts between.
+  for (const char* count : {"12", "4", "32", "-8", "16.0", "\"16\""}) {
+    const std::string text = std::string("[daemon]\nlut_directions = ") + count + "\n";
+    expect_error(text, 2, "daemon.lut_directions", {"must be 8 or 16"});
+    EXPECT_FALSE(contains(parse_error(text), "between")) << parse_error(text);
+    expect_error(
+        "[[region]]\nname = \"r\"\nx = 0\ny = 0\nwidth = 4\nheight = 4\nnormal_map = \"n.png\"\n"
+        "traversal = \"direction_lut\"\n"
+        "lut_directions = " +
+            std::string(count) + "\n",
+        9, "region[0].lut_directions", {"must be 8 or 16"});
+  }
+  expect_error("[daemon]\nlut_directions = 4\n", 2, "daemon.lut_directions", {"(got 4)"});
+  // At the line that asked for bilinear sampling, not at the table's head.
+  expect_error("[daemon]\ntraversal = \"direction_lut\"\nsampling = \"bilinear\"\n", 3, "daemon.sampling", {"nearest"});
 }
 
 // The shipped example's commented lines, uncommented: its [daemon] table and the [region.METHOD] tables say

@@ -202,13 +202,13 @@ int run_check_config(const CheckConfigOptions& o) {
   const SceneSpec spec = parse_scene_file(o.file);
   SceneLoadReport report;
   const Scene scene = load_scene(spec, &report);
-  if (o.quiet) return 0;
-  // What the daemon logs as warnings at load, before the summary.
+  // What the daemon logs as warnings at load, before the summary; with --quiet too (a script that checks a file for
+  // the service must hear that the service cannot read an image).
   std::vector<std::string> warnings = load_warnings(spec, report, scene);
   for (std::string& w : desktop_warnings(spec)) warnings.push_back(std::move(w));
   for (std::string& w : service_path_warnings(spec)) warnings.push_back(std::move(w));
   for (const std::string& w : warnings) fmt::print(stderr, "pseudohaptic: warning: {}\n", w);
-  write_stdout(summary(spec, scene, report));
+  if (!o.quiet) write_stdout(summary(spec, scene, report));
   return 0;
 }
 
@@ -224,7 +224,7 @@ Run add_check_config_command(CLI::App& app) {
                                   "exist, what the daemon runs instead (its embedded default scene)")
                        ->check(non_empty_path())
                        ->capture_default_str();
-  app.add_flag("-q,--quiet", o->quiet, "Print nothing on success");
+  app.add_flag("-q,--quiet", o->quiet, "No summary: only the warnings (standard error), or the error");
   return [o] { return run_check_config(*o); };
 }
 

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -33,7 +34,7 @@ inline CLI::Validator finite_number() { return finite_check(false, ""); }
 inline CLI::Validator finite_from(double lo, double hi) {
   const auto g = [](double v) {
     std::ostringstream s;
-    s << v;
+    s << std::setprecision(15) << v;  // every digit of a bound like 1048576 (the default 6 would round it)
     return s.str();
   };
   return CLI::Validator(
