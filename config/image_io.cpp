@@ -170,23 +170,28 @@ bool starts_as_png(const fs::path& path) {
 // libpng here (config/image_png.hpp), without loading the module.
 bool read_here(const fs::path& path) { return lowercase_extension(path) == ".png" || starts_as_png(path); }
 
-// A folder named as an image is said as such, not as a format no reader knows or a file that is not a PNG.
-void check_not_a_folder(const fs::path& path) {
+// A folder named as an image is said as such, not as a format no reader knows or a file that is not a PNG; a FIFO, a
+// device or a socket too, before an open() or read() that would wait for ever for a writer that never comes (the
+// daemon's reader is given up after two minutes, a tool's is not; and no image reader reads a stream whole).
+void check_a_regular_file(const fs::path& path) {
   std::error_code ignored;
-  if (fs::is_directory(path, ignored)) throw image_file_error(path, "is a folder, not an image file");
+  const fs::file_status status = fs::status(path, ignored);  // (through links; missing: the open says so)
+  if (fs::is_directory(status)) throw image_file_error(path, "is a folder, not an image file");
+  if (fs::exists(status) && !fs::is_regular_file(status))
+    throw image_file_error(path, "is not a regular file (a FIFO, a device or a socket), not an image file");
 }
 
 }  // namespace
 
 ImageSize read_image_size(const fs::path& path, const ImageLimits& limits) {
-  check_not_a_folder(path);
+  check_a_regular_file(path);
   if (read_here(path)) return read_png_size(path, limits);
   check_before_decoding(path, limits);
   return backend(path).read_image_size(path, limits);
 }
 
 RawImage read_image(const fs::path& path, const ImageLimits& limits) {
-  check_not_a_folder(path);
+  check_a_regular_file(path);
   if (read_here(path)) return read_png(path, limits);
   return read_image_with_openimageio(path, limits);
 }

@@ -110,6 +110,9 @@ class PngFile {
     if (setjmp(png_jmpbuf(png_)) != 0) return false;
     png_set_read_fn(png_, file_, read_from_file);
     png_set_sig_bytes(png_, 8);
+    // libpng's own limit (1,000,000 px a side) would refuse a larger header as "Invalid IHDR data" before the limits
+    // of image_size_refusal (config/image_header_check.hpp) say plainly what is too large: PNG's own bound here.
+    png_set_user_limits(png_, PNG_UINT_31_MAX, PNG_UINT_31_MAX);
     png_read_info(png_, info_);
     png_set_expand(png_);              // 1, 2 and 4-bit grey to 8 bits, a palette to RGB, a transparent colour to alpha
     png_set_interlace_handling(png_);  // an interlaced file's 7 passes; 16-bit samples stay big-endian, as stored

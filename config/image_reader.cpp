@@ -34,8 +34,9 @@ image_wire::Answer serve_image_request(const image_wire::Request& request, const
 
 std::string reader_out_of_memory() {
   return fmt::format(
-      "not enough memory to read it: the image reader may use {} GiB, which the region's fields and their copy for "
-      "the daemon (8 bytes a texel for the slopes, 4 for the heights) exceed; make the region smaller",
+      "not enough memory to read it: the image reader may use {} GiB, which reading the map for the region exceeds "
+      "(at the peak the map's decoded texels, their copy resampled to the region's size and the region's fields with "
+      "their copy for the daemon lie in memory together); make the region smaller",
       kReaderAddressSpaceBytes >> 30);
 }
 

@@ -7,6 +7,7 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <libdeflate.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <array>
@@ -16,6 +17,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <memory>
@@ -178,6 +180,20 @@ TEST(ImageIo, APngIsReadWhateverItsNameAndAFolderIsNamedAsOne) {
     expect_error_names(
         folder, [&] { read_image_size(folder); }, "is a folder, not an image file");
   }
+  // A FIFO no one writes: refused at once, named (an open() would wait for a writer for ever), under any name.
+  for (const char* name : {"fifo.png", "fifo.tif", "fifo"}) {
+    const fs::path fifo = dir / name;
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0) << fifo;
+    const auto start = std::chrono::steady_clock::now();
+    expect_error_names(
+        fifo, [&] { read_image(fifo); }, "is not a regular file (a FIFO, a device or a socket)");
+    expect_error_names(
+        fifo, [&] { read_image_size(fifo); }, "is not a regular file");
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+  }
+  // A link to an image is an image.
+  fs::create_symlink(dir / "dome.png", dir / "link.png");
+  EXPECT_EQ(read_image(dir / "link.png").pixels, named.pixels);
 }
 
 TEST(ImageIo, RgbaPngKeepsColourWhereAlphaIsLow) {
@@ -523,6 +539,15 @@ TEST(ImageIoErrors, HeaderClaimingAHugeImageIsRefusedBeforeReading) {
   write_file_bytes(path, bytes);
   expect_error_names(
       path, [&] { read_image(path); }, "image is 100000 x 100000 px, more than the limit of");
+  // Past libpng's own default limit (1,000,000 px a side), which said "Invalid IHDR data": the same plain words.
+  put_big_endian(bytes, 16, 2000000);
+  put_big_endian(bytes, 20, 1);
+  put_big_endian(bytes, 29, libdeflate_crc32(0, bytes.data() + 12, 17));
+  write_file_bytes(path, bytes);
+  for (const auto& read :
+       std::initializer_list<std::function<void()>>{[&] { read_image(path); }, [&] { read_image_size(path); }}) {
+    expect_error_names(path, read, "image is 2000000 x 1 px, more than the limit of 32768 px per side");
+  }
 }
 
 TEST(ImageIoErrors, LimitsApplyToRealImages) {
