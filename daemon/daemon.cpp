@@ -400,9 +400,11 @@ bool Daemon::on_released_elsewhere(int fd) {
 }
 
 void Daemon::let_go(const std::string& node, std::string_view why) {
-  // Frames of this mouse held for the session helper's answer go out first, in order with the other mice's.
-  if (holding_ && std::any_of(held_events_.begin(), held_events_.end(), [&](const auto& e) { return e.first == node; }))
-    release_held();
+  // Frames held for the session helper's answer go out first, in order, before what this mouse's grab kept (which came
+  // after them).
+  if (holding_) {
+    if (const auto m = mice_.find(node); m != mice_.end() && m->second->reader) release_held();
+  }
   if (const auto u = untaken_.find(node); u != untaken_.end()) {
     ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, u->second->fd(), nullptr);
     retired_.keep(std::move(u->second));  // not grabbed: closed off the lock
@@ -429,7 +431,8 @@ void Daemon::let_go(const std::string& node, std::string_view why) {
 // mouse held) stays kReleaseGrace for its readers to read it. Here, under the state lock, either wait would stall every
 // other mouse's reader (at 8 kHz a mouse's kernel buffer overflows in 50 ms).
 void Daemon::retire_virtual_devices(Mouse& mouse) {
-  if (mouse.reader) emit_what_the_grab_kept(mouse, mouse.reader->stop());
+  // (What it emits now was stamped earlier, maybe more than kReleaseGrace earlier: the grace is given for it too.)
+  const bool emitted_late = mouse.reader && emit_what_the_grab_kept(mouse, mouse.reader->stop());
   mouse.reader.reset();
   mouse.frames.reset();
   const SteadyTime now = std::chrono::steady_clock::now();
@@ -438,7 +441,7 @@ void Daemon::retire_virtual_devices(Mouse& mouse) {
           .count();
   for (std::unique_ptr<UinputSink>* sink : {&mouse.sink, &mouse.passthrough_sink}) {
     if (!*sink) continue;
-    const bool released = (*sink)->release_held() || (*sink)->wrote_a_key_since(grace_began);
+    const bool released = (*sink)->release_held() || (*sink)->wrote_a_key_since(grace_began) || emitted_late;
     retired_.keep(std::move(*sink), released ? now + UinputSink::kReleaseGrace : now);
   }
   // An unplugged mouse's node too: closing it lets go of the grab, which waits for the kernel. (One still there is
@@ -447,8 +450,9 @@ void Daemon::retire_virtual_devices(Mouse& mouse) {
 }
 
 void Daemon::let_go_of_all(std::string_view why) {
-  while (!mice_.empty()) let_go(mice_.begin()->first, why);
-  while (!untaken_.empty()) let_go(untaken_.begin()->first, why);
+  // (Copies: let_go erases the entry whose key it was given, and may look the node up after that.)
+  while (!mice_.empty()) let_go(std::string(mice_.begin()->first), why);
+  while (!untaken_.empty()) let_go(std::string(untaken_.begin()->first), why);
   unopened_.clear();
   passed_over_.clear();
 }
@@ -648,18 +652,19 @@ void Daemon::release_held() {
       route(*it->second, event);
     } catch (const UinputError& e) {
       log_.error("{}", e.what());
+      it->second->ending = "virtual device failed";  // (nothing more is written to it as it is let go of)
       let_go(node, "virtual device failed");
     }
   }
   remember_emitted(std::chrono::steady_clock::now());
 }
 
-// A taken mouse let go of (the daemon stopping, the mice taken again after a reload, a device that went away): what its
-// grab kept from the desktop and is not emitted yet (the batch its reader held, what the kernel still queues for the
-// grab) goes out through its virtual device before that releases the buttons it holds, so that a click made at that
-// moment reaches the desktop.
-void Daemon::emit_what_the_grab_kept(Mouse& mouse, std::vector<InputEvent> events) {
-  if (!mouse.ending.empty() || !mouse.frames || !mouse.device) return;  // its reader saw it go, or its device failed
+// A taken mouse let go of while still there (the daemon stopping, the mice taken again after a reload): what its grab
+// kept from the desktop and is not emitted yet (the batch its reader held, what the kernel still queues for the grab)
+// goes out through its virtual device before that releases the buttons it holds, so that a click made at that moment
+// reaches the desktop. Whether anything went out.
+bool Daemon::emit_what_the_grab_kept(Mouse& mouse, std::vector<InputEvent> events) {
+  if (!mouse.ending.empty() || !mouse.frames || !mouse.device) return false;  // it went away, or its device failed
   std::vector<InputEvent> queued;
   try {
     mouse.device->read_batch(queued, Wait::no);  // (gone: what was read, if anything)
@@ -667,16 +672,17 @@ void Daemon::emit_what_the_grab_kept(Mouse& mouse, std::vector<InputEvent> event
     log_.debug("{}", e.what());
   }
   events.insert(events.end(), queued.begin(), queued.end());
-  if (events.empty()) return;
+  if (events.empty()) return false;
   try {
     for (const InputEvent& e : events) route(mouse, e);
   } catch (const UinputError& e) {
     log_.error("{}", e.what());
-    return;
+    return true;  // (some may have gone out)
   }
   remember_emitted(std::chrono::steady_clock::now());
   log_.debug("{} {}: {} events its grab kept emitted as it is let go of", mouse.device->node(),
              quoted_name(*mouse.device), events.size());
+  return true;
 }
 
 void Daemon::watch_untaken(const std::string& node, std::unique_ptr<EvdevDevice> device) {

@@ -123,7 +123,7 @@ class Daemon final : private ControlHandler {
   void let_go(const std::string& node, std::string_view why);
   void let_go_of_all(std::string_view why);
   void retire_virtual_devices(Mouse& mouse);
-  void emit_what_the_grab_kept(Mouse& mouse, std::vector<InputEvent> events);
+  bool emit_what_the_grab_kept(Mouse& mouse, std::vector<InputEvent> events);
   void on_mouse_batch(const std::string& node, Mouse& mouse, const std::vector<InputEvent>& events, ReadStatus status,
                       const std::string& error);
   void ask_let_go(Mouse& mouse, std::string why);

@@ -30,7 +30,7 @@ class MouseReader {
   using Read = std::function<ReadStatus(std::vector<InputEvent>& events, Wait wait)>;
   // Called with the state lock held, for each batch read, and once at the end: ReadStatus::gone when the
   // mouse went away, and then `error` names a read that failed ("" when it was unplugged). Not called once
-  // the reader is being destroyed.
+  // stop() has been called (the batch in hand is stop()'s).
   using OnBatch =
       std::function<void(const std::vector<InputEvent>& events, ReadStatus status, const std::string& error)>;
 
