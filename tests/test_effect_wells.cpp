@@ -398,13 +398,14 @@ TEST(Wells, ValidateNamesTheParameterAndItsRange) {
     change(p);
     return validate(p);
   };
-  EXPECT_EQ(message([](WellsParams& p) { p.radius_px = 0.5; }), "wells radius_px must be in [1, 1024]");
+  EXPECT_EQ(message([](WellsParams& p) { p.radius_px = 0.5; }), "wells radius_px must be in [1, 1024] (got 0.5)");
   EXPECT_EQ(message([](WellsParams& p) { p.strength = std::numeric_limits<double>::quiet_NaN(); }),
-            "wells strength must be in [0, 10]");
-  EXPECT_EQ(message([](WellsParams& p) { p.max_gain = 0.9; }), "wells max_gain must be in [1, 4]");
-  EXPECT_EQ(message([](WellsParams& p) { p.min_gain = 0.05; }), "wells min_gain must be in [0.1, 1]");
-  EXPECT_EQ(message([](WellsParams& p) { p.snap_px = 17.0; }), "wells snap_px must be in [0, 16]");
-  EXPECT_EQ(message([](WellsParams& p) { p.snap_fraction = 0.3; }), "wells snap_fraction must be in [0, 0.25]");
+            "wells strength must be in [0, 10] (got nan)");
+  EXPECT_EQ(message([](WellsParams& p) { p.max_gain = 0.9; }), "wells max_gain must be in [1, 4] (got 0.9)");
+  EXPECT_EQ(message([](WellsParams& p) { p.min_gain = 0.05; }), "wells min_gain must be in [0.1, 1] (got 0.05)");
+  EXPECT_EQ(message([](WellsParams& p) { p.snap_px = 17.0; }), "wells snap_px must be in [0, 16] (got 17)");
+  EXPECT_EQ(message([](WellsParams& p) { p.snap_fraction = 0.3; }),
+            "wells snap_fraction must be in [0, 0.25] (got 0.3)");
   EXPECT_NE(message([](WellsParams& p) { p.isophotes.cos_alpha = 1.5; }).find("cos_alpha"), std::string::npos);
   EXPECT_NE(message([](WellsParams& p) { p.isophotes.light = {0, 0, 0}; }).find("light"), std::string::npos);
   EXPECT_EQ(message([](WellsParams& p) { p.isophotes.light = {1e300, 1e300, 1e300}; }), "");  // finite, non-zero

@@ -14,11 +14,12 @@ namespace ph {
 
 namespace {
 
-// "" when lo <= v <= hi (NaN fails), else "wells <name> must be in [lo, hi]".
+// "" when lo <= v <= hi (NaN fails), else "wells <name> must be in [lo, hi] (got v)": the value too, since a bound
+// may follow from another key (snap_px's from radius_px, snap_fraction's from min_gain).
 std::string check_range(const char* name, double v, double lo, double hi) {
   if (v >= lo && v <= hi) return {};
   std::ostringstream s;
-  s << "wells " << name << " must be in [" << lo << ", " << hi << "]";
+  s << "wells " << name << " must be in [" << lo << ", " << hi << "] (got " << v << ")";
   return s.str();
 }
 
