@@ -35,7 +35,8 @@ try:
     import numpy as np
     from matplotlib.lines import Line2D
 except ImportError as e:  # pragma: no cover - depends on the machine
-    sys.exit(f"charts.py: {e}; install Debian's python3-matplotlib (scripts/install-deps) and run it with "
+    # (Named as the script run: stability_charts.py imports this one.)
+    sys.exit(f"{os.path.basename(sys.argv[0]) or 'charts.py'}: {e}; install Debian's python3-matplotlib (scripts/install-deps) and run it with "
              f"/usr/bin/python3 if another python3 comes first on PATH")
 
 DPI = 110
