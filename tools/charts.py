@@ -36,8 +36,8 @@ try:
     from matplotlib.lines import Line2D
 except ImportError as e:  # pragma: no cover - depends on the machine
     # (Named as the script run: stability_charts.py imports this one.)
-    sys.exit(f"{os.path.basename(sys.argv[0]) or 'charts.py'}: {e}; install Debian's python3-matplotlib (scripts/install-deps) and run it with "
-             f"/usr/bin/python3 if another python3 comes first on PATH")
+    sys.exit(f"{os.path.basename(sys.argv[0]) or 'charts.py'}: {e}; install Debian's python3-matplotlib "
+             f"(scripts/install-deps) and run it with /usr/bin/python3 if another python3 comes first on PATH")
 
 DPI = 110
 SAVE_META = {"Software": None}  # no version or date in the PNG: same input, same bytes
