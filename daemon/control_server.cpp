@@ -7,12 +7,14 @@
 #include <sys/stat.h>
 #include <sys/un.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
+#include <string_view>
 
 namespace ph {
 
@@ -178,16 +180,21 @@ void ControlServer::read_client(int fd, ControlHandler& handler) {
     drop(fd, handler);
     return;
   }
-  if (!client.lines.append({buffer.data(), static_cast<std::size_t>(n)})) {
-    log_.warning("control socket: a line over {} bytes; closing that connection", control::kMaxLine);
-    send_line(fd, control::format_error("line too long"));
-    drop(fd, handler);
-    return;
+  // Line by line, so that the requests read whole before a line too long are still answered (and applied) before the
+  // connection is closed on it.
+  std::vector<std::variant<control::Request, std::string>> requests;
+  bool too_long = false;
+  for (std::string_view data(buffer.data(), static_cast<std::size_t>(n)); !data.empty();) {
+    const std::size_t end = std::min(data.find('\n'), data.size() - 1) + 1;  // through the newline, or the rest
+    if (!client.lines.append(data.substr(0, end))) {
+      too_long = true;
+      break;
+    }
+    data.remove_prefix(end);
+    while (auto line = client.lines.next_line()) requests.push_back(control::parse_request(*line));
   }
   // Of a run of layouts read at once only the last is applied: each may lay out the scene again on the event loop
   // (the embedded default scene is laid out for the desktop), and a burst would hold up the mice. Each is answered.
-  std::vector<std::variant<control::Request, std::string>> requests;
-  while (auto line = client.lines.next_line()) requests.push_back(control::parse_request(*line));
   const auto is_layout = [](const std::variant<control::Request, std::string>& parsed) {
     const auto* request = std::get_if<control::Request>(&parsed);
     return request != nullptr && std::holds_alternative<control::LayoutRequest>(*request);
@@ -198,6 +205,11 @@ void ControlServer::read_client(int fd, ControlHandler& handler) {
       drop(fd, handler);
       return;
     }
+  }
+  if (too_long) {
+    log_.warning("control socket: a line over {} bytes; closing that connection", control::kMaxLine);
+    send_line(fd, control::format_error("line too long"));
+    drop(fd, handler);
   }
 }
 
@@ -229,8 +241,9 @@ std::string ControlServer::answer(int fd, const std::variant<control::Request, s
   }
   const auto& h = std::get<control::HelperRequest>(request);
   const bool had = has_helper();
+  const bool again = had && helpers_.latest() == fd;  // (said once: a loop of `helper` lines would fill the journal)
   helpers_.sent(fd);  // the newest helper wins: a restarted session replaces the old one
-  log_.info("control socket: session helper '{}' connected (uid {})", h.backend, clients_.at(fd)->uid);
+  if (!again) log_.info("control socket: session helper '{}' connected (uid {})", h.backend, clients_.at(fd)->uid);
   if (!had) handler.helper_changed(true);
   return control::format_ok();
 }

@@ -2,6 +2,7 @@
 // queries, a refused peer gets a clear error, and a client that misbehaves is dropped.
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <grp.h>
 #include <gtest/gtest.h>
 #include <poll.h>
@@ -451,6 +452,51 @@ TEST(ControlServer, DropsAClientWhoseLineNeverEnds) {
   EXPECT_THROW(flood.read_line(2s), control::ControlError);  // and the daemon hung up
   control::Client next(path);                                // others are still served
   EXPECT_TRUE(next.request("cursor").ok);
+}
+
+// The requests read whole before a line too long are answered and applied before the connection is closed on it.
+TEST(ControlServer, RequestsBeforeALineTooLongAreStillAnswered) {
+  const ScratchDir dir("control-long-line");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  ServerLoop server(path, sessions);
+  control::Client client(path);
+  const std::string text = "position 3 4\ncursor\n" + std::string(control::kMaxLine + 100, 'x') + "\nposition 1 2\n";
+  ASSERT_EQ(::send(client.fd(), text.data(), text.size(), MSG_NOSIGNAL), static_cast<ssize_t>(text.size()));
+  std::vector<std::string> replies;
+  try {
+    while (auto line = client.read_line(2s)) replies.push_back(*line);
+  } catch (const control::ControlError&) {  // the daemon hung up
+  }
+  ASSERT_EQ(replies.size(), 3U) << fmt::format("{}", fmt::join(replies, " | "));
+  EXPECT_EQ(replies[0], "ok");
+  EXPECT_TRUE(replies[1].starts_with("ok ")) << replies[1];  // the cursor
+  EXPECT_EQ(replies[2], "error line too long");
+  EXPECT_EQ(server.handler.at(), (Vec2{3, 4}));  // the one before the long line applied, the one after it not
+}
+
+// A connection that says `helper` again and again is one helper, logged once: a loop of them must not fill the journal.
+TEST(ControlServer, AHelperSaidAgainIsLoggedOnce) {
+  const ScratchDir dir("control-helper-again");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  const std::string log_path = (dir.path() / "log").string();
+  std::FILE* log = std::fopen(log_path.c_str(), "w");
+  ASSERT_NE(log, nullptr);
+  {
+    ServerLoop server(path, sessions, log);
+    control::Client helper(path);
+    for (int i = 0; i < 20; ++i) ASSERT_TRUE(helper.request("helper x11").ok);
+    control::Client other(path);  // another connection saying it: a new helper, said
+    ASSERT_TRUE(other.request("helper wayland").ok);
+  }
+  std::fclose(log);
+  const std::string said = read_file_text(log_path);
+  std::size_t count = 0;
+  for (std::size_t at = said.find("session helper '"); at != std::string::npos;
+       at = said.find("session helper '", at + 1))
+    ++count;
+  EXPECT_EQ(count, 2U) << said;
 }
 
 // A burst of layouts (a helper's, or anyone's the access rule lets in) would lay the scene out again for each on the
