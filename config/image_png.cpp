@@ -75,7 +75,11 @@ class PngFile {
   // The header, refused by the limits as the image module refuses it.
   PngHeader header(const ImageLimits& limits) {
     PngHeader header;
-    if (!read_header(header)) throw image_file_error(path_, std::string("cannot open: ") + message_.text);
+    if (!read_info(header)) throw image_file_error(path_, std::string("cannot open: ") + message_.text);
+    // The size before libpng's next step, which allocates a row for the width whatever it is.
+    if (const std::string refusal = image_size_refusal(header.width, header.height, 1, limits); !refusal.empty())
+      throw image_file_error(path_, refusal);
+    if (!read_layout(header)) throw image_file_error(path_, std::string("cannot open: ") + message_.text);
     const std::string refusal = image_size_refusal(header.width, header.height, header.channels, limits);
     if (!refusal.empty()) throw image_file_error(path_, refusal);
     return header;
@@ -106,19 +110,26 @@ class PngFile {
 
  private:
   // libpng's calls, each in a function whose frame holds nothing a longjmp back to it would have to destroy.
-  bool read_header(PngHeader& header) {
+  // The chunks before the pixels; the size from the header alone (nothing allocated for it yet).
+  bool read_info(PngHeader& header) {
     if (setjmp(png_jmpbuf(png_)) != 0) return false;
     png_set_read_fn(png_, file_, read_from_file);
     png_set_sig_bytes(png_, 8);
     // libpng's own limit (1,000,000 px a side) would refuse a larger header as "Invalid IHDR data" before the limits
-    // of image_size_refusal (config/image_header_check.hpp) say plainly what is too large: PNG's own bound here.
+    // of image_size_refusal (config/image_header_check.hpp) say plainly what is too large: PNG's own bound here, ours
+    // checked (header()) before read_layout allocates anything for that size.
     png_set_user_limits(png_, PNG_UINT_31_MAX, PNG_UINT_31_MAX);
     png_read_info(png_, info_);
+    header.width = png_get_image_width(png_, info_);
+    header.height = png_get_image_height(png_, info_);
+    return true;
+  }
+  // The pixels' layout as they will be read (libpng allocates its row buffers here).
+  bool read_layout(PngHeader& header) {
+    if (setjmp(png_jmpbuf(png_)) != 0) return false;
     png_set_expand(png_);              // 1, 2 and 4-bit grey to 8 bits, a palette to RGB, a transparent colour to alpha
     png_set_interlace_handling(png_);  // an interlaced file's 7 passes; 16-bit samples stay big-endian, as stored
     png_read_update_info(png_, info_);
-    header.width = png_get_image_width(png_, info_);
-    header.height = png_get_image_height(png_, info_);
     header.channels = png_get_channels(png_, info_);
     header.bit_depth = png_get_bit_depth(png_, info_);
     header.row_bytes = png_get_rowbytes(png_, info_);
