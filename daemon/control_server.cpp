@@ -241,8 +241,8 @@ std::string ControlServer::answer(int fd, const std::variant<control::Request, s
   }
   const auto& h = std::get<control::HelperRequest>(request);
   const bool had = has_helper();
-  const bool again = had && helpers_.latest() == fd;  // (said once: a loop of `helper` lines would fill the journal)
-  helpers_.sent(fd);  // the newest helper wins: a restarted session replaces the old one
+  const bool again = helpers_.latest() == fd;  // (said once: a loop of `helper` lines would fill the journal)
+  helpers_.sent(fd);                           // the newest helper wins: a restarted session replaces the old one
   if (!again) log_.info("control socket: session helper '{}' connected (uid {})", h.backend, clients_.at(fd)->uid);
   if (!had) handler.helper_changed(true);
   return control::format_ok();
