@@ -2,13 +2,15 @@
 
 #include <fmt/format.h>
 
+#include <sys/resource.h>
+
+#include <cstdint>
 #include <exception>
 #include <new>
 #include <string>
 #include <variant>
 
 #include "config/field_loader.hpp"
-#include "config/reader_sandbox.hpp"
 
 namespace ph {
 
@@ -33,11 +35,19 @@ image_wire::Answer serve_image_request(const image_wire::Request& request, const
 }
 
 std::string reader_out_of_memory() {
+  // The limit the reader runs under: its own (config/reader_sandbox.hpp), or a tighter one it was started under.
+  rlimit limit{};
+  std::string allowed = "the memory the reader could have";
+  if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) {
+    const std::uint64_t bytes = limit.rlim_cur;
+    allowed = bytes % (std::uint64_t{1} << 30) == 0 ? fmt::format("the {} GiB the image reader may use", bytes >> 30)
+                                                    : fmt::format("the {} MiB the image reader may use", bytes >> 20);
+  }
   return fmt::format(
-      "not enough memory to read it: the image reader may use {} GiB, which reading the map for the region exceeds "
-      "(at the peak the map's decoded texels, their copy resampled to the region's size and the region's fields with "
-      "their copy for the daemon lie in memory together); make the region smaller",
-      kReaderAddressSpaceBytes >> 30);
+      "not enough memory to read it: reading the map for the region exceeds {} (at the peak the map's decoded "
+      "texels, their copy resampled to the region's size and the region's fields with their copy for the daemon lie "
+      "in memory together); make the region smaller",
+      allowed);
 }
 
 std::vector<std::byte> encode_answer(const image_wire::Answer& answer) {

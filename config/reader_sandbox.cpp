@@ -33,6 +33,9 @@ class FilterBuilder {
   void load_arg_low(int i) {
     code_.push_back(BPF_STMT(BPF_LD | BPF_W | BPF_ABS, static_cast<__u32>(offsetof(seccomp_data, args) + 8 * i)));
   }
+  void load_arg_high(int i) {
+    code_.push_back(BPF_STMT(BPF_LD | BPF_W | BPF_ABS, static_cast<__u32>(offsetof(seccomp_data, args) + 8 * i + 4)));
+  }
   // if (A == value) return `ret`; A is unchanged otherwise.
   void return_if_equal(__u32 value, __u32 ret) {
     code_.push_back(BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, value, 0, 1));
@@ -151,7 +154,6 @@ std::vector<sock_filter> reader_filter(pid_t self) {
       SYS_setresuid,
       SYS_setresgid,
       SYS_setgroups,
-      SYS_prlimit64,
       SYS_setrlimit,
   };
   for (__u32 call : denied) f.return_if_equal(call, errno_ret(EPERM));
@@ -160,6 +162,14 @@ std::vector<sock_filter> reader_filter(pid_t self) {
   f.on_call(SYS_clone, [](FilterBuilder& b) {
     b.load_arg_low(0);
     b.return_unless_any_bit(CLONE_THREAD, errno_ret(EPERM));
+  });
+  // prlimit64 (what getrlimit is made of): reading a limit only, its new limit NULL, so that an out-of-memory
+  // answer can say the limit the reader ran under.
+  f.on_call(SYS_prlimit64, [](FilterBuilder& b) {
+    b.load_arg_low(2);
+    b.return_unless_equal(0, errno_ret(EPERM));
+    b.load_arg_high(2);
+    b.return_unless_equal(0, errno_ret(EPERM));
   });
   // open and openat: reading only.
   constexpr __u32 writing = O_WRONLY | O_RDWR | O_CREAT | O_TRUNC | O_APPEND;
@@ -216,7 +226,12 @@ std::vector<std::string> enter_reader_sandbox() {
 #endif
   };
   for (const auto& [resource, value] : limits) {
-    const rlimit limit{value, value};
+    // Never raised: a tighter limit the reader was started under (ulimit, the unit's LimitAS=) stays, and an
+    // unprivileged process could not raise it anyway.
+    rlimit limit{value, value};
+    rlimit now{};
+    if (::getrlimit(resource, &now) == 0 && now.rlim_max != RLIM_INFINITY && now.rlim_max < value)
+      limit = {now.rlim_max, now.rlim_max};
     if (::setrlimit(resource, &limit) < 0) missed.push_back(failed("setrlimit"));
   }
 #if defined(__x86_64__)

@@ -411,9 +411,16 @@ TEST(ReaderSandbox, ForbidsWritingSocketsAndNewProcessesButNotThreadsOrReading) 
     bool ran = false;
     std::thread([&] { ran = true; }).join();
     if (!ran) failures |= 16;
+    // A limit can be read (to say it), not changed, not even lowered.
+    rlimit limit{};
+    if (::getrlimit(RLIMIT_NOFILE, &limit) != 0) failures |= 32;
+    const rlimit lower{limit.rlim_cur / 2, limit.rlim_max / 2};
+    if (::setrlimit(RLIMIT_NOFILE, &lower) == 0 || errno != EPERM) failures |= 64;
+    if (::prlimit(0, RLIMIT_NOFILE, &lower, nullptr) == 0 || errno != EPERM) failures |= 64;
     return failures;
   });
-  EXPECT_EQ(status, 0) << "bits: 1 wrote a file, 2 made a socket, 4 forked, 8 could not read, 16 no thread";
+  EXPECT_EQ(status, 0) << "bits: 1 wrote a file, 2 made a socket, 4 forked, 8 could not read, 16 no thread, "
+                          "32 could not read a limit, 64 changed one";
   EXPECT_FALSE(std::filesystem::exists(target));
 }
 

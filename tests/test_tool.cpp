@@ -586,9 +586,30 @@ TEST(Tool, ARegionTooLargeForTheMemoryIsNamed) {
   const std::string limited =
       "ulimit -v 1000000 && exec " + quote(std::string(PH_TOOL_PATH)) + " check-config " + quote(dir / "huge.toml");
   const ToolResult r = run_program("/bin/sh", "-c " + quote(limited), dir);
-  expect_clean_failure(r, {(dir / "huge.toml").string() + ":1: region 'huge': not enough memory for its fields "
-                                                          "(16384x16384 px, about 2048 MiB a field"});
+  // Said by the image reader, which check-config reads through as the daemon does, under the tighter limit it was
+  // started under (its own 8 GiB would not be raised past it, nor complained about).
+  expect_clean_failure(r, {(dir / "huge.toml").string() + ":1: region 'huge': not enough memory to read it",
+                           "exceeds the 976 MiB the image reader may use", "make the region smaller"});
   EXPECT_FALSE(contains(r.err, "bad_alloc")) << r.err;
+  EXPECT_FALSE(contains(r.err, "setrlimit")) << r.err;
+}
+
+// check-config reads the images through the daemon's image reader, not in its own process: a reader that crashes
+// fails the check as it fails the service's load, naming the file.
+TEST(Tool, CheckConfigReadsTheImagesAsTheDaemonDoes) {
+  ScratchDir dir;
+  write_normal_png16(dir / "n.png", NormalImage(8, 8));
+  std::ofstream(dir / "scene.toml") << "[[region]]\nname = \"r\"\nwidth = 8\nheight = 8\nnormal_map = \"n.png\"\n";
+  std::ofstream(dir / "reader") << "#!/bin/sh\nkill -SEGV $$\n";
+  fs::permissions(dir / "reader", fs::perms::owner_all);
+  const ToolResult r = run_program("/usr/bin/env",
+                                   "PH_IMAGE_READER=" + quote(dir / "reader") + " " + quote(std::string(PH_TOOL_PATH)) +
+                                       " check-config " + quote(dir / "scene.toml"),
+                                   dir);
+  expect_clean_failure(r, {(dir / "n.png").string(), "the image reader (a child process)", "SIGSEGV"});
+  // With the real reader, the same file passes.
+  const ToolResult fine = run_tool("check-config " + quote(dir / "scene.toml"), dir);
+  EXPECT_EQ(fine.rc, 0) << fine.err;
 }
 
 // An option that would change nothing in the trace asked for is refused, naming it and what would use it.

@@ -17,6 +17,7 @@
 #include "config/daemon_config.hpp"
 #include "config/desktop_geometry.hpp"
 #include "config/field_loader.hpp"
+#include "config/image_child.hpp"
 #include "config/scene_file.hpp"
 #include "core/engine/decode.hpp"
 #include "core/engine/default_scene.hpp"
@@ -201,7 +202,10 @@ int run_check_config(const CheckConfigOptions& o) {
   }
   const SceneSpec spec = parse_scene_file(o.file);
   SceneLoadReport report;
-  const Scene scene = load_scene(spec, &report);
+  // The images are read as the daemon reads them, in its image reader (config/image_child.hpp), under the same
+  // limits: a region the reader has no memory or time for fails here as it would fail in the service.
+  ImageChild images;
+  const Scene scene = load_scene(spec, &report, &images);
   // What the daemon logs as warnings at load, before the summary; with --quiet too (a script that checks a file for
   // the service must hear that the service cannot read an image).
   std::vector<std::string> warnings = load_warnings(spec, report, scene);
