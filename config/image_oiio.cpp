@@ -57,6 +57,21 @@ void check_spec(const std::filesystem::path& path, const OIIO::ImageSpec& spec, 
   if (!refusal.empty()) throw image_file_error(path, refusal);
 }
 
+// Why OpenImageIO could not open the file. A header claiming more than OpenImageIO's own limits ("limits:imagesize_MB",
+// "limits:channels"; its TIFF reader checks them as it opens) comes with advice to raise them, which a scene author
+// cannot follow: said in the words of our limits, which such an image exceeds anyway.
+FieldError open_error(const std::filesystem::path& path, const ImageLimits& limits) {
+  const std::string message = one_line(OIIO::geterror());
+  if (message.find("\"limits:imagesize_MB\"") != std::string::npos ||
+      message.find("\"limits:channels\"") != std::string::npos) {
+    return image_file_error(path, "its header claims an image larger than the limits of " +
+                                      std::to_string(limits.max_side) + " px per side, " +
+                                      std::to_string(limits.max_pixels) + " pixels and " +
+                                      std::to_string(limits.max_channels) + " channels; refused before reading it");
+  }
+  return image_file_error(path, "cannot open: " + message);
+}
+
 // Writes pixels of the given type in the given format, whatever the file name says.
 void write_pixels(const std::filesystem::path& path, const char* format, std::int32_t width, std::int32_t height,
                   int channels, OIIO::TypeDesc type, const void* pixels) {
@@ -92,7 +107,7 @@ void write_image(const std::filesystem::path& path, const char* format, std::int
 ImageSize read_size(const std::filesystem::path& path, const ImageLimits& limits) {
   const OIIO::ImageSpec config = as_stored_config();
   auto in = OIIO::ImageInput::open(path.string(), &config);
-  if (!in) throw image_file_error(path, "cannot open: " + one_line(OIIO::geterror()));
+  if (!in) throw open_error(path, limits);
   check_spec(path, in->spec(), limits);
   const OIIO::TypeDesc format = in->spec().format;
   const std::uint32_t code_max = format == OIIO::TypeDesc::UINT8 ? 255 : format == OIIO::TypeDesc::UINT16 ? 65535 : 0;
@@ -161,7 +176,7 @@ bool read_as_float(OIIO::ImageInput& in, std::size_t values, float* pixels) {
 RawImage read_pixels(const std::filesystem::path& path, const ImageLimits& limits) {
   const OIIO::ImageSpec config = as_stored_config();
   auto in = OIIO::ImageInput::open(path.string(), &config);
-  if (!in) throw image_file_error(path, "cannot open: " + one_line(OIIO::geterror()));
+  if (!in) throw open_error(path, limits);
   const OIIO::ImageSpec& spec = in->spec();
   check_spec(path, spec, limits);
 

@@ -550,6 +550,35 @@ TEST(ImageIoErrors, HeaderClaimingAHugeImageIsRefusedBeforeReading) {
   }
 }
 
+// A TIFF's header claiming a huge image: OpenImageIO's TIFF reader refuses it as it opens, with advice to raise its own
+// limits; the refusal is said in our limits' words instead, by name.
+TEST(ImageIoErrors, TiffHeaderClaimingAHugeImageIsRefusedInOurWords) {
+  const ScratchDir dir;
+  const fs::path path = dir / "huge.tif";
+  const auto huge = [](int, int, int) -> std::uint16_t { return 0; };
+  std::vector<std::uint8_t> bytes =
+      white_is_zero_tiff({.width = 1, .height = 1, .rows_per_strip = 1, .channels = 1, .bits = 16, .code = huge});
+  // ImageWidth, ImageLength (the first two entries) and RowsPerStrip (the eighth: one strip still) as LONGs of 2^20:
+  // 2 TB of 16-bit values.
+  for (const std::size_t at : {std::size_t{10}, std::size_t{22}, std::size_t{10 + 12 * 7}}) {
+    bytes[at + 2] = 4;  // LONG
+    bytes[at + 8] = 0;
+    bytes[at + 9] = 0;
+    bytes[at + 10] = 0x10;
+    bytes[at + 11] = 0;
+  }
+  write_file_bytes(path, bytes);
+  for (const auto& read :
+       std::initializer_list<std::function<void()>>{[&] { read_image(path); }, [&] { read_image_size(path); }}) {
+    expect_error_names(path, read, "its header claims an image larger than the limits of 32768 px per side");
+    try {
+      read();
+    } catch (const FieldError& e) {
+      EXPECT_EQ(std::string(e.what()).find("limits:imagesize_MB"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(ImageIoErrors, LimitsApplyToRealImages) {
   const ScratchDir dir;
   const fs::path path = dir / "small.png";
