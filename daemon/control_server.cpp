@@ -169,11 +169,23 @@ void ControlServer::log_refusal(const ucred& peer, const std::string& why) {
   refusals.unlogged = 0;
 }
 
+namespace {
+
+// Whether more bytes wait to be read on the socket now.
+bool bytes_waiting(int fd) {
+  char byte = 0;
+  return ::recv(fd, &byte, 1, MSG_PEEK | MSG_DONTWAIT) == 1;
+}
+
+}  // namespace
+
 void ControlServer::read_client(int fd, ControlHandler& handler) {
   const auto it = clients_.find(fd);
   if (it == clients_.end()) return;
   Client& client = *it->second;
-  std::array<char, 4096> buffer{};
+  // At most 512 bytes a wake-up: what is left wakes the loop again, after it has let go of the state lock, so that a
+  // flood of short requests holds up the mice for a fraction of a millisecond at a time (bench/bench_control.cpp).
+  std::array<char, 512> buffer{};
   const ssize_t n = ::recv(fd, buffer.data(), buffer.size(), 0);
   if (n < 0 && (errno == EAGAIN || errno == EINTR)) return;
   if (n <= 0) {
@@ -193,24 +205,42 @@ void ControlServer::read_client(int fd, ControlHandler& handler) {
     data.remove_prefix(end);
     while (auto line = client.lines.next_line()) requests.push_back(control::parse_request(*line));
   }
-  // Of a run of layouts read at once only the last is applied: each may lay out the scene again on the event loop
-  // (the embedded default scene is laid out for the desktop), and a burst would hold up the mice. Each is answered.
+  // Of a run of layouts sent at once only the last is applied: each may lay out the scene again on the event loop
+  // (the embedded default scene is laid out for the desktop; absolute output remakes the virtual devices), and a
+  // burst would hold up the mice. Each is answered. A run may go on in what the next read takes: the last layout of
+  // a read waits (answered) while more of the burst waits in the socket, and is applied before whatever follows it
+  // unless another layout does.
   const auto is_layout = [](const std::variant<control::Request, std::string>& parsed) {
     const auto* request = std::get_if<control::Request>(&parsed);
     return request != nullptr && std::holds_alternative<control::LayoutRequest>(*request);
   };
+  const auto apply_deferred = [&] {
+    if (client.layout_deferred) handler.layout(*client.layout);
+    client.layout_deferred = false;
+  };
+  const bool more_waiting = !too_long && static_cast<std::size_t>(n) == buffer.size() && bytes_waiting(fd);
+  // The answers go back in one send(): a flood of requests costs one system call a read, not one a line.
+  std::string replies;
   for (std::size_t i = 0; i < requests.size(); ++i) {
-    const bool superseded = i + 1 < requests.size() && is_layout(requests[i]) && is_layout(requests[i + 1]);
-    if (!send_line(fd, answer(fd, requests[i], handler, superseded))) {
-      drop(fd, handler);
-      return;
+    const bool layout = is_layout(requests[i]);
+    if (layout) {
+      client.layout_deferred = false;  // superseded by this one
+    } else {
+      apply_deferred();
     }
+    const bool last = i + 1 == requests.size();
+    const bool superseded = layout && (last ? more_waiting : is_layout(requests[i + 1]));
+    replies += answer(fd, requests[i], handler, superseded);
+    replies += '\n';
+    if (superseded && last) client.layout_deferred = true;
   }
+  if (!more_waiting) apply_deferred();
   if (too_long) {
     log_.warning("control socket: a line over {} bytes; closing that connection", control::kMaxLine);
-    send_line(fd, control::format_error("line too long"));
-    drop(fd, handler);
+    replies += control::format_error("line too long");
+    replies += '\n';
   }
+  if (!send_text(fd, replies) || too_long) drop(fd, handler);
 }
 
 std::string ControlServer::answer(int fd, const std::variant<control::Request, std::string>& parsed,
@@ -248,8 +278,10 @@ std::string ControlServer::answer(int fd, const std::variant<control::Request, s
   return control::format_ok();
 }
 
-bool ControlServer::send_line(int fd, const std::string& line) {
-  const std::string text = line + '\n';
+bool ControlServer::send_line(int fd, const std::string& line) { return send_text(fd, line + '\n'); }
+
+bool ControlServer::send_text(int fd, const std::string& text) {
+  if (text.empty()) return true;
   // Never block the event loop: a client whose socket buffer is full has stopped reading.
   const ssize_t n = ::send(fd, text.data(), text.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
   return n == static_cast<ssize_t>(text.size());

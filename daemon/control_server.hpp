@@ -92,8 +92,9 @@ class ControlServer {
     UniqueFd fd;
     control::LineBuffer lines;
     uid_t uid = 0;
-    std::optional<Rect> layout;  // the last layout it sent
-    bool passthrough = false;    // what its last passthrough request asked
+    std::optional<Rect> layout;    // the last layout it sent
+    bool layout_deferred = false;  // answered, not yet applied: more of the burst it came in waits to be read
+    bool passthrough = false;      // what its last passthrough request asked
   };
   static constexpr std::size_t kMaxClients = 16;
   // A refused uid's refusals are logged once in this time, with a count of those left out: any local user can
@@ -112,6 +113,7 @@ class ControlServer {
   std::string answer(int fd, const std::variant<control::Request, std::string>& parsed, ControlHandler& handler,
                      bool superseded);
   bool send_line(int fd, const std::string& line);
+  bool send_text(int fd, const std::string& text);  // all of it at once, or false (the client is not reading)
   void drop(int fd, ControlHandler& handler);
 
   std::string path_;

@@ -507,7 +507,8 @@ TEST(ControlServer, AHelperSaidAgainIsLoggedOnce) {
 }
 
 // A burst of layouts (a helper's, or anyone's the access rule lets in) would lay the scene out again for each on the
-// event loop: of a run read at once only the last is applied, and what follows a layout sees it applied.
+// event loop: of a run sent at once only the last is applied, though the daemon reads it in several pieces, and what
+// follows a layout sees it applied.
 TEST(ControlServer, OfARunOfLayoutsOnlyTheLastIsApplied) {
   const ScratchDir dir("control-layouts");
   const std::string path = (dir.path() / "control").string();
@@ -515,10 +516,11 @@ TEST(ControlServer, OfARunOfLayoutsOnlyTheLastIsApplied) {
   ServerLoop server(path, sessions);
   control::Client client(path);
   std::string burst;
-  for (int i = 0; i < 50; ++i) burst += fmt::format("layout 0 0 {} 1080\n", 1920 + (i % 2) * 700);
+  for (int i = 0; i < 200; ++i) burst += fmt::format("layout 0 0 {} 1080\n", 1920 + (i % 2) * 700);
   burst += "cursor\nlayout 0 0 1234 567\n";
+  ASSERT_GT(burst.size(), 4096U);  // more than any one read
   ASSERT_EQ(::send(client.fd(), burst.data(), burst.size(), MSG_NOSIGNAL), static_cast<ssize_t>(burst.size()));
-  for (int i = 0; i < 52; ++i) {
+  for (int i = 0; i < 202; ++i) {
     const std::optional<std::string> reply = client.read_line(2s);
     ASSERT_TRUE(reply.has_value()) << "reply " << i;
     EXPECT_TRUE(reply->starts_with("ok")) << *reply;
@@ -528,6 +530,40 @@ TEST(ControlServer, OfARunOfLayoutsOnlyTheLastIsApplied) {
   // One at a time, each is applied before its answer.
   ASSERT_TRUE(client.request("layout 0 0 800 600").ok);
   EXPECT_EQ(server.handler.desktop(), (Rect{0, 0, 800, 600}));
+  // A run ending a read is applied before the request that follows it in the next one.
+  std::string run;
+  while (run.size() < 3000) run += "layout 0 0 640 480\n";
+  run += "position 5 5\nstatus\n";
+  ASSERT_EQ(::send(client.fd(), run.data(), run.size(), MSG_NOSIGNAL), static_cast<ssize_t>(run.size()));
+  bool status_read = false;  // the answers up to the status, which is the last
+  for (int i = 0; i < 1000 && !status_read; ++i)
+    status_read = client.read_line(2s).value_or("").starts_with("ok mode=");
+  ASSERT_TRUE(status_read);
+  EXPECT_EQ(server.handler.desktop(), (Rect{0, 0, 640, 480}));
+  EXPECT_EQ(server.handler.layouts(), 4);
+}
+
+// A burst longer than the daemon reads at once (it reads a little at a time, so that a flood does not hold up the
+// mice) is answered whole and in order.
+TEST(ControlServer, ABurstLongerThanOneReadIsAnsweredWholeAndInOrder) {
+  const ScratchDir dir("control-burst");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  ServerLoop server(path, sessions);
+  control::Client client(path);
+  std::string burst;
+  constexpr int kPairs = 1000;
+  for (int i = 0; i < kPairs; ++i) burst += fmt::format("position {} 0.5\ncursor\n\n", i);
+  ASSERT_GT(burst.size(), 16000U);
+  ASSERT_EQ(::send(client.fd(), burst.data(), burst.size(), MSG_NOSIGNAL), static_cast<ssize_t>(burst.size()));
+  for (int i = 0; i < kPairs; ++i) {
+    ASSERT_EQ(client.read_line(2s), "ok") << i;
+    const std::optional<control::Reply> at = control::parse_reply(client.read_line(2s).value_or(""));
+    ASSERT_TRUE(at && at->ok) << i;
+    ASSERT_EQ(control::parse_cursor(at->text), (Vec2{double(i), 0.5})) << i;
+    ASSERT_TRUE(client.read_line(2s).value_or("").starts_with("error")) << i;  // the empty line
+  }
+  EXPECT_TRUE(client.request("cursor").ok);
 }
 
 // Connects `count` times as a refused peer and reads each refusal; returns how many were refused with a reason.
