@@ -317,10 +317,12 @@ Run add_trace_command(CLI::App& app) {
       "with these columns in this order:\n"
       "frame,x,y,texel_x,texel_y,cos_alpha,delta_beta_deg,kmax,kmin,dh,cd,region\n"
       "(x, y: where the cursor entered the texel, screen px; cos_alpha, delta_beta_deg, kmax, kmin: curvature\n"
-      "method, dh: depth method, empty for the other; cd: the method's C/D, which materials and wells scale\n"
-      "per frame on top). The last frame is shortened so that the cursor's travel along the stroke ends at\n"
-      "--to. A summary (its C/D range with the effects), and a warning per map with invalid texels\n"
-      "(repaired) or stretched out of proportion to its region, go to standard error.");
+      "method; dh: depth method, the height change in px between the two heights its C/D is taken from\n"
+      "(C/D = 1 + gain * dh / their distance in px, within [1/kmin, kmax]); empty where the other method\n"
+      "gave the step; cd: the method's C/D, which materials and wells scale per frame on top).\n"
+      "The last frame is shortened so that the cursor's travel along the stroke ends at --to. A summary\n"
+      "(its C/D range with the effects), and a warning per map with invalid texels (repaired) or\n"
+      "stretched out of proportion to its region, go to standard error.");
   auto* src = app.add_option_group("texture", "What to trace across (exactly one)");
   src->add_option("--scene", o->scene_file, "Scene file (TOML); the stroke defaults to the first region")
       ->check(non_empty_path());
