@@ -197,9 +197,11 @@ def latin1_on_line_3(path):
 # ------------------------------------------------------------------------------------------------ cases
 
 class Case:
-    def __init__(self, name, script, args, rc, err=(), out=(), no_err=(), check=None, files=(), no_files=()):
+    def __init__(self, name, script, args, rc, err=(), out=(), no_err=(), check=None, files=(), no_files=(),
+                 no_out=()):
         self.name, self.script, self.args, self.rc = name, script, args, rc
         self.err, self.out, self.no_err, self.check = list(err), list(out), list(no_err), check
+        self.no_out = list(no_out)
         self.files, self.no_files = list(files), list(no_files)
 
 
@@ -390,6 +392,18 @@ def build(root):
            err=["no scored trials: nothing to compare"])
     paired("10 correct 2", variant("p_correct", good_study, lambda d: edit_cell(d / "trials.csv", "correct", "2", 4)),
            1, err=["trials.csv:5: correct: not 0 or 1: '2'"])
+    # 11. The FAKE marker of --fake-data: it marks the charts while it is newer than the CSV files; a later run that
+    # replaced them leaves it older, and they are measurements again; --fake-data never overwrites measurements.
+    def marked(d, age_s):
+        (d / "FAKE").write_text("made by charts.py --fake-data; not measurements\n")
+        newest = max((d / n).stat().st_mtime for n in ("variants.csv", "fig5_traces.csv", "fig2_grid.csv"))
+        os.utime(d / "FAKE", (newest + age_s, newest + age_s))
+
+    charts("11 FAKE marker", variant("fake", good_acc, lambda d: marked(d, 0)), 0, out=["**FAKE DATA**"])
+    charts("11 stale FAKE marker", variant("fake_stale", good_acc, lambda d: marked(d, -60)), 0,
+           err=["FAKE is older than the CSV files", "charted as measurements"], no_out=["FAKE DATA"])
+    cases.append(Case("11 fake data over measurements", "charts.py", ["--fake-data", variant("fake_over", good_acc)],
+                      1, err=["holds variants.csv, fig5_traces.csv, fig2_grid.csv and no FAKE marker"]))
     return cases
 
 
@@ -412,6 +426,7 @@ def judge(case, result, results):
     problems += [f"stderr lacks {t!r}" for t in case.err if t not in result.stderr]
     problems += [f"stdout lacks {t!r}" for t in case.out if t not in result.stdout]
     problems += [f"stderr has {t!r}" for t in case.no_err if t in result.stderr]
+    problems += [f"stdout has {t!r}" for t in case.no_out if t in result.stdout]
     if case.rc != 0 and case.script == "stability_charts.py" and result.stdout:
         problems.append("tables printed although it failed")
     outdir = Path(case.args[1]) if len(case.args) > 1 and case.script != "error_bounds.py" else None

@@ -4,7 +4,10 @@
     charts.py CSVDIR OUTDIR [--default VARIANT]...   read CSVDIR, write the PNGs into OUTDIR, print the
                                                      Pareto table (Markdown) to stdout
     charts.py --fake-data CSVDIR                     write made-up CSV files (and a FAKE marker) to develop
-                                                     and test against; their charts say FAKE DATA
+                                                     and test against; their charts say FAKE DATA while
+                                                     the marker is newer than the files (a run of
+                                                     `pseudohaptic accuracy` into CSVDIR leaves it older);
+                                                     refuses a CSVDIR of measurements
 
 Reads (columns in any order; extra columns are ignored; an empty cell is "not measured"):
   variants.csv      variant,method,ns_per_frame_median,end_err_rms_px required; traversal, storage, sampling,
@@ -919,11 +922,31 @@ def fake_curvature_cd(a1, a2):
     return 1.0
 
 
+CSV_NAMES = ("variants.csv", "fig5_traces.csv", "fig2_grid.csv")
+
+
+def is_fake(csvdir):
+    """Whether CSVDIR holds --fake-data's files: its FAKE marker, written after them, no older than any of them (a
+    run of `pseudohaptic accuracy` into the folder replaces the files and leaves the marker older)."""
+    marker = csvdir / "FAKE"
+    if not marker.exists():
+        return False
+    newest = max((csvdir / n).stat().st_mtime_ns for n in CSV_NAMES if (csvdir / n).exists())
+    if marker.stat().st_mtime_ns >= newest:
+        return True
+    print(f"charts.py: warning: {marker} is older than the CSV files, which a later run replaced: charted as "
+          "measurements", file=sys.stderr)
+    return False
+
+
 def write_fake(csvdir):
     """Made-up CSV files of the contract's shape (deterministic) for developing and testing the charts."""
     rng = random.Random(6)
+    measured = [n for n in CSV_NAMES if (csvdir / n).exists()]
+    if measured and not (csvdir / "FAKE").exists():
+        raise InputError(f"{csvdir} holds {', '.join(measured)} and no FAKE marker: measurements, which "
+                         "--fake-data would overwrite; give a new or empty folder")
     csvdir.mkdir(parents=True, exist_ok=True)
-    (csvdir / "FAKE").write_text("made by charts.py --fake-data; not measurements\n")
     cols = ["variant", "method", "traversal", "storage", "sampling"] + VARIANT_NUMERIC
     base = {"exact": 260, "unit_steps": 330, "frame_midpoint": 60, "direction_lut8": 150, "direction_lut16": 165}
     berr = {"exact": 0.02, "unit_steps": 0.05, "frame_midpoint": 3.0, "direction_lut8": 0.8, "direction_lut16": 0.3}
@@ -989,6 +1012,7 @@ def write_fake(csvdir):
                 kmin = min(max(1.5 * (1 - d), 1), 5)
                 cd = 1 - c * (1 - 1 / kmin) if c > 0 else 1 - c * (kmax - 1) if c < 0 else 1.0
                 w.writerow([f"{c:.6g}", f"{d:.6g}", f"{cd:.6g}"])
+    (csvdir / "FAKE").write_text("made by charts.py --fake-data; not measurements\n")  # last: newer than the files
 
 
 # ---------------------------------------------------------------------------------------------------- main
@@ -1010,6 +1034,9 @@ def main(argv):
             p.error("--fake-data takes only CSVDIR")
         try:
             write_fake(args.csvdir)
+        except InputError as e:
+            print(f"charts.py: {e}", file=sys.stderr)
+            return 1
         except OSError as e:
             print(f"charts.py: {os_error_text(e, args.csvdir)}", file=sys.stderr)
             return 1
@@ -1026,7 +1053,7 @@ def main(argv):
         unknown = [d for d in args.default if d not in {v["variant"] for v in variants}]
         if unknown:
             raise InputError(f"--default {', '.join(unknown)}: no such variant in variants.csv")
-        fake = (args.csvdir / "FAKE").exists()
+        fake = is_fake(args.csvdir)
         make_outdir(args.outdir)
         variants.report_nonfinite([c for c in VARIANT_NUMERIC if c not in COST_KEYS],
                                   "shown as inf or - in the table; not drawn, and on no front, where it is the error")
