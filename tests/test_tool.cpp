@@ -33,6 +33,7 @@
 #include "tests/scratch_dir.hpp"
 #include "tests/tool_runner.hpp"
 #include "tools/csv_file.hpp"
+#include "tools/output_folder.hpp"
 
 namespace ph {
 namespace {
@@ -305,6 +306,48 @@ TEST(Tool, ACsvFileIsReplacedWholeOrNotAtAll) {
   null.write("x\n");
   null.close();
   EXPECT_TRUE(fs::is_character_file("/dev/null"));
+}
+
+// A command's files are replaced as a set: until commit() each is written beside its name, so that a run that fails or
+// is cut short while any of them is written leaves all of them as they were, not some of this run's beside an older
+// run's (the charts would read them as one run).
+TEST(Tool, AnOutputSetIsReplacedWholeOrNotAtAll) {
+  ScratchDir dir;
+  std::ofstream(dir / "a.csv") << "old a\n";
+  std::ofstream(dir / "b.csv") << "old b\n";
+  fs::permissions(dir / "a.csv", fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  const auto files_in_dir = [&] { return std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()); };
+  {
+    tools::OutputSet files(dir.path());
+    tools::CsvFile a(files.stage("a.csv"), false);
+    a.write("new a\n");
+    a.close();
+    EXPECT_EQ(read_text(dir / "a.csv"), "old a\n");  // written, not yet in place
+    tools::CsvFile b(files.stage("b.csv"), false);
+    b.write("new b, unfinished");
+  }  // an error while b was written: never committed
+  EXPECT_EQ(read_text(dir / "a.csv"), "old a\n");
+  EXPECT_EQ(read_text(dir / "b.csv"), "old b\n");
+  EXPECT_EQ(files_in_dir(), 2);  // no temporary file
+  {
+    tools::OutputSet files(dir.path());
+    for (const char* name : {"a.csv", "b.csv", "c.csv"}) {
+      tools::CsvFile f(files.stage(name), false);
+      f.print("new {}\n", name);
+      f.close();
+    }
+    files.commit();
+  }
+  EXPECT_EQ(read_text(dir / "a.csv"), "new a.csv\n");
+  EXPECT_EQ(read_text(dir / "b.csv"), "new b.csv\n");
+  EXPECT_EQ(read_text(dir / "c.csv"), "new c.csv\n");
+  EXPECT_EQ(fs::status(dir / "a.csv").permissions(),
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);  // the replaced file's mode
+  EXPECT_EQ(files_in_dir(), 3);
+  // A link is written through, as a CsvFile writes it.
+  fs::create_symlink(dir / "c.csv", dir / "link.csv");
+  tools::OutputSet files(dir.path());
+  EXPECT_EQ(files.stage("link.csv"), dir / "link.csv");
 }
 
 TEST(Tool, AWriteThatFailsIsAnErrorNotASuccess) {

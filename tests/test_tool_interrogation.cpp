@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -229,6 +230,16 @@ TEST(ToolInterrogation, InspectChecksEverythingBeforeWritingAnything) {
   const ToolResult r = run_tool("inspect " + quote(out) + maps + " --size 32,32 --light 0,0,0", dir);
   expect_clean_failure(r, {"--light: must not be 0,0,0"});
   EXPECT_TRUE(pictures() == earlier) << "a picture of the failed run was written";
+
+  // Cut short while it writes (here by the file size limit, which kills it at the first picture): the pictures
+  // are replaced together once all are written, so the earlier run's stay whole (before, K.png was left cut).
+  const std::string limited = "ulimit -c 0 && ulimit -f 1 && exec " + quote(std::string(PH_TOOL_PATH)) + " inspect " +
+                              quote(out) + maps + " --size 48,48";
+  EXPECT_EQ(run_program("/bin/sh", "-c " + quote(limited), dir).rc, 128 + SIGXFSZ);
+  for (const auto& [name, bytes] : pictures()) {
+    if (name.ends_with(".partial")) continue;  // the temporary of the picture it was writing, as for a CSV file
+    EXPECT_TRUE(earlier.contains(name) && earlier.at(name) == bytes) << name << " changed";
+  }
 
   expect_clean_failure(run_tool("inspect " + quote(dir / "new") + maps + " --light 0,0,0", dir), {"--light"});
   EXPECT_FALSE(fs::exists(dir / "new"));

@@ -631,8 +631,9 @@ std::vector<VariantRow> measure_all(const Workload& w, const std::vector<MethodP
   return rows;
 }
 
+// Each writer writes a file of the folder's OutputSet (tools/output_folder.hpp): in place, the set stages them.
 void write_variants(const fs::path& path, const std::vector<VariantRow>& rows) {
-  CsvFile f(path);
+  CsvFile f(path, false);
   f.print(
       "variant,method,traversal,storage,sampling,ns_per_frame_median,ns_per_frame_p99,ns_per_step,"
       "bytes_per_texel,precompute_ms,cd_err_rms,cd_err_max,end_err_rms_px,end_err_max_px,drift_px\n");
@@ -646,7 +647,7 @@ void write_variants(const fs::path& path, const std::vector<VariantRow>& rows) {
 
 // Fig. 5: the default variant's C/D along the centre row of each target, with the truth.
 void write_fig5(const fs::path& path, const Workload& w, const std::vector<MethodPtr>& methods) {
-  CsvFile f(path);
+  CsvFile f(path, false);
   f.print("target,method,x,cd,cd_truth\n");
   for (std::size_t t = 0; t < w.config.targets.size(); ++t) {
     const Shape& shape = w.config.targets[t];
@@ -674,7 +675,7 @@ void write_fig5(const fs::path& path, const Workload& w, const std::vector<Metho
 
 // Fig. 2: the curvature method's formula over the paper's plane of cos(alpha) and delta-beta.
 void write_fig2(const fs::path& path) {
-  CsvFile f(path);
+  CsvFile f(path, false);
   f.print("cos_alpha,delta_beta_deg,cd\n");
   const CurvatureParams params{};
   for (int i = 0; i <= 40; ++i) {
@@ -698,9 +699,12 @@ int run_accuracy(const AccuracyOptions& o) {
              workload.strokes.size(), workload.engines.size());
   const std::vector<MethodPtr> methods = measured_methods();
   const std::vector<VariantRow> rows = measure_all(workload, methods);
-  write_variants(outdir / "variants.csv", rows);
-  write_fig5(outdir / "fig5_traces.csv", workload, methods);
-  write_fig2(outdir / "fig2_grid.csv");
+  // Replaced as a set: an interrupted run leaves the three files of the last one, not some of each.
+  OutputSet files(outdir);
+  write_variants(files.stage("variants.csv"), rows);
+  write_fig5(files.stage("fig5_traces.csv"), workload, methods);
+  write_fig2(files.stage("fig2_grid.csv"));
+  files.commit();
   fmt::print("wrote {} variants to {} in {:.1f} s\n", rows.size(), outdir.string(), ms_since(t_start) / 1000.0);
   return 0;
 }

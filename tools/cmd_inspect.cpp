@@ -26,6 +26,7 @@
 #include "tools/finite_check.hpp"
 #include "tools/map_flags.hpp"
 #include "tools/number_tuple.hpp"
+#include "tools/output_folder.hpp"
 #include "tools/progress_line.hpp"
 
 namespace ph::tools {
@@ -176,18 +177,19 @@ int run_inspect(const InspectOptions& o) {
 
   const std::filesystem::path out = o.outdir;
   std::filesystem::create_directories(out);
+  // Replaced together once all are written (seconds for a large texture): an interrupted run leaves the last run's
+  // pictures, not some of this one's beside them (tools/output_folder.hpp).
+  OutputSet files(out);
   // What the classes call planar sets the floors: a curvedness of planar_curvedness, and its square for K.
   const double planar = p.tolerances.planar_curvedness;
-  const double k_scale = write_diverging(out / "K.png", p.curvature.gaussian, planar * planar);
-  const double h_scale = write_diverging(out / "H.png", p.curvature.mean, planar);
-  write_picture(out / "class.png", p.classes, [](std::uint8_t c) { return kClassColours[c & 3]; });
-  write_mask(out / "isophotes.png", p.isophotes);
-  if (p.contours) {
-    write_mask(out / "contours.png", *p.contours);
-  } else {
-    // Not one of this run's pictures: an older run's, with a depth map, would read as this texture's contours.
-    std::filesystem::remove(out / "contours.png");
-  }
+  const double k_scale = write_diverging(files.stage("K.png"), p.curvature.gaussian, planar * planar);
+  const double h_scale = write_diverging(files.stage("H.png"), p.curvature.mean, planar);
+  write_picture(files.stage("class.png"), p.classes, [](std::uint8_t c) { return kClassColours[c & 3]; });
+  write_mask(files.stage("isophotes.png"), p.isophotes);
+  if (p.contours) write_mask(files.stage("contours.png"), *p.contours);
+  files.commit();
+  // Not one of this run's pictures: an older run's, with a depth map, would read as this texture's contours.
+  if (!p.contours) std::filesystem::remove(out / "contours.png");
   progress.finish(true);
 
   fmt::print("{} x {} texels, curvature from the {} map ({}-bit), filter radius {}\n", p.width, p.height,

@@ -73,7 +73,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 std::string cell(double v) { return std::isnan(v) ? std::string() : fmt::format("{:.6g}", v); }
 
 void write_modes(const fs::path& path, const std::vector<const FailureMode*>& modes) {
-  CsvFile f(path);
+  CsvFile f(path, false);  // a file of the run's OutputSet, which stages it
   f.print("mode,family,severity,has_features,description\n");
   for (const FailureMode* m : modes) {
     f.print("{},{},{},{},{}\n", m->name, csv_quoted(m->family), csv_quoted(m->severity), m->has_features ? 1 : 0,
@@ -101,8 +101,10 @@ int run_stability(const StabilityOptions& o) {
   prepare_output_folder(outdir, {"stability.csv", "modes.csv"});
   const std::vector<MethodPtr> methods = measured_methods();
 
-  const fs::path path = outdir / "stability.csv";
-  CsvFile f(path);
+  // Both files are replaced together at the end: a run that fails or is cut short leaves them as they were, not new
+  // modes beside old rows (tools/output_folder.hpp).
+  OutputSet files(outdir);
+  CsvFile f(files.stage("stability.csv"), false);
   f.print(
       "mode,family,severity,method,variant,traversal,sampling,cd_err_rms,jitter_rms,jitter_truth_rms,"
       "travel_err_pct,travel_sens_pct,iso_pct,rate_px,contrast,contrast_truth,faults,strokes\n");
@@ -134,11 +136,10 @@ int run_stability(const StabilityOptions& o) {
                config.engines.size(), seconds_since(t_mode));
   }
   f.close();
-  // After the rows: a run that fails (or is cut short) before them leaves both files as they were, not new modes
-  // beside old rows; each file is replaced whole (tools/csv_file.hpp).
-  write_modes(outdir / "modes.csv", modes);
+  write_modes(files.stage("modes.csv"), modes);
+  files.commit();
   fmt::print("wrote {} rows to {} in {:.1f} s; {} faults (NaN, C/D out of bounds, strokes that never ended)\n", rows,
-             path.string(), seconds_since(t_start), faults);
+             (outdir / "stability.csv").string(), seconds_since(t_start), faults);
   return faults == 0 ? 0 : 1;
 }
 

@@ -76,7 +76,7 @@ const PaperNumber* paper_number(const std::string& technique, const GroupSummary
 std::string cell(double v, int decimals) { return std::isfinite(v) ? fmt::format("{:.{}f}", v, decimals) : ""; }
 
 void write_file(const fs::path& path, const std::string& text) {
-  CsvFile file(path);
+  CsvFile file(path, false);  // a file of the run's OutputSet, which stages it
   file.write(text);
   file.close();
 }
@@ -264,9 +264,11 @@ int run_study_command(const StudyOptions& o) {
                std::chrono::duration<double>(now - t0).count());
   });
   const std::vector<GroupSummary> summaries = all_summaries(trials, techniques.size(), design);
-  write_file(outdir / "trials.csv", trials_csv(trials, techniques));
-  write_file(outdir / "summary.csv", summary_csv(summaries, techniques));
-  write_file(outdir / "summary.md", summary_md(summaries, techniques, design));
+  OutputSet files(outdir);  // the three replaced together (tools/output_folder.hpp)
+  write_file(files.stage("trials.csv"), trials_csv(trials, techniques));
+  write_file(files.stage("summary.csv"), summary_csv(summaries, techniques));
+  write_file(files.stage("summary.md"), summary_md(summaries, techniques, design));
+  files.commit();
   fmt::print(
       "{} technique{} x {} participants: {} trials in {:.1f} s; wrote trials.csv, summary.csv and summary.md "
       "to {}\n",

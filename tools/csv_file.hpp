@@ -24,10 +24,11 @@ namespace ph::tools {
 // dropped on an error, the file is closed quietly and the temporary one removed.
 class CsvFile {
  public:
-  explicit CsvFile(std::filesystem::path path) : path_(std::move(path)) {
+  // `staged` false: written in place, for a file that is itself a temporary one (tools/output_folder.hpp, OutputSet).
+  explicit CsvFile(std::filesystem::path path, bool staged = true) : path_(std::move(path)) {
     struct stat st {};
     const bool exists = path_ != "-" && ::lstat(path_.c_str(), &st) == 0;
-    if (path_ != "-" && (!exists || S_ISREG(st.st_mode))) {
+    if (staged && path_ != "-" && (!exists || S_ISREG(st.st_mode))) {
       staged_ = path_.parent_path() / fmt::format(".{}.{}.partial", path_.filename().string(), ::getpid());
       if (exists) mode_ = st.st_mode & 07777;
     }
