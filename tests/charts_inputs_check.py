@@ -392,17 +392,28 @@ def build(root):
            err=["no scored trials: nothing to compare"])
     paired("10 correct 2", variant("p_correct", good_study, lambda d: edit_cell(d / "trials.csv", "correct", "2", 4)),
            1, err=["trials.csv:5: correct: not 0 or 1: '2'"])
-    # 11. The FAKE marker of --fake-data: it marks the charts while it is newer than the CSV files; a later run that
+    # 11. A run of other techniques than the paper's two (`study --technique none --technique hybrid`): its charts but
+    # the paper's Fig. 4, which shows those two, and a warning that says so.
+    def other_techniques(d):
+        for name in ("summary.csv", "trials.csv"):
+            for old, new in (("curvature:sign+1", "none"), ("depth", "hybrid")):
+                edit_where(d / name, {"technique": old}, "technique", new)
+
+    study("11 not the paper's techniques", variant("t_others", good_study, other_techniques), 0,
+          err=["study_times.png: not drawn", "no scored trial with a time of the paper's techniques"],
+          files=["study_errors.png", "study_techniques.png"], no_files=["study_times.png"])
+
+    # 12. The FAKE marker of --fake-data: it marks the charts while it is newer than the CSV files; a later run that
     # replaced them leaves it older, and they are measurements again; --fake-data never overwrites measurements.
     def marked(d, age_s):
         (d / "FAKE").write_text("made by charts.py --fake-data; not measurements\n")
         newest = max((d / n).stat().st_mtime for n in ("variants.csv", "fig5_traces.csv", "fig2_grid.csv"))
         os.utime(d / "FAKE", (newest + age_s, newest + age_s))
 
-    charts("11 FAKE marker", variant("fake", good_acc, lambda d: marked(d, 0)), 0, out=["**FAKE DATA**"])
-    charts("11 stale FAKE marker", variant("fake_stale", good_acc, lambda d: marked(d, -60)), 0,
+    charts("12 FAKE marker", variant("fake", good_acc, lambda d: marked(d, 0)), 0, out=["**FAKE DATA**"])
+    charts("12 stale FAKE marker", variant("fake_stale", good_acc, lambda d: marked(d, -60)), 0,
            err=["FAKE is older than the CSV files", "charted as measurements"], no_out=["FAKE DATA"])
-    cases.append(Case("11 fake data over measurements", "charts.py", ["--fake-data", variant("fake_over", good_acc)],
+    cases.append(Case("12 fake data over measurements", "charts.py", ["--fake-data", variant("fake_over", good_acc)],
                       1, err=["holds variants.csv, fig5_traces.csv, fig2_grid.csv and no FAKE marker"]))
     return cases
 

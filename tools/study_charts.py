@@ -5,8 +5,8 @@
 
 Writes study_errors.png (error rate per height x radius and technique, 95 % CIs over participants, the paper's
 overall rates marked), study_times.png (per-participant mean decision times per profile, radius and height for
-the paper's two techniques, as boxplots like the paper's Fig. 4) and study_techniques.png (every technique's
-overall error against its time). Reuses tools/charts.py's reader and style; the same input gives the same bytes.
+the paper's two techniques, as boxplots like the paper's Fig. 4; not drawn, with a warning, for a run without
+them) and study_techniques.png (every technique's overall error against its time). Reuses tools/charts.py's reader and style; the same input gives the same bytes.
 """
 
 import argparse
@@ -235,12 +235,17 @@ def main(argv):
         if infinite:
             raise InputError(f"{trials.path}:{infinite[0]['_line']}: column time_s: infinite")
         trials.report_nonfinite(["time_s"], "left out of study_times.png")
-        if not any(r["technique"] in PAPER_TECHNIQUES and r["scored"] == "1" and finite(r["time_s"]) for r in trials):
-            raise InputError(f"{trials.path}: no scored trial with a time of the paper's techniques ("
-                             + ", ".join(PAPER_TECHNIQUES) + ")")
+        # study_times.png is the paper's Fig. 4, of its two techniques: a run of others (`--technique`) has the
+        # other two charts only.
+        times = any(r["technique"] in PAPER_TECHNIQUES and r["scored"] == "1" and finite(r["time_s"]) for r in trials)
+        if not times:
+            warn(f"study_times.png: not drawn: {trials.path} has no scored trial with a time of the paper's "
+                 "techniques (" + ", ".join(PAPER_TECHNIQUES) + "), which it shows")
         make_outdir(args.outdir)
-        written = [chart_errors(summary, args.outdir), chart_times(trials, summary, args.outdir),
-                   chart_techniques(summary, args.outdir)]
+        written = [chart_errors(summary, args.outdir)]
+        if times:
+            written.append(chart_times(trials, summary, args.outdir))
+        written.append(chart_techniques(summary, args.outdir))
     except InputError as e:
         print(f"study_charts.py: {e}", file=sys.stderr)
         return 1
