@@ -113,6 +113,11 @@ class LineReader {
 
   void check_text(string_view text) const {
     for (const char c : text) {
+      if (c == '\r') {
+        position_.fail(
+            "a carriage return that does not end a line (old Mac line endings?): lines end with a newline, or a "
+            "carriage return and a newline");
+      }
       if (is_binary(c)) {
         position_.fail(fmt::format("binary data (byte 0x{:02x}); expected an evemu text recording",
                                    static_cast<unsigned char>(c)));

@@ -195,6 +195,12 @@ DeviceDescription read_description(const YAML::Node& evdev, const ErrorSite& sit
     site.fail(name,
               fmt::format("'name' has {} characters; at most {} are allowed", name.Scalar().size(), kMaxDeviceName));
   }
+  // A name no device can have (the kernel's are text) and no evemu file can hold: refused here, at its line.
+  for (const char c : name.Scalar()) {
+    const auto byte = static_cast<unsigned char>(c);
+    if ((byte < 0x20 && c != '\t') || byte == 0x7f)
+      site.fail(name, fmt::format("'name' contains a control character (0x{:02x})", byte));
+  }
   device.name = name.Scalar();
   read_id(require(evdev, "id", "'evdev'", site), device, site);
   read_codes(require(evdev, "codes", "'evdev'", site), device, site);
@@ -237,7 +243,11 @@ YAML::Node device_list(const YAML::Node& root, const ErrorSite& site) {
   if (!root.IsDefined() || root.IsNull()) site.fail_without_line("empty input: no YAML document");
   require_map(root, "a libinput record (the top level)", site);
   if (const YAML::Node version = lookup(root, "version"); version.IsDefined()) {
-    integer_in(version, 1, 1, "libinput record format version", site);
+    const std::int64_t number = integer_in(version, std::numeric_limits<std::int64_t>::min(),
+                                           std::numeric_limits<std::int64_t>::max(), "version", site);
+    if (number != 1) {
+      site.fail(version, fmt::format("libinput record format version {} is not supported; expected 1", number));
+    }
   }
   const YAML::Node devices = require(root, "devices", "the libinput record", site);
   require_list(devices, "'devices'", site);

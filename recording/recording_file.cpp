@@ -14,27 +14,33 @@
 
 namespace ph {
 
-RecordingFormat detect_recording_format(std::string_view start) {
+std::optional<RecordingFormat> recording_format_of(std::string_view start, bool complete) {
   // Skip blank lines and YAML/evemu comments; the first meaningful line tells.
   std::size_t pos = 0;
   while (pos < start.size()) {
-    const std::size_t end = std::min(start.find('\n', pos), start.size());
+    const std::size_t newline = start.find('\n', pos);
+    if (newline == std::string_view::npos && !complete) return std::nullopt;  // a line cut short: read on
+    const std::size_t end = std::min(newline, start.size());
     const std::string_view line = start.substr(pos, end - pos);
     if (line.starts_with("# EVEMU")) return RecordingFormat::evemu;
     const std::size_t first = line.find_first_not_of(" \t\r");
     if (first != std::string_view::npos && line[first] != '#') {
-      // libinput record files start with their top-level YAML keys; anything else is read as evemu,
-      // whose reader names the line it cannot make sense of.
+      // libinput record files start with their top-level YAML keys (or a YAML directive, or the document's
+      // start); anything else is read as evemu, whose reader names the line it cannot make sense of.
       const std::string_view word = line.substr(first);
-      for (std::string_view yaml_start : {"version:", "ndevices:", "libinput:", "system:", "devices:", "---"}) {
+      for (std::string_view yaml_start :
+           {"version:", "ndevices:", "libinput:", "system:", "devices:", "---", "%YAML"}) {
         if (word.starts_with(yaml_start)) return RecordingFormat::libinput_record;
       }
       return RecordingFormat::evemu;
     }
     pos = end + 1;
   }
+  if (!complete) return std::nullopt;
   return RecordingFormat::evemu;  // empty input: the evemu reader says what is missing
 }
+
+RecordingFormat detect_recording_format(std::string_view start) { return *recording_format_of(start, true); }
 
 namespace {
 
@@ -63,17 +69,27 @@ class PrefixedBuffer final : public std::streambuf {
 }  // namespace
 
 Recording read_recording(std::istream& in, const std::string& origin, std::size_t device_index, RecordingInfo* info) {
-  std::string head(4096, '\0');
-  in.read(head.data(), static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<std::size_t>(in.gcount()));
-  if (in.bad()) throw RecordingError(fmt::format("{}: read error", origin));
-  const RecordingFormat format = detect_recording_format(head);
+  // Read until the first meaningful line tells the format: a long comment at the start (a header of notes) is
+  // read past, up to kMaxHead bytes.
+  constexpr std::size_t kChunk = 4096, kMaxHead = std::size_t{1} << 20;
+  std::string head;
+  std::optional<RecordingFormat> format;
+  while (!format) {
+    const std::size_t had = head.size();
+    head.resize(had + kChunk);
+    in.read(head.data() + had, static_cast<std::streamsize>(kChunk));
+    head.resize(had + static_cast<std::size_t>(in.gcount()));
+    if (in.bad()) throw RecordingError(fmt::format("{}: read error", origin));
+    // A UTF-8 byte order mark, which some editors write and YAML allows: not part of the first line.
+    if (had == 0 && head.starts_with("\xEF\xBB\xBF")) head.erase(0, 3);
+    format = recording_format_of(head, in.eof() || head.size() >= kMaxHead);
+  }
   PrefixedBuffer buffer(std::move(head), in.rdbuf());
   std::istream whole(&buffer);
-  if (format == RecordingFormat::libinput_record) {
+  if (*format == RecordingFormat::libinput_record) {
     LibinputDevices devices;
     Recording recording = read_libinput_record(whole, origin, device_index, kMaxLibinputRecordBytes, &devices);
-    if (info != nullptr) *info = {format, devices.index, devices.count};
+    if (info != nullptr) *info = {*format, devices.index, devices.count};
     return recording;
   }
   if (device_index != 0 && device_index != kFirstPointerDevice) {
@@ -81,7 +97,7 @@ Recording read_recording(std::istream& in, const std::string& origin, std::size_
         fmt::format("{}: no device {}: an evemu recording holds one device (0)", origin, device_index));
   }
   Recording recording = read_evemu(whole, origin);
-  if (info != nullptr) *info = {format, 0, 1};
+  if (info != nullptr) *info = {*format, 0, 1};
   return recording;
 }
 

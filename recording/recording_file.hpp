@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <istream>
+#include <optional>
 #include <string>
 
 #include "core/engine/device.hpp"
@@ -22,6 +23,9 @@ struct RecordingInfo {
   std::size_t device_count = 1;
 };
 
+// The format told by the first line of `start` that is not blank or a comment; evemu where none is. With `complete`
+// false (more may follow `start`), nothing where `start` holds only blank lines, comments and a line cut short.
+std::optional<RecordingFormat> recording_format_of(std::string_view start, bool complete);
 RecordingFormat detect_recording_format(std::string_view start);
 // device_index: which device of a libinput record file, or kFirstPointerDevice (libinput_record.hpp); an
 // evemu recording holds only device 0 (kFirstPointerDevice gives it too). `info` may be null.

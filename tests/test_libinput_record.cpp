@@ -251,7 +251,8 @@ struct LineCase {
 
 TEST(LibinputRecord, WrongShapesAreErrorsWithTheirLine) {
   const std::vector<LineCase> cases = {
-      {1, "version: 2", 1, "version"},
+      {1, "version: 2", 1, "libinput record format version 2 is not supported; expected 1"},
+      {5, "    name: \"a\\nb\"", 5, "'name' contains a control character (0x0a)"},
       {1, "version: one", 1, "must be an integer"},
       {2, "gadgets:", 1, "'devices' missing"},
       {4, "  evdevs:", 3, "'evdev' missing in device 0"},
@@ -468,6 +469,33 @@ TEST(LibinputRecord, ReadRecordingDetectsTheFormat) {
     EXPECT_EQ(recording.events, parse_file(name).events);
   }
   EXPECT_EQ(detect_recording_format(kBase), RecordingFormat::libinput_record);
+}
+
+// What comes before the first line that tells the format: a byte order mark (which YAML allows and some editors
+// write), a YAML directive, and comments longer than one read (a header of notes), whose end may fall within a line.
+TEST(LibinputRecord, TheFormatIsToldPastAByteOrderMarkADirectiveAndLongComments) {
+  const auto read_text = [](const std::string& text) {
+    std::istringstream in(text);
+    RecordingInfo info;
+    const Recording recording = read_recording(in, "test.yml", 0, &info);
+    EXPECT_EQ(info.format, RecordingFormat::libinput_record) << text.substr(0, 40);
+    return recording;
+  };
+  const Recording plain = parse(kBase);
+  EXPECT_EQ(read_text("\xEF\xBB\xBF" + std::string(kBase)).events, plain.events);
+  EXPECT_EQ(read_text("%YAML 1.1\n---\n" + std::string(kBase)).events, plain.events);
+  for (std::size_t comments : {4090U, 4096U, 5000U, 300000U}) {  // the key before, across and after the first read
+    std::string notes;
+    while (notes.size() < comments) notes += "# notes on the recording\n";
+    notes.resize(comments - 1);
+    EXPECT_EQ(read_text(notes + "\n" + std::string(kBase)).events, plain.events) << comments;
+  }
+  // An evemu file's byte order mark too.
+  std::istringstream evemu("\xEF\xBB\xBF# EVEMU 1.3\nN: m\nI: 0003 0001 0001 0001\n");
+  EXPECT_EQ(read_recording(evemu, "test.evemu").device.name, "m");
+  // "ver" at the end of what was read first is not yet a line to judge.
+  EXPECT_FALSE(recording_format_of("# notes\nver", false).has_value());
+  EXPECT_EQ(recording_format_of("# notes\nver", true), RecordingFormat::evemu);
 }
 
 TEST(LibinputRecord, ReadRecordingStillReadsEvemu) {

@@ -932,6 +932,18 @@ TEST(ReplayTool, ARecordingWithoutMotionIsWarnedOf) {
   const ToolResult moved = run_tool("replay " + quote(stroke_file(dir)) + " " + quote(dir / "out.evemu"), dir);
   ASSERT_EQ(moved.rc, 0) << moved.err;
   EXPECT_FALSE(contains(moved.err, "warning")) << moved.err;
+  // Motion whose frames never end (no SYN_REPORT) is never applied: said, not passed through in silence.
+  Recording unframed;
+  unframed.device = testing::test_mouse();
+  for (std::int64_t t = 0; t < 5; ++t) unframed.events.push_back({t * 1000, ev::kRel, ev::kRelX, 7});
+  const fs::path motion = dir / "unframed.evemu";
+  write_file(motion, evemu_text(unframed));
+  const ToolResult unended = run_tool("replay " + quote(motion) + " " + quote(dir / "out.evemu"), dir);
+  ASSERT_EQ(unended.rc, 0) << unended.err;
+  EXPECT_TRUE(contains(unended.err, "warning: " + motion.string() +
+                                        " holds no SYN_REPORT, which ends a frame: no frame ended, nothing was "
+                                        "rescaled"))
+      << unended.err;
 }
 
 TEST(ReplayTool, IsDeterministicAcrossProcesses) {

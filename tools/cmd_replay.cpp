@@ -186,8 +186,8 @@ void note_device(const std::string& input, const Recording& recording, const Rec
                input, info.device_index, info.device_count, recording.device.name);
   } else if (!pointer) {
     fmt::print(stderr,
-               "pseudohaptic: {}: device {} (\"{}\") has no REL_X/REL_Y: nothing to rescale, every event passes "
-               "through{}\n",
+               "pseudohaptic: {}: device {} (\"{}\") has no REL_X/REL_Y in its description (evemu's B: 02 line, "
+               "libinput record's codes): nothing to rescale, every event passes through{}\n",
                input, info.device_index, recording.device.name,
                info.device_count > 1
                    ? fmt::format(" (the file has {} devices; --device N picks another)", info.device_count)
@@ -310,9 +310,18 @@ int run_replay(const ReplayOptions& o) {
   const bool moved = std::any_of(input.events.begin(), input.events.end(), [](const InputEvent& e) {
     return e.type == ev::kRel && (e.code == ev::kRelX || e.code == ev::kRelY);
   });
+  // Motion is applied when its frame ends: motion without a SYN_REPORT passes unapplied, as an unfinished last
+  // frame does.
+  const bool framed = std::any_of(input.events.begin(), input.events.end(),
+                                  [](const InputEvent& e) { return e.type == ev::kSyn && e.code == ev::kSynReport; });
   if (!moved) {
     fmt::print(stderr, "pseudohaptic: warning: {} holds {}: nothing was rescaled\n",
                o.input == "-" ? "<stdin>" : o.input, input.events.empty() ? "no events" : "no REL_X/REL_Y motion");
+  } else if (!framed) {
+    fmt::print(stderr,
+               "pseudohaptic: warning: {} holds no SYN_REPORT, which ends a frame: no frame ended, nothing was "
+               "rescaled\n",
+               o.input == "-" ? "<stdin>" : o.input);
   }
   return 0;
 }
@@ -323,9 +332,11 @@ Run add_replay_command(CLI::App& app) {
   auto o = std::make_shared<ReplayOptions>();
   app.description(
       "Push a recorded mouse stream (evemu or `libinput record`) through the daemon's pipeline and write\n"
-      "the stream the daemon would emit, as an evemu recording. Timestamps, the device description and\n"
-      "every non-motion event are kept, in order; only REL_X/REL_Y change. Without --as-daemon the pipeline\n"
-      "runs with the flags' defaults (relative output, no acceleration), not the daemon's.");
+      "the stream the daemon would emit, as an evemu recording. Timestamps and every non-motion event are\n"
+      "kept, in order; with relative output the device description too, and only REL_X/REL_Y change (with\n"
+      "--output-mode absolute the description is the daemon's absolute device's and motion is ABS_X/ABS_Y).\n"
+      "Without --as-daemon the pipeline runs with the flags' defaults (relative output, no acceleration),\n"
+      "not the daemon's.");
   app.add_option("INPUT", o->input, "Recording to read (evemu or libinput record YAML); - for standard input")
       ->required()
       ->check(non_empty_path());
