@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -554,6 +555,30 @@ int main(int argc, char** argv) {
                     "changed",
                     released_s, line, killed, *restarted, restarts_before, unit_property("NRestarts"), back_s,
                     restarted_stroke.changed));
+
+    // Options through a drop-in, with no path in it (docs/SERVICE.md, "Logs"): $PSEUDOHAPTICD_OPTIONS unset gives
+    // the daemon no argument; set to --verbose, it runs with it and logs its debug lines.
+    const auto arguments = [](pid_t pid) {
+      std::string text = read_text_file("/proc/" + std::to_string(pid) + "/cmdline");
+      std::replace(text.begin(), text.end(), '\0', ' ');
+      return text;
+    };
+    const std::string plain = arguments(*restarted);
+    if (plain.find(' ') != plain.size() - 1) throw Fatal("the daemon has arguments without a drop-in: " + plain);
+    const std::string drop_in = "/etc/systemd/system/" + kUnit + ".d/verbose.conf";
+    must_run("mkdir -p /etc/systemd/system/" + kUnit +
+             ".d && printf '[Service]\\nEnvironment=PSEUDOHAPTICD_OPTIONS="
+             "--verbose\\n' > " +
+             drop_in + " && systemctl daemon-reload");
+    before = journal();
+    must_run("systemctl restart " + kUnit);
+    const std::string debug_line = expect_journal(before, "not a pointer (needs REL_X, REL_Y and a button)");
+    const std::string verbose = arguments(main_pid());
+    if (verbose.find(" --verbose ") == std::string::npos) throw Fatal("the drop-in's option is not passed: " + verbose);
+    must_run("rm " + drop_in + " && rmdir --ignore-fail-on-non-empty /etc/systemd/system/" + kUnit +
+             ".d && systemctl daemon-reload && systemctl restart " + kUnit);
+    pass("a drop-in's Environment=PSEUDOHAPTICD_OPTIONS=--verbose reaches the daemon",
+         fmt::format("command line '{}' without it, '{}' with it; journal: \"{}\"", plain, verbose, debug_line));
   } catch (const std::exception& e) {
     std::printf("FAIL %s\n", e.what());
     std::printf("---- journal of %s ----\n%s\n", kUnit.c_str(), journal().c_str());
