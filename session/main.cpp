@@ -140,7 +140,13 @@ class Helper {
     link_ = Link{};
     link_.failures = failures;
     link_.connection = std::move(connection);
-    log_.info(fmt::format("connected to pseudohapticd at {}", control_));
+    // Said once, not on every reconnection of a helper the daemon keeps refusing (failures go on until it accepts).
+    const std::string connected = fmt::format("connected to pseudohapticd at {}", control_);
+    if (failures == 0) {
+      log_.info(connected);
+    } else {
+      log_.debug(connected);
+    }
     // A desktop that cannot say where the pointer is reports the layout only: as the daemon's helper it
     // would be asked for positions it cannot give, and the daemon would wait for each answer.
     if (desktop_.knows_pointer() && !send(helper_request(desktop_.backend_name()))) return;
@@ -182,11 +188,25 @@ class Helper {
   void send_position() {
     if (!desktop_.knows_pointer()) return;
     const std::optional<ph::Vec2> at = desktop_.pointer();
-    if (!at) {  // on another X screen, or the compositor did not answer: nothing the daemon can use
-      log_.debug("the desktop did not say where the pointer is");
+    const std::optional<std::string> line = at ? position_request(*at) : std::nullopt;
+    // On another X screen, or the compositor did not answer (or said a position no desktop has): nothing the daemon
+    // can use. Said once when it starts and once when it ends, since without it the daemon's resync goes on from
+    // its model alone.
+    if (!line) {
+      const std::string why =
+          at ? fmt::format("the desktop said the pointer is at {}, {}, off any desktop", at->x, at->y)
+             : std::string("the desktop did not say where the pointer is");
+      if (!pointer_lost_) {
+        log_.notice(why + "; the daemon goes on from its model until it says again");
+      } else {
+        log_.debug(why);
+      }
+      pointer_lost_ = true;
       return;
     }
-    if (const std::optional<std::string> line = position_request(*at)) send(*line);
+    if (pointer_lost_) log_.notice("the desktop says where the pointer is again");
+    pointer_lost_ = false;
+    send(*line);
   }
 
   // Pass-through while a listed application has the focus (pseudohaptic-session(1), --passthrough).
@@ -202,13 +222,23 @@ class Helper {
   void read_daemon() {
     const ControlConnection::Received received = link_.connection->read_available();
     const bool in_bounds = link_.lines.append(received.data);
-    while (const std::optional<std::string> line = link_.lines.next_line()) {
-      const Conversation::Reaction reaction = link_.conversation.on_line(*line);
-      if (reaction.accepted) link_.failures = 0;
-      if (!reaction.complaint.empty()) log_.error(reaction.complaint);
-      if (reaction.send_position) send_position();
-      if (!link_.connection) return;
+    std::vector<std::string> lines;
+    while (std::optional<std::string> line = link_.lines.next_line()) lines.push_back(std::move(*line));
+    const Conversation::Reactions reactions = link_.conversation.on_lines(lines);
+    if (reactions.accepted) {
+      link_.failures = 0;
+      refusals_.forget();
     }
+    // A refusal said again on every reconnection is logged once at error, then only with --verbose.
+    for (const std::string& complaint : reactions.complaints) {
+      if (refusals_.is_new(complaint)) {
+        log_.error(complaint);
+      } else {
+        log_.debug(complaint);
+      }
+    }
+    if (reactions.send_position) send_position();  // once for all the queries read
+    if (!link_.connection) return;
     if (!in_bounds) {
       drop(fmt::format("the daemon sent a line longer than {} bytes", ph::control::kMaxLine));
     } else if (received.closed) {
@@ -221,6 +251,8 @@ class Helper {
   Desktop& desktop_;
   const Log& log_;
   Link link_;
+  Repeats refusals_;           // the daemon's complaints, said once until it accepts a request again
+  bool pointer_lost_ = false;  // the last position asked for could not be given
 };
 
 std::string_view env(const char* name) {
@@ -355,6 +387,7 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   const Log log(verbose);
+  const std::string requested = backend;
   backend = choose_backend(backend, display, wayland_display, env("WAYLAND_DISPLAY"), env("DISPLAY"));
   if (backend.empty()) {
     log.error("no desktop this helper knows: neither WAYLAND_DISPLAY nor DISPLAY is set (see pseudohaptic-session(1))");
@@ -364,6 +397,7 @@ int main(int argc, char** argv) {
     log.notice("--display names an X display: the wayland backend ignores it");
   if (backend == "x11" && !wayland_display.empty())
     log.notice("--wayland-display names a Wayland display: the x11 backend ignores it");
+  const std::vector<std::string> listed = passthrough;  // for an x11 fallback below
   if (backend != "x11" && !passthrough.empty()) {
     log.notice("--passthrough needs the x11 backend (the focused window's WM_CLASS); ignored");
     passthrough.clear();
@@ -382,8 +416,19 @@ int main(int argc, char** argv) {
     return 1;
   }
   try {
-    const std::unique_ptr<Desktop> desktop =
-        open_until_stopped(stop, log, [&] { return open_desktop(backend, display, wayland_display, log); });
+    std::unique_ptr<Desktop> desktop;
+    try {
+      desktop = open_until_stopped(stop, log, [&] { return open_desktop(backend, display, wayland_display, log); });
+    } catch (const std::runtime_error& e) {
+      // A WAYLAND_DISPLAY left in the user manager by an earlier Wayland session, in an X session now.
+      const std::string fallback = fallback_backend(requested, backend, display, wayland_display, env("DISPLAY"));
+      if (fallback.empty()) throw;
+      log.notice(
+          fmt::format("{}; trying the X display ({}) instead", e.what(), display.empty() ? env("DISPLAY") : display));
+      backend = fallback;
+      passthrough = listed;
+      desktop = open_until_stopped(stop, log, [&] { return open_desktop(backend, display, wayland_display, log); });
+    }
     if (!desktop) return 0;  // stopped while it opened
     return Helper(control, passthrough, *desktop, log).run(signals.get());
   } catch (const std::runtime_error& e) {  // X11Error, WaylandError: no display, or it went away

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <limits>
 
 #include "control/protocol.hpp"
@@ -15,12 +16,13 @@ std::string helper_request(std::string_view backend) {
 }
 
 std::optional<std::string> layout_request(Rect layout) {
-  if (layout.w <= 0 || layout.h <= 0) return std::nullopt;
+  if (!is_valid_desktop(layout)) return std::nullopt;
   return control::format_request(control::LayoutRequest{layout}) + "\n";
 }
 
 std::optional<std::string> position_request(Vec2 position) {
-  if (!is_finite(position)) return std::nullopt;
+  constexpr double kMax = kMaxDesktopCoordinate;
+  if (!is_finite(position) || std::fabs(position.x) > kMax || std::fabs(position.y) > kMax) return std::nullopt;
   return control::format_request(control::PositionRequest{position}) + "\n";
 }
 
@@ -65,6 +67,18 @@ std::string choose_backend(std::string_view requested, std::string_view x_displa
   return "";
 }
 
+std::string fallback_backend(std::string_view requested, std::string_view chosen, std::string_view x_display_option,
+                             std::string_view wayland_display_option, std::string_view display_env) {
+  const bool from_environment_alone = requested == "auto" && chosen == "wayland" && wayland_display_option.empty();
+  return from_environment_alone && (!display_env.empty() || !x_display_option.empty()) ? "x11" : "";
+}
+
+bool Repeats::is_new(std::string_view message) {
+  if (message == last_) return false;
+  last_ = message;
+  return true;
+}
+
 std::chrono::milliseconds reconnect_delay(int failures) {
   const int doublings = std::clamp(failures - 1, 0, 5);
   return std::min(std::chrono::milliseconds(250 << doublings), std::chrono::milliseconds(5000));
@@ -86,6 +100,12 @@ Conversation::Reaction Conversation::on_line(std::string_view line) {
     reaction.complaint = fmt::format("the daemon sent a line not understood: '{}'", line);
     return reaction;
   }
+  // Refusals of the connection itself, which the daemon sends as it accepts it, before any request is read (and
+  // then closes it): no request of the helper's was refused.
+  if (!reply->ok && (reply->text.starts_with("permission denied") || reply->text == "too many connections")) {
+    reaction.complaint = fmt::format("the daemon refused the connection: {}", reply->text);
+    return reaction;
+  }
   std::string request = "(nothing)";
   if (!awaiting_.empty()) {
     request = std::move(awaiting_.front());
@@ -94,6 +114,17 @@ Conversation::Reaction Conversation::on_line(std::string_view line) {
   reaction.accepted = reply->ok;
   if (!reply->ok) reaction.complaint = fmt::format("the daemon refused '{}': {}", request, reply->text);
   return reaction;
+}
+
+Conversation::Reactions Conversation::on_lines(const std::vector<std::string>& lines) {
+  Reactions all;
+  for (const std::string& line : lines) {
+    Reaction one = on_line(line);
+    all.send_position = all.send_position || one.send_position;
+    all.accepted = all.accepted || one.accepted;
+    if (!one.complaint.empty()) all.complaints.push_back(std::move(one.complaint));
+  }
+  return all;
 }
 
 }  // namespace ph::session

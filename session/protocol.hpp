@@ -17,9 +17,11 @@ namespace ph::session {
 
 // The requests, each a whole line with its '\n'.
 std::string helper_request(std::string_view backend);  // "helper x11"
-// "layout X Y W H"; nullopt unless W and H are > 0.
+// "layout X Y W H"; nullopt for a layout the daemon refuses (is_valid_desktop: W and H from 1 to 2^20, X and Y
+// within ±2^20).
 std::optional<std::string> layout_request(Rect layout);
-// "position X Y"; nullopt for a non-finite coordinate.
+// "position X Y"; nullopt for a coordinate the daemon refuses (not finite, or past ±2^20: a compositor that
+// misbehaves), which would only earn an error for every query.
 std::optional<std::string> position_request(Vec2 position);
 std::string passthrough_request(bool on);  // "passthrough on" / "passthrough off"
 
@@ -38,6 +40,24 @@ std::string choose_backend(std::string_view requested, std::string_view x_displa
                            std::string_view wayland_display_option, std::string_view wayland_display_env,
                            std::string_view display_env);
 
+// The backend to try when the one chosen cannot open its display: x11 where "auto" chose wayland from a
+// WAYLAND_DISPLAY alone (a variable left in the user manager by an earlier Wayland session) and an X display is at
+// hand (DISPLAY, or --display); empty otherwise.
+std::string fallback_backend(std::string_view requested, std::string_view chosen, std::string_view x_display_option,
+                             std::string_view wayland_display_option, std::string_view display_env);
+
+// A message the helper logs at its level only when it is not the one it logged last: a daemon that refuses every
+// reconnection (a session it does not let in) would otherwise log the same line every 5 s for as long as the session
+// runs. forget() when things went well again, so that the next failure is said.
+class Repeats {
+ public:
+  bool is_new(std::string_view message);
+  void forget() { last_.clear(); }
+
+ private:
+  std::string last_;
+};
+
 // How long to wait before the next connection attempt after `failures` failed ones in a row: 250 ms,
 // doubling, at most 5 s.
 std::chrono::milliseconds reconnect_delay(int failures);
@@ -52,10 +72,19 @@ class Conversation {
     bool accepted = false;       // an `ok` reply: the daemon takes this helper's requests
     std::string complaint;       // non-empty: a line to log (an error reply, or a line not understood)
   };
+  // What a batch of lines read at once asks: a position once however many `query` lines came (each answer costs
+  // a compositor query, which may take its whole time limit, and one position answers them all), whether any
+  // request was accepted, and the complaints in order.
+  struct Reactions {
+    bool send_position = false;
+    bool accepted = false;
+    std::vector<std::string> complaints;
+  };
 
   // Notes a request sent (its line, with or without '\n'), to pair with its reply.
   void sent(std::string_view request);
   Reaction on_line(std::string_view line);
+  Reactions on_lines(const std::vector<std::string>& lines);
   // Requests still waiting for their reply.
   std::size_t awaiting() const { return awaiting_.size(); }
 

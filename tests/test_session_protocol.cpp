@@ -41,6 +41,13 @@ TEST(SessionRequests, RefuseWhatTheDaemonWouldRefuse) {
   EXPECT_EQ(layout_request({0, 0, 1920, -1}), std::nullopt);
   EXPECT_EQ(position_request({std::nan(""), 1}), std::nullopt);
   EXPECT_EQ(position_request({1, HUGE_VAL}), std::nullopt);
+  // What a misbehaving compositor says (Hyprland's int32 maximum, a Wayfire reply of 1e308): past the daemon's
+  // ±2^20, which would answer each with an error.
+  EXPECT_EQ(position_request({2147483647.5, 2147483647.5}), std::nullopt);
+  EXPECT_EQ(position_request({1e308, 0}), std::nullopt);
+  EXPECT_EQ(position_request({-1048576, 1048576}), "position -1048576 1048576\n");
+  EXPECT_EQ(layout_request({0, 0, (1 << 20) + 1, 1080}), std::nullopt);
+  EXPECT_EQ(layout_request({-(1 << 20) - 1, 0, 1920, 1080}), std::nullopt);
 }
 
 TEST(SessionBackend, AutoPrefersWaylandThenX11) {
@@ -54,6 +61,27 @@ TEST(SessionBackend, AutoPrefersWaylandThenX11) {
   // --wayland-display names a Wayland display: taken, with or without WAYLAND_DISPLAY, and over DISPLAY.
   EXPECT_EQ(choose_backend("auto", "", "wayland-1", "", ""), "wayland");
   EXPECT_EQ(choose_backend("auto", "", "wayland-1", "", ":0"), "wayland");
+}
+
+// A WAYLAND_DISPLAY that auto followed and that cannot be opened (left in the user manager by an earlier Wayland
+// session, in an X session now): X is tried where an X display is at hand, and only then.
+TEST(SessionBackend, AWaylandDisplayFromTheEnvironmentAloneFallsBackToX11) {
+  EXPECT_EQ(fallback_backend("auto", "wayland", "", "", ":0"), "x11");
+  EXPECT_EQ(fallback_backend("auto", "wayland", "", "", ""), "");             // no X display
+  EXPECT_EQ(fallback_backend("auto", "wayland", "", "wayland-1", ":0"), "");  // --wayland-display: meant
+  EXPECT_EQ(fallback_backend("wayland", "wayland", "", "", ":0"), "");        // --backend wayland: meant
+  EXPECT_EQ(fallback_backend("auto", "x11", "", "", ":0"), "");
+}
+
+// A refusal the daemon says on every reconnection is logged once, and again after things went well.
+TEST(SessionLog, ARepeatedMessageIsNewOnlyAfterAnother) {
+  Repeats r;
+  EXPECT_TRUE(r.is_new("the daemon refused the connection: permission denied"));
+  EXPECT_FALSE(r.is_new("the daemon refused the connection: permission denied"));
+  EXPECT_TRUE(r.is_new("the daemon refused 'layout 0 0 0 0': layout: W and H must be from 1"));
+  EXPECT_TRUE(r.is_new("the daemon refused the connection: permission denied"));
+  r.forget();  // a request accepted
+  EXPECT_TRUE(r.is_new("the daemon refused the connection: permission denied"));
 }
 
 TEST(SessionPassthrough, ListedApplicationsMatchEitherNameInAnyCase) {
@@ -122,8 +150,39 @@ TEST(SessionConversation, ComplainsAboutLinesItDoesNotKnow) {
     EXPECT_NE(r.complaint.find("not understood"), std::string::npos) << line;
   }
   // An error with no request waiting still gets logged.
-  EXPECT_EQ(c.on_line("error permission denied: uid 1001 is not in the active session").complaint,
-            "the daemon refused '(nothing)': permission denied: uid 1001 is not in the active session");
+  EXPECT_EQ(c.on_line("error layout: W and H must be from 1 to 1048576").complaint,
+            "the daemon refused '(nothing)': layout: W and H must be from 1 to 1048576");
+}
+
+// The daemon refuses a connection as it accepts it, before it reads a request: said as the connection's refusal, not
+// blamed on the helper's first request, which stays waiting for its reply.
+TEST(SessionConversation, ARefusedConnectionIsNotARefusedRequest) {
+  Conversation c;
+  c.sent("helper x11\n");
+  EXPECT_EQ(
+      c.on_line("error permission denied: uid 1001 is neither root nor the user of an active local session").complaint,
+      "the daemon refused the connection: permission denied: uid 1001 is neither root nor the user of an active "
+      "local session");
+  EXPECT_EQ(c.on_line("error too many connections").complaint,
+            "the daemon refused the connection: too many connections");
+  EXPECT_EQ(c.awaiting(), 1u);
+}
+
+// Lines read at once: one position for however many queries (each costs a compositor query, up to its time limit),
+// and every complaint.
+TEST(SessionConversation, QueriesReadAtOnceAskForOnePosition) {
+  Conversation c;
+  c.sent("layout 0 0 1920 1080\n");
+  c.sent("position 1 2\n");
+  const Conversation::Reactions r =
+      c.on_lines({"query", "query", "ok", "query", "error position: X and Y", "nonsense"});
+  EXPECT_TRUE(r.send_position);
+  EXPECT_TRUE(r.accepted);
+  EXPECT_EQ(r.complaints, (std::vector<std::string>{"the daemon refused 'position 1 2': position: X and Y",
+                                                    "the daemon sent a line not understood: 'nonsense'"}));
+  const Conversation::Reactions none = c.on_lines({});
+  EXPECT_FALSE(none.send_position || none.accepted);
+  EXPECT_TRUE(none.complaints.empty());
 }
 
 }  // namespace
