@@ -1,4 +1,5 @@
 // End-to-end test of `pseudohaptic accuracy --small`: the three CSV files the charts read.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -43,6 +44,10 @@ TEST(ToolAccuracy, SmallRunWritesTheThreeCsvFiles) {
   ASSERT_EQ(r.rc, 0) << r.err;
 
   const auto [vh, variants] = read_csv_rows(out / "variants.csv");
+  // Progress counts the rows it measures, against the total it said at the start.
+  const std::string last = fmt::format("[{0}/{0}] ", variants.size());
+  EXPECT_NE(r.err.find(fmt::format(": {} rows (", variants.size())), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(last), std::string::npos) << r.err;
   ASSERT_EQ(vh,
             "variant,method,traversal,storage,sampling,ns_per_frame_median,ns_per_frame_p99,ns_per_step,"
             "bytes_per_texel,precompute_ms,cd_err_rms,cd_err_max,end_err_rms_px,end_err_max_px,drift_px");

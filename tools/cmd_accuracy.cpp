@@ -603,8 +603,19 @@ VariantRow measure_auto(const Workload& w, const MethodTruth& truth, const Metho
 constexpr double kAutoBudgetsPx[] = {0.25, 2.0, 8.0};
 
 // Every variant of every method: method x storage x (engine variants, auto at each budget).
+// The rows measure_all makes: every engine variant on each storage of each method, and auto at each budget on f32.
+std::size_t rows_to_measure(const Workload& w, const std::vector<MethodPtr>& methods) {
+  std::size_t n = 0;
+  for (const MethodPtr& method : methods) {
+    for (Storage storage : storages_for(*method))
+      n += w.engines.size() + (storage == Storage::f32 ? std::size(kAutoBudgetsPx) : 0);
+  }
+  return n;
+}
+
 std::vector<VariantRow> measure_all(const Workload& w, const std::vector<MethodPtr>& methods) {
   std::vector<VariantRow> rows;
+  const std::size_t total = rows_to_measure(w, methods);
   for (const MethodPtr& method : methods) {
     // A method that reads heights only where a depth map is given has a truth with them and one without.
     std::optional<MethodTruth> truths[2];  // [0]: without a depth map
@@ -614,13 +625,15 @@ std::vector<VariantRow> measure_all(const Workload& w, const std::vector<MethodP
       std::optional<MethodTruth>& truth = truths[depth_given ? 1 : 0];
       if (!truth) {
         const Clock::time_point t_truth = Clock::now();
+        fmt::print(stderr, "accuracy: {} ground truth{}...\n", method->name(),
+                   depth_given ? "" : " without a depth map");
         truth = compute_truth(w, *method, depth_given);
         fmt::print(stderr, "accuracy: {} ground truth{} in {:.1f} s\n", method->name(),
                    depth_given ? "" : " without a depth map", ms_since(t_truth) / 1000.0);
       }
-      auto report = [&rows](VariantRow row) {
-        fmt::print(stderr, "accuracy: {:<44} end rms {:.3g} px, C/D rms {:.3g}, {:.0f} ns/frame\n", row.variant,
-                   row.end_rms, row.cd_rms, row.ns_median);
+      auto report = [&rows, total](VariantRow row) {
+        fmt::print(stderr, "accuracy: [{}/{}] {:<44} end rms {:.3g} px, C/D rms {:.3g}, {:.0f} ns/frame\n",
+                   rows.size() + 1, total, row.variant, row.end_rms, row.cd_rms, row.ns_median);
         rows.push_back(std::move(row));
       };
       for (const EngineOptions& engine : w.engines) report(measure_variant(w, *truth, method, storage, scenes, engine));
@@ -695,9 +708,12 @@ int run_accuracy(const AccuracyOptions& o) {
   const fs::path outdir(o.outdir);
   prepare_output_folder(outdir, {"variants.csv", "fig5_traces.csv", "fig2_grid.csv"});
   const Workload workload = make_workload(o.small);
-  fmt::print(stderr, "accuracy: {} shapes, {} strokes, {} engine variants\n", workload.config.targets.size(),
-             workload.strokes.size(), workload.engines.size());
   const std::vector<MethodPtr> methods = measured_methods();
+  fmt::print(stderr,
+             "accuracy: {} shapes, {} strokes, {} engine variants: {} rows (methods x storages x variants, "
+             "and auto)\n",
+             workload.config.targets.size(), workload.strokes.size(), workload.engines.size(),
+             rows_to_measure(workload, methods));
   const std::vector<VariantRow> rows = measure_all(workload, methods);
   // Replaced as a set: an interrupted run leaves the three files of the last one, not some of each.
   OutputSet files(outdir);
