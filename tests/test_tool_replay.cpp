@@ -946,6 +946,25 @@ TEST(ReplayTool, ARecordingWithoutMotionIsWarnedOf) {
       << unended.err;
 }
 
+// A long recording takes seconds: on a terminal the replay says what it is doing, on one line it erases; into a
+// file or a pipe it says nothing of it (a log would fill with progress).
+TEST(ReplayTool, ProgressIsShownOnATerminalOnly) {
+  if (std::system("command -v script >/dev/null 2>&1") != 0) GTEST_SKIP() << "no script(1) for a terminal";
+  ScratchDir dir;
+  const fs::path in = testing::recorded_mice().front();
+  ASSERT_EQ(testing::missing_file({in}), "");
+  const std::string replay = quote(std::string(PH_TOOL_PATH)) + " replay " + quote(in) + " " + quote(dir / "out.evemu");
+  const ToolResult on_terminal = run_program("script", "-qec " + quote(replay) + " /dev/null", dir);
+  ASSERT_EQ(on_terminal.rc, 0) << on_terminal.out << on_terminal.err;
+  EXPECT_TRUE(contains(on_terminal.out, "\rreplay: reading ")) << on_terminal.out;
+  EXPECT_TRUE(contains(on_terminal.out, " % of ")) << on_terminal.out;
+  EXPECT_TRUE(contains(on_terminal.out, "\rreplay: writing ")) << on_terminal.out;
+  EXPECT_TRUE(contains(on_terminal.out, "replayed ")) << on_terminal.out;
+  const ToolResult in_a_file = run_tool("replay " + quote(in) + " " + quote(dir / "out.evemu"), dir);
+  ASSERT_EQ(in_a_file.rc, 0) << in_a_file.err;
+  EXPECT_FALSE(contains(in_a_file.err, "replay: ")) << in_a_file.err;
+}
+
 TEST(ReplayTool, IsDeterministicAcrossProcesses) {
   ScratchDir dir;
   const fs::path in = testing::recorded_mice().front();

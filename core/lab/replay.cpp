@@ -14,7 +14,7 @@ void run_stream(EventSource& source, Pipeline& pipeline, EventSink& sink, std::v
 }
 
 Recording replay(const Recording& input, const Scene& scene, const PipelineConfig& config,
-                 std::vector<FrameReport>* reports) {
+                 std::vector<FrameReport>* reports, std::function<void(std::size_t)> progress) {
   Recording output;
   // Absolute output describes a tablet-like device of the desktop's size, for a pointer the daemon takes; a device
   // without relative motion (a tablet, a keyboard) the daemon never takes, and its description stays its own.
@@ -27,7 +27,7 @@ Recording replay(const Recording& input, const Scene& scene, const PipelineConfi
   output.events.reserve(input.events.size());
   // The scene outlives this call: share it without owning it.
   Pipeline pipeline(std::shared_ptr<const Scene>(std::shared_ptr<const Scene>(), &scene), config);
-  RecordingSource source(input.events);
+  RecordingSource source(input.events, std::move(progress));
   RecordingSink sink(output.events);
   run_stream(source, pipeline, sink, reports);
   return output;
