@@ -74,6 +74,7 @@ std::optional<DeviceMatch> parse_device_match(std::string_view text, std::string
     }
     match.vendor = vendor;
     match.product = product;
+    match.written_usb = prefix == "usb:";
     return match;
   }
   error = fmt::format("'{}': unknown matcher ({})", text, kAllowed);
@@ -82,7 +83,8 @@ std::optional<DeviceMatch> parse_device_match(std::string_view text, std::string
 
 std::string format_device_match(const DeviceMatch& match) {
   if (match.name_glob) return "name:" + *match.name_glob;
-  return fmt::format("id:{:04x}:{:04x}", match.vendor.value_or(0), match.product.value_or(0));
+  return fmt::format("{}:{:04x}:{:04x}", match.written_usb ? "usb" : "id", match.vendor.value_or(0),
+                     match.product.value_or(0));
 }
 
 AccelSettings acceleration_of(const DaemonSettings& settings) {

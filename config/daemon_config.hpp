@@ -20,6 +20,7 @@ namespace ph {
 struct DeviceMatch {
   std::optional<std::string> name_glob;
   std::optional<std::uint16_t> vendor, product;
+  bool written_usb = false;  // "usb:" rather than "id:" (the same matcher): said back as it was written
 };
 
 struct DaemonSettings {

@@ -195,6 +195,14 @@ TEST(DaemonConfiguration, ReloadKeepsThePipelineWhenOnlyTheSceneChanged) {
   std::string error;
   pickier.settings.devices.push_back(*parse_device_match("name:Logitech*", error));
   EXPECT_FALSE(only_scene_differs(base, pickier));
+  // The same devices written another way (usb: and id: are one matcher): the mice need not be taken again.
+  Configuration by_usb = base, by_id = base;
+  by_usb.settings.devices.push_back(*parse_device_match("usb:046d:c077", error));
+  by_id.settings.devices.push_back(*parse_device_match("id:046D:C077", error));
+  EXPECT_TRUE(only_scene_differs(by_usb, by_id));
+  Configuration other_mouse = by_usb;
+  other_mouse.settings.devices.back().product = 0xc078;
+  EXPECT_FALSE(only_scene_differs(by_usb, other_mouse));
 }
 
 // Invalid texels are reported at load (docs/METHODS.md, "Screen, regions and fields"): the daemon logs every

@@ -92,7 +92,7 @@ TEST(DeviceMatches, VendorProductIds) {
   EXPECT_TRUE(device_matches(s, "whatever", 0x1532, 0x00a5)) << "hex digits in either case";
   EXPECT_FALSE(device_matches(s, "whatever", 0x046d, 0xc078));
   EXPECT_FALSE(device_matches(s, "whatever", 0xc077, 0x046d));
-  EXPECT_EQ(format_device_match(s.devices[0]), "id:046d:c077");
+  EXPECT_EQ(format_device_match(s.devices[0]), "usb:046d:c077");  // said back as written
   EXPECT_EQ(format_device_match(s.devices[1]), "id:1532:00a5");
   // usb: and id: are the same matcher: vendor:product regardless of the bus.
   EXPECT_TRUE(device_matches(with({"id:046d:c077"}), "", 0x046d, 0xc077));

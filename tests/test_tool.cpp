@@ -1267,7 +1267,7 @@ TEST(Tool, CheckConfig) {
           << r.err;
     }
     for (std::string_view part :
-         {"name:Logitech*, id:046d:c077", "absolute", "0,0 2560x1440", "1.5", "'bump-gaussian-h1-r100'", "500x500",
+         {"name:Logitech*, usb:046d:c077", "absolute", "0,0 2560x1440", "1.5", "'bump-gaussian-h1-r100'", "500x500",
           "curvature", "2000000 bytes", "0 invalid texels repaired", "\n      normal map: 500x500 px\n",
           "\n      depth map: not read: neither the method nor an effect uses it\n"}) {
       EXPECT_TRUE(contains(r.out, part)) << "expected '" << part << "' in: " << r.out;
