@@ -466,8 +466,9 @@ PH_FRAME_PATH void Daemon::on_mouse_batch(const std::string& node, Mouse& mouse,
   try {
     if (!events.empty()) {
       const SteadyTime now{std::chrono::microseconds(events.front().time)};
-      // Motion after a pause: whatever happened meanwhile (a warp, another pointer), ask where the cursor is.
-      if (now - last_motion_ > kPauseBeforeQuery && control_ && control_->has_helper()) {
+      // Motion after a pause: whatever happened meanwhile (a warp, another pointer), ask where the cursor is. Not
+      // in pass-through, where the model is not used (its frames would only wait for the answer).
+      if (now - last_motion_ > kPauseBeforeQuery && !passthrough_wanted_ && control_ && control_->has_helper()) {
         control_->query_helper();
         last_query_ = now;
         if (!holding_) start_holding();
@@ -626,8 +627,15 @@ void Daemon::set_passthrough(bool on) {
   for (auto& [node, mouse] : mice_) {
     if (on && mouse->frames != nullptr) make_passthrough_sink(node, *mouse);
   }
-  // The application may have moved the cursor while it held it.
-  if (!on && control_) control_->query_helper();
+  // The application may have moved the cursor while it held it: ask where it is, and hold the mice's frames until
+  // the answer, as after a pause, so that motion that goes on across the switch does not start from the model of
+  // before (the cursor would jump back, and the answer, a pixel the daemon had just emitted, be taken for its own).
+  // Nothing the daemon emitted before is still on its way through the desktop.
+  if (!on && control_ && control_->has_helper()) {
+    emitted_.clear();
+    control_->query_helper();
+    if (!holding_) start_holding();
+  }
   notifier_.status(status_line());
 }
 

@@ -632,9 +632,38 @@ int follow_cases(const Options& options, XServer& x, TestMouse& mouse, TestMouse
         fmt::format("{} of 5 frames of (-7, +3) counts came out of the pass-through device (XInput id {}) "
                     "unchanged, nothing out of the absolute one; X's pointer went from ({}, {}) to ({}, {})",
                     unchanged, *relative, from.x, from.y, to.x, to.y));
+    // The focus leaves while the mouse goes on moving: the frames after the switch start where the application left
+    // X's pointer, not from the model of before (the daemon holds them for the helper's answer, as after a pause):
+    // X's pointer never jumps back. The application first takes the pointer 200 px or so away from the model, and
+    // the frames come a millisecond apart, so that some reach the daemon before the helper's answer.
+    for (int i = 0; i < 10; ++i) {
+      mouse.send(make_frame({rel(ev::kRelX, -20)}));
+      std::this_thread::sleep_for(8ms);
+    }
+    std::this_thread::sleep_for(100ms);
+    x.drain();
     x.set_active_window(None);
     XSync(x.get(), False);
+    XServer::Pointer last = x.pointer();
+    double largest_step = 0.0;
+    std::string largest_at;
+    for (int i = 0; i < 200; ++i) {
+      mouse.send(make_frame({rel(ev::kRelX, 1)}));
+      std::this_thread::sleep_for(1ms);
+      if (i % 5 != 4) continue;
+      const XServer::Pointer now = x.pointer();
+      const double step = std::hypot(now.x - last.x, now.y - last.y);
+      if (step > largest_step) {
+        largest_step = step;
+        largest_at = fmt::format("frames {}-{}: ({}, {}) -> ({}, {})", i - 4, i, last.x, last.y, now.x, now.y);
+      }
+      last = now;
+    }
     if (!wait_until([&] { return !passing(); }, 10s, nullptr, 50ms)) problems.push_back("pass-through did not end");
+    notes.push_back(fmt::format(
+        "200 frames of +1 count 1 ms apart across the switch: X's pointer's largest step in 5 frames {:.1f} px ({})",
+        largest_step, largest_at));
+    if (largest_step > 60.0) problems.push_back("X's pointer jumped at the switch: " + largest_at);
     XDestroyWindow(x.get(), game);
     XSync(x.get(), False);
     // Back to the textures: after the helper's answer, the mouse's frames come from the absolute device
