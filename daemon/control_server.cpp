@@ -214,8 +214,9 @@ void ControlServer::read_client(int fd, ControlHandler& handler) {
     const auto* request = std::get_if<control::Request>(&parsed);
     return request != nullptr && std::holds_alternative<control::LayoutRequest>(*request);
   };
+  // (Unless another connection has sent a layout since, which is then the latest and applied.)
   const auto apply_deferred = [&] {
-    if (client.layout_deferred) handler.layout(*client.layout);
+    if (client.layout_deferred && layouts_.latest() == fd) handler.layout(*client.layout);
     client.layout_deferred = false;
   };
   const bool more_waiting = !too_long && static_cast<std::size_t>(n) == buffer.size() && bytes_waiting(fd);

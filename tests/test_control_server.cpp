@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -541,6 +542,53 @@ TEST(ControlServer, OfARunOfLayoutsOnlyTheLastIsApplied) {
   ASSERT_TRUE(status_read);
   EXPECT_EQ(server.handler.desktop(), (Rect{0, 0, 640, 480}));
   EXPECT_EQ(server.handler.layouts(), 4);
+}
+
+// A layout that ended one read of a connection, more of its burst waiting, is applied before what follows it in the
+// next read: unless another connection's layout came between, which is then the latest and stays.
+TEST(ControlServer, ALayoutLeftForTheNextReadGivesWayToALaterOne) {
+  const ScratchDir dir("control-deferred-layout");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  const UniqueFd epoll(::epoll_create1(EPOLL_CLOEXEC));
+  std::FILE* null = std::fopen("/dev/null", "w");
+  ASSERT_NE(null, nullptr);
+  const Logger log(false, false, null);
+  RecordingHandler handler;
+  {
+    ControlServer server(path, epoll.get(), sessions, log);
+    std::array<epoll_event, 8> events{};
+    const auto wait = [&] { return ::epoll_wait(epoll.get(), events.data(), static_cast<int>(events.size()), 1000); };
+    control::Client a(path);
+    ASSERT_EQ(wait(), 1);
+    server.on_readable(events[0].data.fd, handler);  // A accepted
+    control::Client b(path);
+    ASSERT_EQ(wait(), 1);
+    server.on_readable(events[0].data.fd, handler);  // B accepted
+    // Exactly one read's worth of layouts (8 lines of 22 bytes, 16 of 21: 512), then a request.
+    std::string burst;
+    for (int i = 0; i < 8; ++i) burst += "layout 0 0 1111 11111\n";
+    for (int i = 0; i < 16; ++i) burst += "layout 0 0 1111 1111\n";
+    ASSERT_EQ(burst.size(), 512U);
+    burst += "cursor\n";
+    ASSERT_EQ(::send(a.fd(), burst.data(), burst.size(), MSG_NOSIGNAL), static_cast<ssize_t>(burst.size()));
+    ASSERT_EQ(wait(), 1);
+    const int a_fd = events[0].data.fd;
+    server.on_readable(a_fd, handler);  // the layouts: the last one waits for what follows
+    EXPECT_EQ(handler.layouts(), 0);
+    const std::string later = "layout 0 0 2222 2222\n";
+    ASSERT_EQ(::send(b.fd(), later.data(), later.size(), MSG_NOSIGNAL), static_cast<ssize_t>(later.size()));
+    std::this_thread::sleep_for(50ms);
+    const int n = wait();
+    ASSERT_EQ(n, 2);
+    const int b_fd = events[0].data.fd == a_fd ? events[1].data.fd : events[0].data.fd;
+    server.on_readable(b_fd, handler);  // B's layout, sent after A's
+    EXPECT_EQ(handler.desktop(), (Rect{0, 0, 2222, 2222}));
+    server.on_readable(a_fd, handler);  // A's `cursor`
+    EXPECT_EQ(handler.desktop(), (Rect{0, 0, 2222, 2222})) << "A's earlier layout was applied over B's";
+    EXPECT_EQ(handler.layouts(), 1);
+  }
+  std::fclose(null);
 }
 
 // A burst longer than the daemon reads at once (it reads a little at a time, so that a flood does not hold up the
