@@ -229,9 +229,8 @@ std::vector<std::string> enter_reader_sandbox() {
     // Never raised: a tighter limit the reader was started under (ulimit, the unit's LimitAS=) stays, and an
     // unprivileged process could not raise it anyway.
     rlimit limit{value, value};
-    rlimit now{};
-    if (::getrlimit(resource, &now) == 0 && now.rlim_max != RLIM_INFINITY && now.rlim_max < value)
-      limit = {now.rlim_max, now.rlim_max};
+    if (rlimit now{}; ::getrlimit(resource, &now) == 0)  // (RLIM_INFINITY is the largest value)
+      limit = {std::min<rlim_t>(value, now.rlim_cur), std::min<rlim_t>(value, now.rlim_max)};
     if (::setrlimit(resource, &limit) < 0) missed.push_back(failed("setrlimit"));
   }
 #if defined(__x86_64__)

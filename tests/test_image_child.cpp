@@ -398,6 +398,19 @@ TEST(ImageWire, AnswersWithNonFiniteOrMisshapenFieldsAreRefused) {
   }
 }
 
+// The reader's limits never raise one it was started under, soft or hard (a user's `ulimit -S`, a unit's LimitCPU=).
+TEST(ReaderSandbox, NeverRaisesALimitItWasStartedUnder) {
+  const int status = in_child([] {
+    const rlimit soft{10, RLIM_INFINITY};  // 10 s of CPU, soft only
+    if (::setrlimit(RLIMIT_CPU, &soft) != 0) return 1;
+    enter_reader_sandbox();
+    rlimit now{};
+    if (::getrlimit(RLIMIT_CPU, &now) != 0) return 2;
+    return now.rlim_cur == 10 && now.rlim_max == 300 ? 0 : 3;  // the soft limit kept; the hard one the reader's
+  });
+  EXPECT_EQ(status, 0) << "1: could not set the test's limit; 2: could not read it; 3: raised or not lowered";
+}
+
 TEST(ReaderSandbox, ForbidsWritingSocketsAndNewProcessesButNotThreadsOrReading) {
   const ScratchDir dir("sandbox");
   const std::string target = (dir.path() / "written").string();
