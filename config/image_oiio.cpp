@@ -83,6 +83,18 @@ void write_pixels(const std::filesystem::path& path, const char* format, std::in
   const bool written = out->write_image(type, pixels);
   const bool closed = out->close();
   if (!written || !closed) throw image_file_error(path, "cannot write: " + one_line(out->geterror()));
+  // OpenImageIO 2.4's PNG writer reports success where the disk was full or the file size limit met, leaving the
+  // file cut short: read back, whole, what was written (a tool's pictures and maps; milliseconds for the largest).
+  // The format's own reader: the name may not say it (a temporary name).
+  const OIIO::ImageSpec config = as_stored_config();
+  auto in = OIIO::ImageInput::create(format);
+  OIIO::ImageSpec read_spec;
+  const bool opened = in && in->open(path.string(), read_spec, config);
+  std::vector<unsigned char> back(opened ? in->spec().image_bytes() : 0);
+  if (!opened || in->spec().width != width || in->spec().height != height ||
+      !in->read_image(0, 0, 0, in->spec().nchannels, OIIO::TypeDesc::UNKNOWN, back.data())) {
+    throw image_file_error(path, "cannot write: the file reads back cut short or corrupt (a full disk?)");
+  }
 }
 
 OIIO::TypeDesc type_desc(image_backend::PixelType type) {

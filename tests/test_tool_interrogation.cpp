@@ -240,6 +240,14 @@ TEST(ToolInterrogation, InspectChecksEverythingBeforeWritingAnything) {
     if (name.ends_with(".partial")) continue;  // the temporary of the picture it was writing, as for a CSV file
     EXPECT_TRUE(earlier.contains(name) && earlier.at(name) == bytes) << name << " changed";
   }
+  // The limit met with SIGXFSZ ignored, as a full disk is met: OpenImageIO's PNG writer says nothing of the picture
+  // it cut short (it exited 0 and the set was committed); the picture is read back, and the run fails.
+  const ToolResult full = run_program("/bin/sh", "-c " + quote("trap '' XFSZ && " + limited), dir);
+  expect_clean_failure(full, {"K.png", "reads back cut short or corrupt"});
+  for (const auto& [name, bytes] : pictures()) {
+    if (name.ends_with(".partial")) continue;
+    EXPECT_TRUE(earlier.contains(name) && earlier.at(name) == bytes) << name << " changed";
+  }
 
   expect_clean_failure(run_tool("inspect " + quote(dir / "new") + maps + " --light 0,0,0", dir), {"--light"});
   EXPECT_FALSE(fs::exists(dir / "new"));
