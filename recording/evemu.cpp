@@ -88,7 +88,14 @@ class LineReader {
       const std::size_t available = end_ - begin_;
       const auto* newline = static_cast<const char*>(std::memchr(start, '\n', available));
       const std::size_t length = newline != nullptr ? static_cast<std::size_t>(newline - start) : available;
-      if (line_.size() + length > kMaxEvemuLine + 1) fail_too_long();
+      if (line_.size() + length > kMaxEvemuLine + 1) {
+        // A file of old Mac line endings is one long line: said as such, not as a line too long. (A carriage return
+        // that ends a line before its newline is CRLF's.)
+        const std::size_t scanned = newline != nullptr && length > 0 && start[length - 1] == '\r' ? length - 1 : length;
+        if (line_.find('\r') != std::string::npos || std::memchr(start, '\r', scanned) != nullptr)
+          check_text(string_view("\r"));
+        fail_too_long();
+      }
       line_.append(start, length);
       begin_ += length;
       if (newline != nullptr) {

@@ -430,6 +430,13 @@ TEST(Evemu, EveryMistakeNamesItsLine) {
       {kName + "\x01\x02garbage\n", 2, "binary data (byte 0x01)"},
       {kName + "N\r: x\n", 2, "a carriage return that does not end a line (old Mac line endings?)"},
       {kName + "E: 0.000000 0002 0000 1\rE: 0.000000 0000 0000 0\r", 2, "a carriage return that does not end"},
+      {kName +
+           [] {  // a whole file of old Mac line endings: one line longer than a line may be
+             std::string lines;
+             while (lines.size() < 6000) lines += "E: 0.000000 0002 0000 1\r";
+             return lines;
+           }(),
+       2, "a carriage return that does not end"},
       {kName + "# a comment with a \x7f\n", 2, "binary data"},
       {"# EVEMU 2.0\nN: a\n", 1, "evemu format version 2.0 is not supported"},
       {"# EVEMU one\nN: a\n", 1, "bad version line"},

@@ -960,6 +960,14 @@ TEST(ReplayTool, ProgressIsShownOnATerminalOnly) {
   EXPECT_TRUE(contains(on_terminal.out, " % of ")) << on_terminal.out;
   EXPECT_TRUE(contains(on_terminal.out, "\rreplay: writing ")) << on_terminal.out;
   EXPECT_TRUE(contains(on_terminal.out, "replayed ")) << on_terminal.out;
+  // The replay to standard output, the same terminal: the progress line is gone before the recording's text.
+  const ToolResult to_terminal = run_program(
+      "script", "-qec " + quote(quote(std::string(PH_TOOL_PATH)) + " replay " + quote(in) + " -") + " /dev/null", dir);
+  ASSERT_EQ(to_terminal.rc, 0) << to_terminal.out;
+  EXPECT_FALSE(contains(to_terminal.out, "replay: writing")) << to_terminal.out.substr(0, 300);
+  const std::size_t text = to_terminal.out.find("# EVEMU");
+  ASSERT_NE(text, std::string::npos);
+  EXPECT_EQ(to_terminal.out.find("replay: ", text), std::string::npos);
   const ToolResult in_a_file = run_tool("replay " + quote(in) + " " + quote(dir / "out.evemu"), dir);
   ASSERT_EQ(in_a_file.rc, 0) << in_a_file.err;
   EXPECT_FALSE(contains(in_a_file.err, "replay: ")) << in_a_file.err;

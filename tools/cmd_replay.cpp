@@ -307,9 +307,12 @@ int run_replay(const ReplayOptions& o) {
   };
   const Recording output = replay(input, scene, config, o.trace.empty() ? nullptr : &reports,
                                   progress.in_place() ? std::function<void(std::size_t)>(replayed) : nullptr);
-  stage("writing " + o.output);
+  // Standard output may be the terminal the progress line is on: the line goes before anything is written there.
+  const bool to_stdout = o.output == "-" || o.trace == "-";
+  if (!to_stdout) stage("writing " + o.output);
   std::ostringstream text;
   write_evemu(text, output);
+  if (to_stdout) progress.finish(true);
 
   // Both texts go to their temporary files first; then what is written directly (it can fail: a FIFO's
   // reader gone, a full disk), then the renames (which practically cannot), the output last each time. A
