@@ -399,6 +399,8 @@ def build(root):
             for old, new in (("curvature:sign+1", "none"), ("depth", "hybrid")):
                 edit_where(d / name, {"technique": old}, "technique", new)
 
+    (out / "11 not the paper's techniques").mkdir(parents=True)  # an earlier run's chart there: removed
+    (out / "11 not the paper's techniques" / "study_times.png").write_bytes(b"an earlier run's")
     study("11 not the paper's techniques", variant("t_others", good_study, other_techniques), 0,
           err=["study_times.png: not drawn", "no scored trial with a time of the paper's techniques"],
           files=["study_errors.png", "study_techniques.png"], no_files=["study_times.png"])
@@ -415,6 +417,9 @@ def build(root):
            err=["FAKE is older than the CSV files", "charted as measurements"], no_out=["FAKE DATA"])
     cases.append(Case("12 fake data over measurements", "charts.py", ["--fake-data", variant("fake_over", good_acc)],
                       1, err=["holds variants.csv, fig5_traces.csv, fig2_grid.csv and no FAKE marker"]))
+    cases.append(Case("12 fake data over measurements after fake data", "charts.py",
+                      ["--fake-data", variant("fake_over_stale", good_acc, lambda d: marked(d, -60))], 1,
+                      err=["no FAKE marker newer than them"]))
     return cases
 
 

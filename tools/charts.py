@@ -925,17 +925,18 @@ def fake_curvature_cd(a1, a2):
 CSV_NAMES = ("variants.csv", "fig5_traces.csv", "fig2_grid.csv")
 
 
-def is_fake(csvdir):
+def is_fake(csvdir, quiet=False):
     """Whether CSVDIR holds --fake-data's files: its FAKE marker, written after them, no older than any of them (a
     run of `pseudohaptic accuracy` into the folder replaces the files and leaves the marker older)."""
     marker = csvdir / "FAKE"
     if not marker.exists():
         return False
-    newest = max((csvdir / n).stat().st_mtime_ns for n in CSV_NAMES if (csvdir / n).exists())
+    newest = max([(csvdir / n).stat().st_mtime_ns for n in CSV_NAMES if (csvdir / n).exists()], default=0)
     if marker.stat().st_mtime_ns >= newest:
         return True
-    print(f"charts.py: warning: {marker} is older than the CSV files, which a later run replaced: charted as "
-          "measurements", file=sys.stderr)
+    if not quiet:
+        print(f"charts.py: warning: {marker} is older than the CSV files, which a later run replaced: charted as "
+              "measurements", file=sys.stderr)
     return False
 
 
@@ -943,9 +944,9 @@ def write_fake(csvdir):
     """Made-up CSV files of the contract's shape (deterministic) for developing and testing the charts."""
     rng = random.Random(6)
     measured = [n for n in CSV_NAMES if (csvdir / n).exists()]
-    if measured and not (csvdir / "FAKE").exists():
-        raise InputError(f"{csvdir} holds {', '.join(measured)} and no FAKE marker: measurements, which "
-                         "--fake-data would overwrite; give a new or empty folder")
+    if measured and not is_fake(csvdir, quiet=True):
+        raise InputError(f"{csvdir} holds {', '.join(measured)} and no FAKE marker newer than them: measurements, "
+                         "which --fake-data would overwrite; give a new or empty folder")
     csvdir.mkdir(parents=True, exist_ok=True)
     cols = ["variant", "method", "traversal", "storage", "sampling"] + VARIANT_NUMERIC
     base = {"exact": 260, "unit_steps": 330, "frame_midpoint": 60, "direction_lut8": 150, "direction_lut16": 165}

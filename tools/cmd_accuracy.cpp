@@ -602,7 +602,6 @@ VariantRow measure_auto(const Workload& w, const MethodTruth& truth, const Metho
 // frame_midpoint on more shapes.
 constexpr double kAutoBudgetsPx[] = {0.25, 2.0, 8.0};
 
-// Every variant of every method: method x storage x (engine variants, auto at each budget).
 // The rows measure_all makes: every engine variant on each storage of each method, and auto at each budget on f32.
 std::size_t rows_to_measure(const Workload& w, const std::vector<MethodPtr>& methods) {
   std::size_t n = 0;
@@ -613,6 +612,7 @@ std::size_t rows_to_measure(const Workload& w, const std::vector<MethodPtr>& met
   return n;
 }
 
+// Every variant of every method: method x storage x (engine variants, auto at each budget).
 std::vector<VariantRow> measure_all(const Workload& w, const std::vector<MethodPtr>& methods) {
   std::vector<VariantRow> rows;
   const std::size_t total = rows_to_measure(w, methods);

@@ -245,6 +245,8 @@ def main(argv):
         written = [chart_errors(summary, args.outdir)]
         if times:
             written.append(chart_times(trials, summary, args.outdir))
+        else:  # an earlier run's would read as this one's
+            (args.outdir / "study_times.png").unlink(missing_ok=True)
         written.append(chart_techniques(summary, args.outdir))
     except InputError as e:
         print(f"study_charts.py: {e}", file=sys.stderr)
