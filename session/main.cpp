@@ -140,9 +140,9 @@ class Helper {
     link_ = Link{};
     link_.failures = failures;
     link_.connection = std::move(connection);
-    // Said once, not on every reconnection of a helper the daemon keeps refusing (failures go on until it accepts).
+    // Said once, not on every reconnection of a helper the daemon keeps refusing; a daemon that restarted is said.
     const std::string connected = fmt::format("connected to pseudohapticd at {}", control_);
-    if (failures == 0) {
+    if (!refused_) {
       log_.info(connected);
     } else {
       log_.debug(connected);
@@ -228,9 +228,11 @@ class Helper {
     if (reactions.accepted) {
       link_.failures = 0;
       refusals_.forget();
+      refused_ = false;
     }
     // A refusal said again on every reconnection is logged once at error, then only with --verbose.
     for (const std::string& complaint : reactions.complaints) {
+      refused_ = refused_ || complaint.starts_with(kConnectionRefused);
       if (refusals_.is_new(complaint)) {
         log_.error(complaint);
       } else {
@@ -252,6 +254,7 @@ class Helper {
   const Log& log_;
   Link link_;
   Repeats refusals_;           // the daemon's complaints, said once until it accepts a request again
+  bool refused_ = false;       // the daemon refused the last connection itself (see Conversation::on_line)
   bool pointer_lost_ = false;  // the last position asked for could not be given
 };
 
@@ -420,9 +423,10 @@ int main(int argc, char** argv) {
     try {
       desktop = open_until_stopped(stop, log, [&] { return open_desktop(backend, display, wayland_display, log); });
     } catch (const std::runtime_error& e) {
-      // A WAYLAND_DISPLAY left in the user manager by an earlier Wayland session, in an X session now.
+      // A WAYLAND_DISPLAY left in the user manager by an earlier Wayland session, in an X session now: only where
+      // the display cannot be reached at all (a compositor that went away while it was read is not that).
       const std::string fallback = fallback_backend(requested, backend, display, wayland_display, env("DISPLAY"));
-      if (fallback.empty()) throw;
+      if (fallback.empty() || !std::string_view(e.what()).starts_with(kWaylandUnreachable)) throw;
       log.notice(
           fmt::format("{}; trying the X display ({}) instead", e.what(), display.empty() ? env("DISPLAY") : display));
       backend = fallback;

@@ -103,7 +103,7 @@ Conversation::Reaction Conversation::on_line(std::string_view line) {
   // Refusals of the connection itself, which the daemon sends as it accepts it, before any request is read (and
   // then closes it): no request of the helper's was refused.
   if (!reply->ok && (reply->text.starts_with("permission denied") || reply->text == "too many connections")) {
-    reaction.complaint = fmt::format("the daemon refused the connection: {}", reply->text);
+    reaction.complaint = fmt::format("{}{}", kConnectionRefused, reply->text);
     return reaction;
   }
   std::string request = "(nothing)";

@@ -62,6 +62,13 @@ class Repeats {
 // doubling, at most 5 s.
 std::chrono::milliseconds reconnect_delay(int failures);
 
+// How the Wayland backend's error begins where the display cannot be reached at all (no socket, refused): the one
+// failure fallback_backend is for.
+inline constexpr std::string_view kWaylandUnreachable = "cannot connect to the Wayland display ";
+
+// How Conversation says a refusal of the connection itself (before any request), for the helper to tell it apart.
+inline constexpr std::string_view kConnectionRefused = "the daemon refused the connection: ";
+
 // One connection's conversation: the requests the helper has sent and awaits replies to, in order, and
 // what a line from the daemon asks of it.
 class Conversation {
