@@ -122,6 +122,16 @@ std::uint16_t unorm_code(double v, double code_max) {
 }
 
 // Writes values in [0, 1] (`channels` interleaved) as integer codes in the given encoding.
+// A PNG just written, read back whole: the image module's writer reports success where the disk was full or the file
+// size limit met, leaving it cut short (the module reads back the other formats itself).
+void check_png_written(const fs::path& path) {
+  try {
+    read_png(path, ImageLimits{});
+  } catch (const FieldError&) {
+    throw image_file_error(path, "cannot write: the file reads back cut short or corrupt (a full disk?)");
+  }
+}
+
 void write_unorm(const fs::path& path, std::int32_t width, std::int32_t height, int channels,
                  const std::vector<double>& values, ImageEncoding encoding) {
   if (encoding.bits != 8 && encoding.bits != 16) {
@@ -134,11 +144,13 @@ void write_unorm(const fs::path& path, std::int32_t width, std::int32_t height, 
                    [](double v) { return static_cast<std::uint8_t>(unorm_code(v, 255.0)); });
     check_writable(path);
     backend(path).write_image(path, format, width, height, channels, image_backend::PixelType::uint8, codes.data());
+    if (encoding.format == ImageFormat::png) check_png_written(path);
   } else {
     std::vector<std::uint16_t> codes(values.size());
     std::transform(values.begin(), values.end(), codes.begin(), [](double v) { return unorm_code(v, 65535.0); });
     check_writable(path);
     backend(path).write_image(path, format, width, height, channels, image_backend::PixelType::uint16, codes.data());
+    if (encoding.format == ImageFormat::png) check_png_written(path);
   }
 }
 
@@ -238,6 +250,7 @@ void write_rgb_png8(const std::filesystem::path& path, std::int32_t width, std::
     throw image_file_error(path, "cannot write: pixel count does not match the size");
   check_writable(path);
   backend(path).write_image(path, "png", width, height, 3, image_backend::PixelType::uint8, rgb.data());
+  check_png_written(path);
 }
 
 }  // namespace ph

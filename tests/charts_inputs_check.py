@@ -409,8 +409,9 @@ def build(root):
     # replaced them leaves it older, and they are measurements again; --fake-data never overwrites measurements.
     def marked(d, age_s):
         (d / "FAKE").write_text("made by charts.py --fake-data; not measurements\n")
-        newest = max((d / n).stat().st_mtime for n in ("variants.csv", "fig5_traces.csv", "fig2_grid.csv"))
-        os.utime(d / "FAKE", (newest + age_s, newest + age_s))
+        newest = max((d / n).stat().st_mtime_ns for n in ("variants.csv", "fig5_traces.csv", "fig2_grid.csv"))
+        at = newest + age_s * 1_000_000_000  # in ns: a float of seconds loses the last digits, and the order with it
+        os.utime(d / "FAKE", ns=(at, at))
 
     charts("12 FAKE marker", variant("fake", good_acc, lambda d: marked(d, 0)), 0, out=["**FAKE DATA**"])
     charts("12 stale FAKE marker", variant("fake_stale", good_acc, lambda d: marked(d, -60)), 0,
