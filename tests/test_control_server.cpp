@@ -614,6 +614,39 @@ TEST(ControlServer, ABurstLongerThanOneReadIsAnsweredWholeAndInOrder) {
   EXPECT_TRUE(client.request("cursor").ok);
 }
 
+// `pseudohaptic passthrough` holds pass-through on for as long as it runs, and turns it off when a signal ends it.
+TEST(ControlServer, ThePassthroughCommandHoldsItOnWhileItRuns) {
+  const ScratchDir dir("control-passthrough-command");
+  const std::string path = (dir.path() / "control").string();
+  const FakeSessions sessions(::getuid());
+  ServerLoop server(path, sessions);
+  const std::string err = (dir.path() / "stderr").string();
+  const pid_t tool = ::fork();
+  ASSERT_GE(tool, 0);
+  if (tool == 0) {
+    const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    ::dup2(fd, 2);
+    ::execl(PH_TOOL_PATH, PH_TOOL_PATH, "passthrough", "--socket", path.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const bool on = [&] {
+    for (int i = 0; i < 200 && !server.handler.passthrough_; ++i) std::this_thread::sleep_for(10ms);
+    return server.handler.passthrough_.load();
+  }();
+  EXPECT_TRUE(on) << read_file_text(err);
+  std::this_thread::sleep_for(100ms);
+  EXPECT_TRUE(server.handler.passthrough_) << "it did not stay on";
+  ::kill(tool, SIGTERM);
+  int status = -1;
+  ::waitpid(tool, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status << ": " << read_file_text(err);
+  for (int i = 0; i < 200 && server.handler.passthrough_; ++i) std::this_thread::sleep_for(10ms);
+  EXPECT_FALSE(server.handler.passthrough_);
+  const std::string said = read_file_text(err);
+  EXPECT_NE(said.find("pass-through on"), std::string::npos) << said;
+  EXPECT_NE(said.find("pass-through off"), std::string::npos) << said;
+}
+
 // Connects `count` times as a refused peer and reads each refusal; returns how many were refused with a reason.
 int refused_connections(const std::string& path, int count) {
   return as_nobody([&] {

@@ -1,12 +1,18 @@
-// `pseudohaptic status` and `pseudohaptic cursor`: ask the running daemon through its control socket
-// (docs/SERVICE.md, "The control socket").
+// `pseudohaptic status`, `pseudohaptic cursor` and `pseudohaptic passthrough`: ask the running daemon through its
+// control socket (docs/SERVICE.md, "The control socket").
 #include <fmt/format.h>
+#include <poll.h>
+#include <sys/signalfd.h>
 
+#include <cerrno>
+#include <csignal>
+#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "common/unique_fd.hpp"
 #include "control/client.hpp"
 #include "control/protocol.hpp"
 #include "tools/argument_checks.hpp"
@@ -74,7 +80,58 @@ int run_cursor(const ControlOptions& o) {
   return 0;
 }
 
+// Pass-through on for as long as this runs: the daemon keeps it on while the connection that asked for it is open
+// (docs/SERVICE.md, "Applications that lock the pointer"), so the command holds the connection until a signal
+// ends it (Ctrl-C, SIGTERM from a key binding's second press) or the daemon goes.
+int run_passthrough(const ControlOptions& o) {
+  sigset_t stop;
+  sigemptyset(&stop);
+  for (int signal : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&stop, signal);
+  sigprocmask(SIG_BLOCK, &stop, nullptr);
+  const UniqueFd signals(::signalfd(-1, &stop, SFD_CLOEXEC));
+  if (!signals) throw std::runtime_error(std::string("signalfd: ") + std::strerror(errno));
+  control::Client client(o.socket);
+  const control::Reply on = client.request(control::format_request(control::PassthroughRequest{true}));
+  if (!on.ok) throw std::runtime_error("pseudohapticd: " + control::printable(on.text));
+  fmt::print(stderr,
+             "pseudohaptic: pass-through on: the mice's motion goes unchanged to the application that holds the "
+             "pointer, no textures, until this command ends (Ctrl-C)\n");
+  for (;;) {
+    pollfd fds[2] = {{signals.get(), POLLIN, 0}, {client.fd(), POLLIN, 0}};
+    if (::poll(fds, 2, -1) < 0) {
+      if (errno == EINTR) continue;
+      throw std::runtime_error(std::string("poll: ") + std::strerror(errno));
+    }
+    if (fds[0].revents != 0) break;
+    try {
+      while (client.read_line(std::chrono::milliseconds(0))) {  // what the daemon says on its own: nothing to do
+      }
+    } catch (const control::ControlError&) {
+      throw std::runtime_error("pseudohapticd closed the connection (it stopped or restarted): pass-through is off");
+    }
+  }
+  // Off at once; the connection's close would end it too.
+  try {
+    client.request(control::format_request(control::PassthroughRequest{false}));
+  } catch (const control::ControlError&) {
+  }
+  fmt::print(stderr, "pseudohaptic: pass-through off: the textures are back\n");
+  return 0;
+}
+
 }  // namespace
+
+Run add_passthrough_command(CLI::App& app) {
+  auto o = std::make_shared<ControlOptions>();
+  app.description(
+      "Turn the daemon's pass-through on for as long as this command runs (until Ctrl-C, SIGTERM or SIGHUP): the\n"
+      "mice's motion goes unchanged, through a relative device, to an application that holds the pointer (a game,\n"
+      "a 3D viewer), where the session helper cannot tell (on Wayland; on X11 pseudohaptic-session --passthrough\n"
+      "does it by the focused window). A later passthrough request of another connection (the helper's) wins while\n"
+      "that connection is open. Only root and the user of the active local session may ask.");
+  add_socket_option(app, *o);
+  return [o] { return run_passthrough(*o); };
+}
 
 Run add_status_command(CLI::App& app) {
   auto o = std::make_shared<ControlOptions>();

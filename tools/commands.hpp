@@ -21,5 +21,6 @@ Run add_study_command(CLI::App& app);
 Run add_stability_command(CLI::App& app);
 Run add_status_command(CLI::App& app);
 Run add_cursor_command(CLI::App& app);
+Run add_passthrough_command(CLI::App& app);
 
 }  // namespace ph::tools

@@ -90,6 +90,8 @@ int main(int argc, char** argv) {
   add("status", "Ask the running daemon what it does (output, mice, scene, desktop, cursor model, session helper)",
       ph::tools::add_status_command);
   add("cursor", "Print the running daemon's cursor model, or move it with --set X,Y", ph::tools::add_cursor_command);
+  add("passthrough", "Hold the daemon's pass-through on while it runs (a game that locks the pointer; Wayland)",
+      ph::tools::add_passthrough_command);
 
   // CLI11 answers a misspelt command, no command, or an option before the command with only "A subcommand is
   // required": say which, and list the commands.
