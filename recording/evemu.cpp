@@ -93,7 +93,7 @@ class LineReader {
         // that ends a line before its newline is CRLF's.)
         const std::size_t scanned = newline != nullptr && length > 0 && start[length - 1] == '\r' ? length - 1 : length;
         if (line_.find('\r') != std::string::npos || std::memchr(start, '\r', scanned) != nullptr)
-          check_text(string_view("\r"));
+          fail_carriage_return();
         fail_too_long();
       }
       line_.append(start, length);
@@ -118,13 +118,15 @@ class LineReader {
     position_.fail(fmt::format("line longer than {} characters; is this an evemu recording?", kMaxEvemuLine));
   }
 
+  [[noreturn]] void fail_carriage_return() const {
+    position_.fail(
+        "a carriage return that does not end a line (old Mac line endings?): lines end with a newline, or a carriage "
+        "return and a newline");
+  }
+
   void check_text(string_view text) const {
     for (const char c : text) {
-      if (c == '\r') {
-        position_.fail(
-            "a carriage return that does not end a line (old Mac line endings?): lines end with a newline, or a "
-            "carriage return and a newline");
-      }
+      if (c == '\r') fail_carriage_return();
       if (is_binary(c)) {
         position_.fail(fmt::format("binary data (byte 0x{:02x}); expected an evemu text recording",
                                    static_cast<unsigned char>(c)));

@@ -228,11 +228,10 @@ class Helper {
     if (reactions.accepted) {
       link_.failures = 0;
       refusals_.forget();
-      refused_ = false;
     }
+    refused_ = reactions.refused_connection || (refused_ && !reactions.accepted);
     // A refusal said again on every reconnection is logged once at error, then only with --verbose.
     for (const std::string& complaint : reactions.complaints) {
-      refused_ = refused_ || complaint.starts_with(kConnectionRefused);
       if (refusals_.is_new(complaint)) {
         log_.error(complaint);
       } else {
@@ -419,20 +418,29 @@ int main(int argc, char** argv) {
     return 1;
   }
   try {
+    const auto open = [&] {
+      return open_until_stopped(stop, log, [&] { return open_desktop(backend, display, wayland_display, log); });
+    };
     std::unique_ptr<Desktop> desktop;
+#ifdef PH_SESSION_WAYLAND
     try {
-      desktop = open_until_stopped(stop, log, [&] { return open_desktop(backend, display, wayland_display, log); });
-    } catch (const std::runtime_error& e) {
+      desktop = open();
+    } catch (const WaylandUnreachable& e) {
       // A WAYLAND_DISPLAY left in the user manager by an earlier Wayland session, in an X session now: only where
       // the display cannot be reached at all (a compositor that went away while it was read is not that).
       const std::string fallback = fallback_backend(requested, backend, display, wayland_display, env("DISPLAY"));
-      if (fallback.empty() || !std::string_view(e.what()).starts_with(kWaylandUnreachable)) throw;
+      if (fallback.empty()) throw;
       log.notice(
           fmt::format("{}; trying the X display ({}) instead", e.what(), display.empty() ? env("DISPLAY") : display));
       backend = fallback;
       passthrough = listed;
-      desktop = open_until_stopped(stop, log, [&] { return open_desktop(backend, display, wayland_display, log); });
+      desktop = open();
     }
+#else
+    (void)requested;
+    (void)listed;
+    desktop = open();
+#endif
     if (!desktop) return 0;  // stopped while it opened
     return Helper(control, passthrough, *desktop, log).run(signals.get());
   } catch (const std::runtime_error& e) {  // X11Error, WaylandError: no display, or it went away

@@ -103,7 +103,8 @@ Conversation::Reaction Conversation::on_line(std::string_view line) {
   // Refusals of the connection itself, which the daemon sends as it accepts it, before any request is read (and
   // then closes it): no request of the helper's was refused.
   if (!reply->ok && (reply->text.starts_with("permission denied") || reply->text == "too many connections")) {
-    reaction.complaint = fmt::format("{}{}", kConnectionRefused, reply->text);
+    reaction.refused_connection = true;
+    reaction.complaint = fmt::format("the daemon refused the connection: {}", reply->text);
     return reaction;
   }
   std::string request = "(nothing)";
@@ -122,6 +123,7 @@ Conversation::Reactions Conversation::on_lines(const std::vector<std::string>& l
     Reaction one = on_line(line);
     all.send_position = all.send_position || one.send_position;
     all.accepted = all.accepted || one.accepted;
+    all.refused_connection = all.refused_connection || one.refused_connection;
     if (!one.complaint.empty()) all.complaints.push_back(std::move(one.complaint));
   }
   return all;

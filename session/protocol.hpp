@@ -62,22 +62,16 @@ class Repeats {
 // doubling, at most 5 s.
 std::chrono::milliseconds reconnect_delay(int failures);
 
-// How the Wayland backend's error begins where the display cannot be reached at all (no socket, refused): the one
-// failure fallback_backend is for.
-inline constexpr std::string_view kWaylandUnreachable = "cannot connect to the Wayland display ";
-
-// How Conversation says a refusal of the connection itself (before any request), for the helper to tell it apart.
-inline constexpr std::string_view kConnectionRefused = "the daemon refused the connection: ";
-
 // One connection's conversation: the requests the helper has sent and awaits replies to, in order, and
 // what a line from the daemon asks of it.
 class Conversation {
  public:
   // What the helper does about one line from the daemon.
   struct Reaction {
-    bool send_position = false;  // "query": answer with the real cursor's position
-    bool accepted = false;       // an `ok` reply: the daemon takes this helper's requests
-    std::string complaint;       // non-empty: a line to log (an error reply, or a line not understood)
+    bool send_position = false;       // "query": answer with the real cursor's position
+    bool accepted = false;            // an `ok` reply: the daemon takes this helper's requests
+    bool refused_connection = false;  // the daemon refused the connection itself, before any request
+    std::string complaint;            // non-empty: a line to log (an error reply, or a line not understood)
   };
   // What a batch of lines read at once asks: a position once however many `query` lines came (each answer costs
   // a compositor query, which may take its whole time limit, and one position answers them all), whether any
@@ -85,6 +79,7 @@ class Conversation {
   struct Reactions {
     bool send_position = false;
     bool accepted = false;
+    bool refused_connection = false;
     std::vector<std::string> complaints;
   };
 

@@ -11,7 +11,6 @@
 #include <vector>
 
 #include "session/compositor_answers.hpp"
-#include "session/protocol.hpp"
 #include "xdg-output-unstable-v1-client-protocol.h"
 
 namespace ph::session {
@@ -175,7 +174,7 @@ WaylandDesktop::WaylandDesktop(const std::string& display, std::unique_ptr<Curso
                              : from_environment != nullptr && *from_environment != '\0'
                                  ? std::string(from_environment) + " ($WAYLAND_DISPLAY)"
                                  : std::string("wayland-0 (the default: $WAYLAND_DISPLAY is not set)");
-    throw WaylandError(std::string(kWaylandUnreachable) + name + ": " + std::strerror(error));
+    throw WaylandUnreachable("cannot connect to the Wayland display " + name + ": " + std::strerror(error));
   }
   state_->registry.reset(wl_display_get_registry(state_->display.get()));
   wl_registry_add_listener(state_->registry.get(), &State::kRegistryListener, state_.get());

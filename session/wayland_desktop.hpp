@@ -23,6 +23,13 @@ class WaylandError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The display cannot be reached at all (no socket, or the connection refused): the one failure after which the
+// helper tries the X display (session/protocol.hpp, fallback_backend).
+class WaylandUnreachable : public WaylandError {
+ public:
+  using WaylandError::WaylandError;
+};
+
 class WaylandDesktop : public Desktop {
  public:
   // Connects to `display` (empty: $WAYLAND_DISPLAY, else "wayland-0") and reads the outputs. Throws

@@ -166,6 +166,8 @@ TEST(SessionConversation, ARefusedConnectionIsNotARefusedRequest) {
   EXPECT_EQ(c.on_line("error too many connections").complaint,
             "the daemon refused the connection: too many connections");
   EXPECT_EQ(c.awaiting(), 1u);
+  EXPECT_TRUE(c.on_lines({"error too many connections"}).refused_connection);
+  EXPECT_FALSE(c.on_line("error layout: W and H must be from 1 to 1048576").refused_connection);  // a request's
 }
 
 // Lines read at once: one position for however many queries (each costs a compositor query, up to its time limit),
@@ -178,6 +180,7 @@ TEST(SessionConversation, QueriesReadAtOnceAskForOnePosition) {
       c.on_lines({"query", "query", "ok", "query", "error position: X and Y", "nonsense"});
   EXPECT_TRUE(r.send_position);
   EXPECT_TRUE(r.accepted);
+  EXPECT_FALSE(r.refused_connection);
   EXPECT_EQ(r.complaints, (std::vector<std::string>{"the daemon refused 'position 1 2': position: X and Y",
                                                     "the daemon sent a line not understood: 'nonsense'"}));
   const Conversation::Reactions none = c.on_lines({});
