@@ -191,6 +191,20 @@ void check_a_regular_file(const fs::path& path) {
   if (fs::is_directory(status)) throw image_file_error(path, "is a folder, not an image file");
   if (fs::exists(status) && !fs::is_regular_file(status))
     throw image_file_error(path, "is not a regular file (a FIFO, a device or a socket), not an image file");
+  if (fs::is_regular_file(status) && fs::file_size(path, ignored) == 0)
+    throw image_file_error(path, "is empty (0 bytes), not an image file");
+}
+
+// Maps are PNG, TIFF or OpenEXR (docs/pseudohapticd.8): the module's other readers (JPEG, BMP, GIF, ...) are neither
+// documented nor fuzzed (docs/FUZZING.md), and a lossy format's artefacts are relief the hand would feel.
+void check_a_map_format(const fs::path& path) {
+  const std::string extension = lowercase_extension(path);
+  std::error_code ignored;
+  if (extension == ".tif" || extension == ".tiff" || extension == ".exr" || !fs::exists(path, ignored)) return;
+  throw image_file_error(path, (extension.empty() ? std::string("not a PNG and named without an extension")
+                                                  : "a " + extension + " file, a format not read here") +
+                                   ": maps are PNG, TIFF or OpenEXR files (.png, .tif, .tiff, .exr); convert it to "
+                                   "one of those (a 16-bit PNG for a depth map)");
 }
 
 }  // namespace
@@ -198,6 +212,7 @@ void check_a_regular_file(const fs::path& path) {
 ImageSize read_image_size(const fs::path& path, const ImageLimits& limits) {
   check_a_regular_file(path);
   if (read_here(path)) return read_png_size(path, limits);
+  check_a_map_format(path);
   check_before_decoding(path, limits);
   return backend(path).read_image_size(path, limits);
 }
@@ -205,6 +220,7 @@ ImageSize read_image_size(const fs::path& path, const ImageLimits& limits) {
 RawImage read_image(const fs::path& path, const ImageLimits& limits) {
   check_a_regular_file(path);
   if (read_here(path)) return read_png(path, limits);
+  check_a_map_format(path);
   return read_image_with_openimageio(path, limits);
 }
 

@@ -21,6 +21,7 @@
 #include <sstream>
 #include <system_error>
 #include <utility>
+#include <vector>
 
 #include "core/engine/method_hybrid.hpp"
 #include "core/engine/variant_choice.hpp"
@@ -44,14 +45,96 @@ class Reporter {
   std::string origin_;
 };
 
+// A region's own keys, which no table within a region has (the method tables', [region.materials]' and
+// [region.wells]' keys are other words: tests/test_scene_file.cpp checks that they stay so).
+const std::set<std::string_view> kRegionOwnKeys = {"name",
+                                                   "x",
+                                                   "y",
+                                                   "width",
+                                                   "height",
+                                                   "method",
+                                                   "normal_map",
+                                                   "normal_green",
+                                                   "normal_encoding",
+                                                   "depth_map",
+                                                   "depth_zero",
+                                                   "relief_px",
+                                                   "traversal",
+                                                   "sampling",
+                                                   "lut_directions",
+                                                   "accuracy_px"};
+// The [daemon] table's keys that no region has.
+const std::set<std::string_view> kDaemonOnlyKeys = {"devices", "output",    "desktop",      "acceleration",
+                                                    "speed",   "mouse_dpi", "pointer_speed"};
+
+// How many single-character edits (insert, delete, replace, swap two neighbours) turn `a` into `b`, letter case aside.
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  const auto lower = [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); };
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t cost = lower(a[i - 1]) == lower(b[j - 1]) ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && lower(a[i - 1]) == lower(b[j - 2]) && lower(a[i - 2]) == lower(b[j - 1]))
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  }
+  return d[a.size()][b.size()];
+}
+
+// What an unknown key likely meant: the allowed key a slip away ("did you mean 'normal_map'?"), or the table the key
+// belongs to where it is another table's, each said after ": "; "" where neither.
+std::string likely_meant(std::string_view key, const std::set<std::string_view>& allowed, std::string_view where) {
+  const std::size_t slips = key.size() <= 4 ? 1 : 2;
+  std::string_view best;
+  std::size_t best_distance = slips + 1;
+  for (std::string_view a : allowed) {
+    const std::size_t distance = edit_distance(key, a);
+    if (distance < best_distance) {
+      best = a;
+      best_distance = distance;
+    }
+  }
+  if (!best.empty()) return fmt::format(": did you mean '{}'?", best);
+  if (kDaemonOnlyKeys.contains(key) && where != "daemon.")
+    return ": it is a [daemon] key, written in the [daemon] table";
+  if (kRegionOwnKeys.contains(key) && !where.starts_with("region["))
+    return ": it is a region's key, written in a [[region]] table";
+  return "";
+}
+
 void reject_unknown_keys(const Reporter& rep, const toml::table& table, const std::set<std::string_view>& allowed,
                          std::string_view where) {
   for (const auto& [key, value] : table) {
     if (!allowed.contains(key.str())) {
       std::string list;
       for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      rep.fail(&value, fmt::format("{}{}", where, key.str()), fmt::format("unknown key (allowed: {})", list));
+      rep.fail(&value, fmt::format("{}{}", where, key.str()),
+               fmt::format("unknown key{} (allowed: {})", likely_meant(key.str(), allowed, where), list));
     }
+  }
+}
+
+// In TOML every key below a table's header is that table's: a region's own key added at the end of a region that has
+// a [region.curvature] (or materials, wells) table is read as the table's, and the region would then be said to lack
+// it. Said as what it is, at its line.
+void reject_region_keys_in_its_tables(const Reporter& rep, const toml::table& t, const std::string& where,
+                                      const std::string& table_path = "") {
+  for (const auto& [name, node] : t) {
+    const toml::table* sub = node.as_table();
+    if (sub == nullptr) continue;
+    const std::string path = table_path.empty() ? std::string(name.str()) : table_path + "." + std::string(name.str());
+    for (const auto& [key, value] : *sub) {
+      if (kRegionOwnKeys.contains(key.str())) {
+        rep.fail(&value, fmt::format("{}{}.{}", where, path, key.str()),
+                 fmt::format("is a region's own key, read here as the [region.{0}] table's (in TOML every key below "
+                             "a table's header belongs to that table): write it above [region.{0}]",
+                             path));
+      }
+    }
+    reject_region_keys_in_its_tables(rep, *sub, where, path);
   }
 }
 
@@ -417,6 +500,10 @@ void parse_region_engine(const Reporter& rep, const toml::table& t, const std::s
                            : "applies to traversal = \"direction_lut\" only");
   }
   if (const std::string problem = validate(e); !problem.empty()) {
+    // Said at the region's key that meets the [daemon] table's other one, or at its traversal where it sets both.
+    if (t.get("traversal") == nullptr && t.get("sampling") != nullptr) {
+      rep.fail(t.get("sampling"), where + "sampling", problem + " (the traversal is the [daemon] table's)");
+    }
     rep.fail(key_or_table(t, "traversal"), where + "traversal",
              problem + (t.get("sampling") == nullptr ? " (the sampling is the [daemon] table's)" : ""));
   }
@@ -449,6 +536,7 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
     if (!entry->keys.empty()) keys.insert(entry->name);  // its parameter table
   }
   reject_unknown_keys(rep, t, keys, where);
+  reject_region_keys_in_its_tables(rep, t, where);
   RegionSpec r;
   r.line = static_cast<int>(t.source().begin.line);
   r.name = get_string(rep, t, "name", where).value_or(fmt::format("region {}", index));
@@ -462,6 +550,13 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   r.rect.y = get_int(rep, t, "y", where, 0, -kMaxCoordinate, kMaxCoordinate);
   r.rect.w = get_int(rep, t, "width", where, std::nullopt, 1, kMaxRegionSide);
   r.rect.h = get_int(rep, t, "height", where, std::nullopt, 1, kMaxRegionSide);
+  if (const std::int64_t texels = std::int64_t{r.rect.w} * r.rect.h; texels > kMaxRegionTexels) {
+    rep.fail(t.get("height"), where + "height",
+             fmt::format("a {} x {} region has {} px, more than the {} (8192 x 8192) a region may have: its fields "
+                         "would take gigabytes and minutes to build; make it smaller, or split the relief into "
+                         "regions side by side",
+                         r.rect.w, r.rect.h, texels, kMaxRegionTexels));
+  }
 
   r.method = get_string(rep, t, "method", where).value_or("curvature");
   r.method_in_file = r.method;
@@ -643,14 +738,24 @@ DaemonSettings parse_daemon(const Reporter& rep, const toml::table& t) {
 
 }  // namespace
 
-SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& origin, MethodRegistry methods) {
+namespace {
+
+// `origin` names the text in errors; relative image paths are resolved against `base_dir`.
+SceneSpec parse_scene(std::string_view text, const std::filesystem::path& origin, const std::filesystem::path& base_dir,
+                      MethodRegistry methods) {
   const Reporter rep(origin.string());
   toml::table root;
   try {
     root = toml::parse(text, origin.string());
   } catch (const toml::parse_error& e) {
-    // toml++'s words for a bare word where a value goes, the likeliest slip in a hand-written file: said plainly.
-    const bool bare_word = e.description().find("could not determine value type") != std::string_view::npos;
+    // toml++'s words for a bare word where a value goes, the likeliest slip in a hand-written file: said plainly. (A
+    // word that starts as nan, inf, true or false is taken for one of those first; no key is a boolean.)
+    const std::string_view said = e.description();
+    const bool bare_word = said.find("could not determine value type") != std::string_view::npos ||
+                           said.find("expected 'nan'") != std::string_view::npos ||
+                           said.find("expected 'inf'") != std::string_view::npos ||
+                           said.find("expected 'true'") != std::string_view::npos ||
+                           said.find("expected 'false'") != std::string_view::npos;
     throw ConfigError(fmt::format("{}:{}: {}{}", origin.string(), e.source().begin.line, e.description(),
                                   bare_word ? " (text needs quotes: key = \"value\")" : ""));
   }
@@ -669,7 +774,6 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
   if (regions == nullptr) return spec;
   const toml::array* arr = regions->as_array();
   if (arr == nullptr || !arr->is_array_of_tables()) rep.fail(regions, "region", "must be written as [[region]] tables");
-  const std::filesystem::path base_dir = origin.parent_path();
   std::map<std::string, std::size_t> named;  // name -> the region that has it
   for (std::size_t i = 0; i < arr->size(); ++i) {
     const toml::table& table = *(*arr)[i].as_table();
@@ -684,6 +788,12 @@ SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& o
     }
   }
   return spec;
+}
+
+}  // namespace
+
+SceneSpec parse_scene_text(std::string_view text, const std::filesystem::path& origin, MethodRegistry methods) {
+  return parse_scene(text, origin, origin.parent_path(), std::move(methods));
 }
 
 namespace {
@@ -866,7 +976,37 @@ std::vector<std::string> service_path_warnings(const SceneSpec& spec) {
   return out;
 }
 
+namespace {
+
+// Where relative image paths in `file` start from: its folder, or for a symbolic link the folder of the file it leads
+// to, where the images written beside it are (`pseudohaptic targets` writes scenes that name their images so, and a
+// scene file linked into /etc/pseudohaptic/ finds them).
+std::filesystem::path images_base_dir(const std::filesystem::path& file) {
+  std::error_code error;
+  if (!std::filesystem::is_symlink(std::filesystem::symlink_status(file, error))) return file.parent_path();
+  const std::filesystem::path target = std::filesystem::canonical(file, error);
+  return error ? file.parent_path() : target.parent_path();
+}
+
+// What is read as a file though it is none: a pipe the caller opened for the program, which has a writer (a shell's
+// <(...) names one /dev/fd/N), and /dev/null, an empty scene.
+bool read_as_a_file(const std::filesystem::path& file) {
+  const std::string name = file.string();
+  return name == "/dev/null" || name == "/dev/stdin" || name.starts_with("/dev/fd/") ||
+         name.starts_with("/proc/self/fd/");
+}
+
+}  // namespace
+
 SceneSpec parse_scene_file(const std::filesystem::path& file, MethodRegistry methods) {
+  // A FIFO, a device or a socket named by mistake: its open() or read() would wait for ever for a writer.
+  std::error_code status_error;
+  const std::filesystem::file_status status = std::filesystem::status(file, status_error);
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status) &&
+      !std::filesystem::is_directory(status) && !read_as_a_file(file)) {
+    throw ConfigError(
+        fmt::format("{}: is not a regular file (a FIFO, a device or a socket), not a scene file", file.string()));
+  }
   std::ifstream in(file, std::ios::binary);
   if (!in) {
     const int error = errno;
@@ -888,7 +1028,7 @@ SceneSpec parse_scene_file(const std::filesystem::path& file, MethodRegistry met
     }
   }
   if (in.bad()) throw ConfigError(fmt::format("{}: cannot read the scene file", file.string()));
-  return parse_scene_text(text, file, std::move(methods));
+  return parse_scene(text, file, images_base_dir(file), std::move(methods));
 }
 
 bool scene_file_absent(const std::filesystem::path& file) {

@@ -28,8 +28,11 @@ namespace ph {
 // Where the daemon reads its scene file when it is given none.
 inline constexpr std::string_view kDefaultSceneFile = "/etc/pseudohaptic/scene.toml";
 
-// A region's width and height in px are at most this (a 16384 x 16384 curvature region holds 2 GiB of fields).
+// A region's width and height in px are at most this, and its area at most kMaxRegionTexels: an 8192 x 8192 hybrid
+// region with materials and contour wells takes the image reader 3.3 GB of its 8 GiB and over a minute on two cores
+// (docs/SERVICE.md, "Images"); a 16384 x 16384 one cannot be read under that limit.
 inline constexpr std::int32_t kMaxRegionSide = 1 << 14;
+inline constexpr std::int64_t kMaxRegionTexels = std::int64_t{1} << 26;  // 8192 x 8192
 // The longest scene file read: thousands of regions take a few hundred KiB.
 inline constexpr std::size_t kMaxSceneFileBytes = std::size_t{4} << 20;
 

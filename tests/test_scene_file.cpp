@@ -253,6 +253,47 @@ TEST(SceneFileErrors, UnknownRegionKeyListsTheAllowedOnes) {
                "region[0].depth.kmax_prime", {"unknown key", "gain", "kmax", "kmin"});
 }
 
+// In TOML a key below [region.curvature] is that table's: a region's own key written there is said as such, at its
+// line, and not as missing from the region (or unknown in the table).
+TEST(SceneFileErrors, ARegionsKeyBelowOneOfItsTablesIsSaidAsSuch) {
+  const std::string head = "[[region]]\nname = \"a\"\nnormal_map = \"n.png\"\n";  // 3 lines
+  expect_error(head + "[region.curvature]\nkmax_prime = 3\nwidth = 200\n", 6, "region[0].curvature.width",
+               {"a region's own key", "[region.curvature]", "write it above"});
+  expect_error(head +
+                   "width = 2\nheight = 2\n[region.materials]\nplanar = \"friction\"\n[region.materials.friction]\n"
+                   "stuck_cd = 3\ndepth_map = \"d.png\"\n",
+               10, "region[0].materials.friction.depth_map", {"a region's own key", "[region.materials.friction]"});
+  expect_error(head + "width = 2\nheight = 2\n[region.wells]\nstrength = 0.5\nmethod = \"none\"\n", 8,
+               "region[0].wells.method", {"a region's own key", "above [region.wells]"});
+}
+
+// An unknown key is an error that lists the allowed ones, and says the one a slip away, or the table it belongs in.
+TEST(SceneFileErrors, AnUnknownKeySaysWhatItLikelyMeant) {
+  const std::string head = "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n";  // 4 lines
+  expect_error(head + "normalmap = \"m.png\"\n", 5, "region[0].normalmap", {"did you mean 'normal_map'?", "allowed"});
+  expect_error(head + "Relief_px = 3\n", 5, "region[0].Relief_px", {"did you mean 'relief_px'?"});
+  expect_error(head + "[region.curvatur]\nkmax_prime = 3\n", 5, "region[0].curvatur", {"did you mean 'curvature'?"});
+  expect_error(head + "[region.curvature]\nkmax_prmie = 3\n", 6, "region[0].curvature.kmax_prmie",
+               {"did you mean 'kmax_prime'?"});
+  expect_error(head + "output = \"absolute\"\n", 5, "region[0].output", {"a [daemon] key", "[daemon] table"});
+  expect_error("[daemon]\nspeeed = 0.5\n", 2, "daemon.speeed", {"did you mean 'speed'?"});
+  expect_error("[daemon]\nnormal_map = \"n.png\"\n", 2, "daemon.normal_map", {"a region's key", "[[region]]"});
+  expect_error("width = 3\n", 1, "width", {"a region's key"});
+  // Nothing close: no guess.
+  const std::string far = parse_error(head + "colour = 3\n");
+  EXPECT_FALSE(contains(far, "did you mean")) << far;
+  EXPECT_FALSE(contains(far, "key,")) << far;
+}
+
+// A bare word where a value goes needs quotes, also one that toml++ first takes for nan, inf, true or false.
+TEST(SceneFileErrors, BareWordsAreSaidToNeedQuotes) {
+  for (const char* word : {"curvature", "none", "flat", "inner", "traced", "nearest"}) {
+    expect_error(fmt::format("[[region]]\nwidth = 2\nheight = 2\nmethod = {}\n", word), 4, "", {"text needs quotes"});
+  }
+  const std::string other = parse_error("[[region]]\nname = \"open\nwidth = 2\n");
+  EXPECT_FALSE(contains(other, "quotes")) << other;
+}
+
 TEST(SceneFileErrors, UnknownMethod) {
   expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\nmethod = \"height\"\n", 5,
                "region[0].method", {"'height'", "curvature", "depth"});
@@ -291,6 +332,13 @@ TEST(SceneFileErrors, SizeAndPositionOutOfRange) {
                {"between 1 and 16384"});
   expect_error("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\nx = 9999999999\n", 5, "region[0].x",
                {"between"});
+  // Each side within its bound, the whole beyond what a region may hold: said at its height.
+  expect_error("[[region]]\nwidth = 16384\nheight = 4097\nnormal_map = \"n.png\"\n", 3, "region[0].height",
+               {"16384 x 4097", "67125248 px", "8192 x 8192"});
+  for (const char* size : {"width = 16384\nheight = 4096", "width = 8192\nheight = 8192"}) {
+    const SceneSpec largest = parse_scene_text(fmt::format("[[region]]\n{}\nnormal_map = \"n.png\"\n", size), kOrigin);
+    EXPECT_EQ(std::int64_t{largest.regions[0].rect.w} * largest.regions[0].rect.h, kMaxRegionTexels) << size;
+  }
 }
 
 TEST(SceneFileErrors, BadNormalOptions) {
@@ -641,23 +689,30 @@ TEST(SceneFileErrors, AnEffectsParameterOutOfRangeNamesItsLine) {
       7, "region[0].wells.levels", {"is an empty list"});
 }
 
-// /dev/zero, or a huge file given by mistake, is refused once past the longest scene file, not read into memory.
+// A huge file given by mistake is refused once past the longest scene file, not read into memory; /dev/zero, a
+// device, is not read at all (and /dev/null is an empty scene).
 TEST(SceneFileErrors, AFileLongerThanAnySceneIsRefused) {
-  for (const std::string file : {"/dev/zero"}) {
-    try {
-      parse_scene_file(file);
-      ADD_FAILURE() << "expected an error";
-    } catch (const ConfigError& e) {
-      EXPECT_EQ(std::string(e.what()), file + ": longer than 4 MiB, which no scene file is: is it the file meant?");
-    }
+  try {
+    parse_scene_file("/dev/zero");  // a device: not read at all
+    ADD_FAILURE() << "expected an error";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "/dev/zero: is not a regular file (a FIFO, a device or a socket), not a scene file");
   }
+  EXPECT_TRUE(parse_scene_file("/dev/null").regions.empty());
   const ScratchDir dir("scene-long");
   std::string text = "# a comment\n";
   text.resize(kMaxSceneFileBytes, ' ');
   std::ofstream(dir / "just.toml", std::ios::binary) << text;
   EXPECT_TRUE(parse_scene_file(dir / "just.toml").regions.empty());  // at the bound: read
   std::ofstream(dir / "over.toml", std::ios::binary) << text << ' ';
-  EXPECT_THROW(parse_scene_file(dir / "over.toml"), ConfigError);
+  try {
+    parse_scene_file(dir / "over.toml");
+    ADD_FAILURE() << "expected an error";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (dir / "over.toml").string() + ": longer than 4 MiB, which no scene file is: is it the file meant?");
+  }
 }
 
 TEST(SceneFileErrors, MissingSceneFileIsNamed) {
@@ -796,6 +851,56 @@ TEST(SceneFileErrors, RegionsOffTheConfiguredDesktopAreWarnedOf) {
 }
 
 // A folder opens as a stream and reads as nothing: an empty scene, unless it is refused.
+// A FIFO (or a device, a socket) named as the scene file is refused at once, not waited on for ever; a pipe the
+// caller opened (a shell's <(...), /dev/fd/N) is read as the file it stands for.
+TEST(SceneFileErrors, AFifoIsNotASceneFileButAnOpenPipeIsRead) {
+  ScratchDir dir;
+  const fs::path fifo = dir / "scene.toml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    parse_scene_file(fifo);
+    ADD_FAILURE() << "no ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), fifo.string() +
+                                         ": is not a regular file (a FIFO, a device or a socket), not a "
+                                         "scene file");
+  }
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+  int ends[2];
+  ASSERT_EQ(::pipe(ends), 0);
+  const std::string_view text = "[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n";
+  ASSERT_EQ(::write(ends[1], text.data(), text.size()), static_cast<ssize_t>(text.size()));
+  ::close(ends[1]);
+  const SceneSpec spec = parse_scene_file(fs::path("/dev/fd") / std::to_string(ends[0]));
+  ::close(ends[0]);
+  ASSERT_EQ(spec.regions.size(), 1u);
+  EXPECT_EQ(spec.regions[0].rect.w, 2);
+}
+
+// A scene file that is a symbolic link finds its images where the file it leads to lies: a target's scene linked into
+// another folder loads.
+TEST(SceneFileLoad, ALinkedSceneFileFindsTheImagesBesideTheFileItLeadsTo) {
+  ScratchDir dir;
+  fs::create_directories(dir / "targets");
+  fs::create_directories(dir / "etc" / "sub");
+  const std::vector<fs::path> scenes = write_target_files(dir / "targets", {all_targets()[0]});
+  ASSERT_EQ(scenes.size(), 1u);
+  fs::create_symlink(scenes[0], dir / "etc" / "scene.toml");
+  fs::create_symlink(fs::path("..") / "scene.toml", dir / "etc" / "sub" / "chained.toml");  // a link to the link
+  for (const fs::path& link : {dir / "etc" / "scene.toml", dir / "etc" / "sub" / "chained.toml"}) {
+    SCOPED_TRACE(link.string());
+    const SceneSpec spec = parse_scene_file(link);
+    ASSERT_EQ(spec.regions.size(), 1u);
+    ASSERT_TRUE(spec.regions[0].sources.normal_map);
+    EXPECT_EQ(spec.regions[0].sources.normal_map->parent_path(), fs::canonical(dir / "targets"));
+    EXPECT_EQ(load_scene(spec).regions().size(), 1u);
+  }
+  // A file that is not a link: its own folder, as written.
+  const SceneSpec own = parse_scene_file(scenes[0]);
+  EXPECT_EQ(own.regions[0].sources.normal_map->parent_path(), scenes[0].parent_path());
+}
+
 TEST(SceneFileErrors, AFolderIsNotASceneFile) {
   ScratchDir dir;
   try {
@@ -1212,6 +1317,19 @@ TEST(SceneFileDocs, TheManPageNamesEveryKeyTheParserAllows) {
     for (const std::string& key : keys) {
       EXPECT_TRUE(documented.contains(key)) << "pseudohapticd.8 does not name " << table << "." << key;
     }
+  }
+}
+
+// Why a region's key below a table can be told from the table's own: no table within a region has a key of the
+// region's own (other than the tables themselves).
+TEST(SceneFileErrors, NoTableWithinARegionSharesAKeyWithTheRegion) {
+  std::set<std::string> region_keys;
+  for (const std::string& key : allowed_keys("region")) region_keys.insert(key);
+  for (const char* table : {"curvature", "depth", "hybrid", "materials", "materials.damping", "materials.friction",
+                            "materials.stick_slip", "wells"}) {
+    const std::vector<std::string> keys = allowed_keys(table);
+    ASSERT_FALSE(keys.empty()) << table;
+    for (const std::string& key : keys) EXPECT_FALSE(region_keys.contains(key)) << table << "." << key;
   }
 }
 

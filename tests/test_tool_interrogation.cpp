@@ -182,6 +182,13 @@ TEST(ToolInterrogation, InspectOptionsAndErrors) {
     expect_clean_failure(r, {"--size", "16384"});
     EXPECT_FALSE(fs::exists(dir / "x"));
   }
+  {
+    // Nor larger in all than 8192 x 8192, refused before a map is resampled.
+    const ToolResult r =
+        run_tool("inspect --depth-map " + quote(depth_map) + " --size 16384,4097 " + quote(dir / "x"), dir);
+    expect_clean_failure(r, {"67125248 px", "8192 x 8192", "--size"});
+    EXPECT_FALSE(fs::exists(dir / "x"));
+  }
 }
 
 // --size and --light take their one argument wherever they stand: before OUTDIR with an option after it, CLI11 took

@@ -163,6 +163,14 @@ int run_inspect(const InspectOptions& o) {
   if (!o.depth_map.empty()) sources.depth_map = o.depth_map;
   apply_map_flags(o.maps, sources);
   const ImageSize image = read_image_size(from_depth ? o.depth_map : o.normal_map);
+  const std::int64_t texels =
+      o.size.size() == 2 ? std::int64_t{o.size[0]} * o.size[1] : std::int64_t{image.width} * image.height;
+  if (texels > kMaxRegionTexels) {
+    throw std::invalid_argument(
+        fmt::format("{} px are more than the {} (8192 x 8192) a region may have: give a "
+                    "smaller --size",
+                    texels, kMaxRegionTexels));
+  }
   FieldLoadReport report;
   // On a terminal only: where standard error is a file the legend and the warnings say what was done.
   ProgressLine progress;
