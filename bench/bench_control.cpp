@@ -15,6 +15,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "common/unique_fd.hpp"
 #include "daemon/control_access.hpp"
@@ -43,7 +44,7 @@ class FixedHandler final : public ControlHandler {
   }
   Vec2 cursor() const override { return {960.5, 540.5}; }
   void position(Vec2, bool) override {}
-  void layout(Rect) override {}
+  void layout(Rect, const std::vector<Rect>&) override {}
   void layout_source_gone() override {}
   void helper_changed(bool) override {}
   void passthrough(bool) override {}

@@ -70,15 +70,31 @@ std::variant<Request, std::string> parse_position(const std::vector<std::string_
   return Request{PositionRequest{{*x, *y}}};
 }
 
+// "layout X Y W H", then the outputs' X Y W H where they do not cover the desktop (control/protocol.hpp).
 std::variant<Request, std::string> parse_layout(const std::vector<std::string_view>& w) {
-  if (w.size() != 5) return std::string("layout needs X Y W H (whole px)");
-  const auto x = integer(w[1]), y = integer(w[2]), width = integer(w[3]), height = integer(w[4]);
-  if (!x || !y || !width || !height) return std::string("layout: X Y W H must be whole numbers");
-  const Rect desktop{*x, *y, *width, *height};
+  if (w.size() < 5 || (w.size() - 5) % 4 != 0 || (w.size() - 5) / 4 > kMaxOutputs)
+    return fmt::format("layout needs X Y W H (whole px), then up to {} outputs' X Y W H", kMaxOutputs);
+  std::vector<Rect> rects;
+  for (std::size_t i = 1; i < w.size(); i += 4) {
+    const auto x = integer(w[i]), y = integer(w[i + 1]), width = integer(w[i + 2]), height = integer(w[i + 3]);
+    if (!x || !y || !width || !height) return std::string("layout: X Y W H must be whole numbers");
+    rects.push_back({*x, *y, *width, *height});
+  }
+  const Rect desktop = rects.front();
   if (!is_valid_desktop(desktop))
     return fmt::format("layout: W and H must be from 1 to {}, X and Y within ±{}", kMaxDesktopCoordinate,
                        kMaxDesktopCoordinate);
-  return Request{LayoutRequest{desktop}};
+  std::vector<Rect> outputs(rects.begin() + 1, rects.end());
+  for (const Rect& o : outputs) {
+    const bool inside = o.w >= 1 && o.h >= 1 && o.x >= desktop.x && o.y >= desktop.y &&
+                        std::int64_t{o.x} + o.w <= std::int64_t{desktop.x} + desktop.w &&
+                        std::int64_t{o.y} + o.h <= std::int64_t{desktop.y} + desktop.h;
+    if (!inside) {
+      return fmt::format("layout: the output {} {} {} {} is not a rectangle within the desktop {} {} {} {}", o.x, o.y,
+                         o.w, o.h, desktop.x, desktop.y, desktop.w, desktop.h);
+    }
+  }
+  return Request{LayoutRequest{desktop, std::move(outputs)}};
 }
 
 }  // namespace
@@ -124,7 +140,9 @@ std::string format_request(const Request& request) {
       return fmt::format("position {} {}", r.position.x, r.position.y);
     }
     std::string operator()(const LayoutRequest& r) const {
-      return fmt::format("layout {} {} {} {}", r.desktop.x, r.desktop.y, r.desktop.w, r.desktop.h);
+      std::string line = fmt::format("layout {} {} {} {}", r.desktop.x, r.desktop.y, r.desktop.w, r.desktop.h);
+      for (const Rect& o : r.outputs) line += fmt::format(" {} {} {} {}", o.x, o.y, o.w, o.h);
+      return line;
     }
     std::string operator()(const HelperRequest& r) const { return "helper " + r.backend; }
     std::string operator()(const PassthroughRequest& r) const { return r.on ? "passthrough on" : "passthrough off"; }

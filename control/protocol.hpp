@@ -8,7 +8,9 @@
 #include <string>
 #include <string_view>
 #include <variant>
+#include <vector>
 
+#include "core/engine/desktop_outputs.hpp"
 #include "core/engine/geometry.hpp"
 
 namespace ph::control {
@@ -26,8 +28,12 @@ struct CursorRequest {};
 struct PositionRequest {  // the desktop's real cursor, logical px
   Vec2 position;
 };
-struct LayoutRequest {  // the bounding box of all outputs, logical px
-  Rect desktop;
+struct LayoutRequest {  // logical px
+  Rect desktop;         // what absolute axes span: the outputs' bounding box (X: the root window)
+  // Where the pointer may be, where the outputs do not cover the desktop (monitors of different sizes); none: all
+  // of it (core/engine/desktop_outputs.hpp). At most kMaxOutputs, each within the desktop.
+  std::vector<Rect> outputs;
+  bool operator==(const LayoutRequest&) const = default;
 };
 struct HelperRequest {  // this connection is the session helper, with this backend
   std::string backend;

@@ -216,7 +216,8 @@ void ControlServer::read_client(int fd, ControlHandler& handler) {
   };
   // (Unless another connection has sent a layout since, which is then the latest and applied.)
   const auto apply_deferred = [&] {
-    if (client.layout_deferred && layouts_.latest() == fd) handler.layout(*client.layout);
+    if (client.layout_deferred && layouts_.latest() == fd)
+      handler.layout(client.layout->desktop, client.layout->outputs);
     client.layout_deferred = false;
   };
   const bool more_waiting = !too_long && static_cast<std::size_t>(n) == buffer.size() && bytes_waiting(fd);
@@ -249,9 +250,9 @@ std::string ControlServer::answer(int fd, const std::variant<control::Request, s
   if (const auto* error = std::get_if<std::string>(&parsed)) return control::format_error(*error);
   const control::Request& request = std::get<control::Request>(parsed);
   if (const auto* l = std::get_if<control::LayoutRequest>(&request)) {
-    clients_.at(fd)->layout = l->desktop;
+    clients_.at(fd)->layout = *l;
     layouts_.sent(fd);
-    if (!superseded) handler.layout(l->desktop);
+    if (!superseded) handler.layout(l->desktop, l->outputs);
     return control::format_ok();
   }
   if (std::holds_alternative<control::StatusRequest>(request)) {
@@ -311,7 +312,8 @@ void ControlServer::drop(int fd, ControlHandler& handler) {
   }
   if (layouts_.closed(fd)) {
     if (const int before = layouts_.latest(); before >= 0) {
-      handler.layout(*clients_.at(before)->layout);
+      const control::LayoutRequest& kept = *clients_.at(before)->layout;
+      handler.layout(kept.desktop, kept.outputs);
     } else {
       handler.layout_source_gone();
     }

@@ -30,7 +30,8 @@ class ControlHandler {
   // from_helper: the session helper's report (filtered against what the daemon emitted itself);
   // otherwise a user's explicit `pseudohaptic cursor --set`.
   virtual void position(Vec2 position, bool from_helper) = 0;
-  virtual void layout(Rect desktop) = 0;
+  // `outputs`: where on the desktop the pointer may be, where they do not cover it (control::LayoutRequest).
+  virtual void layout(Rect desktop, const std::vector<Rect>& outputs) = 0;
   // The connection that sent the last layout has closed (the session ended, the helper stopped): nothing keeps
   // that layout up to date any more.
   virtual void layout_source_gone() = 0;
@@ -92,7 +93,7 @@ class ControlServer {
     UniqueFd fd;
     control::LineBuffer lines;
     uid_t uid = 0;
-    std::optional<Rect> layout;    // the last layout it sent
+    std::optional<control::LayoutRequest> layout;  // the last layout it sent
     bool layout_deferred = false;  // answered, not yet applied: more of the burst it came in waits to be read
     bool passthrough = false;      // what its last passthrough request asked
   };

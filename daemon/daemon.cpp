@@ -792,8 +792,9 @@ void Daemon::position(Vec2 position, bool from_helper) {
 
 // Kept even while the scene file sets the desktop: a reload to desktop = "auto" then takes it (the helper sends a
 // layout only when it changes).
-void Daemon::layout(Rect desktop) {
+void Daemon::layout(Rect desktop, const std::vector<Rect>& outputs) {
   helper_desktop_ = desktop;
+  helper_outputs_ = outputs;
   helper_desktop_kept_up_ = true;
   if (config_.settings.desktop) {
     if (desktop != config_.pipeline.desktop)
@@ -801,7 +802,7 @@ void Daemon::layout(Rect desktop) {
                   desktop.h, desktop.x, desktop.y);
     return;
   }
-  change_desktop(desktop, "from the session helper");
+  change_desktop(desktop, outputs, "from the session helper");
 }
 
 void Daemon::layout_source_gone() {
@@ -825,6 +826,7 @@ void Daemon::on_displays_changed() {
       return;
     }
     helper_desktop_.reset();
+    helper_outputs_.clear();
     log_.info(
         "the connected displays changed and the session helper that gave the layout has gone: "
         "following the displays");
@@ -832,12 +834,32 @@ void Daemon::on_displays_changed() {
   std::string no_display;
   const Rect desktop = resolve_desktop(std::nullopt, choice_.drm_dir, no_display);
   if (!no_display.empty() && desktop != config_.pipeline.desktop) log_.warning("{}", no_display);
-  change_desktop(desktop, "the connected displays changed");
+  change_desktop(desktop, {}, "the connected displays changed");
 }
 
-void Daemon::change_desktop(Rect desktop, std::string_view why) {
-  if (desktop == config_.pipeline.desktop) return;
-  log_.info("desktop {}x{}+{}+{} ({})", desktop.w, desktop.h, desktop.x, desktop.y, why);
+namespace {
+
+// "; the pointer stays on its outputs 2560x1440+0+0, 1920x1080+2560+0", or "" for none.
+std::string outputs_said(const std::vector<Rect>& outputs) {
+  std::string said;
+  for (const Rect& o : outputs) said += fmt::format("{}{}x{}+{}+{}", said.empty() ? "" : ", ", o.w, o.h, o.x, o.y);
+  return said.empty() ? said : "; the pointer stays on its outputs " + said;
+}
+
+}  // namespace
+
+void Daemon::change_desktop(Rect desktop, std::vector<Rect> outputs, std::string_view why) {
+  outputs = pointer_outputs(desktop, std::move(outputs));
+  if (desktop == config_.pipeline.desktop) {
+    if (outputs == config_.pipeline.outputs) return;
+    // The same axes' ranges: the virtual devices stay, the model is bounded by the outputs from the next frame on.
+    log_.info("desktop {}x{}+{}+{} ({}){}", desktop.w, desktop.h, desktop.x, desktop.y, why,
+              outputs.empty() ? "; its outputs cover it" : outputs_said(outputs));
+    config_.pipeline.outputs = outputs;
+    pipeline_->set_desktop(desktop, std::move(outputs));
+    return;
+  }
+  log_.info("desktop {}x{}+{}+{} ({}){}", desktop.w, desktop.h, desktop.x, desktop.y, why, outputs_said(outputs));
   if (config_.embedded && !default_scene_laid_out_for(*config_.scene, desktop)) {
     std::shared_ptr<const Scene> replaced = config_.scene;
     config_.scene = std::make_shared<const Scene>(default_scene(desktop));
@@ -849,8 +871,9 @@ void Daemon::change_desktop(Rect desktop, std::string_view why) {
   for (const std::string& note : off_desktop_notes(*config_.scene, desktop))
     log_.warning("{}: {}", config_.source, note);
   config_.pipeline.desktop = desktop;
+  config_.pipeline.outputs = outputs;
   if (config_.pipeline.mode == OutputMode::relative) {
-    pipeline_->set_desktop(desktop);
+    pipeline_->set_desktop(desktop, std::move(outputs));
   } else {
     restart_devices("the desktop changed");  // absolute ranges are fixed when a device is made
   }
@@ -922,9 +945,11 @@ void Daemon::apply(Configuration next) {
   // scene file set the desktop may be out of date, with no display change seen meanwhile to say so.
   if (helper_desktop_ && !next.settings.desktop && (helper_desktop_kept_up_ || !config_.settings.desktop)) {
     next.pipeline.desktop = *helper_desktop_;
+    next.pipeline.outputs = helper_outputs_;
     std::erase(next.warnings, next.desktop_guessed);  // not guessed: the helper's
   } else if (!next.settings.desktop) {
     helper_desktop_.reset();
+    helper_outputs_.clear();
   }
   if (next.embedded && !default_scene_laid_out_for(*next.scene, next.pipeline.desktop)) {
     next.scene = std::make_shared<const Scene>(default_scene(next.pipeline.desktop));

@@ -92,11 +92,11 @@ class Daemon final : private ControlHandler {
   control::Status status() const override;
   Vec2 cursor() const override;
   void position(Vec2 position, bool from_helper) override;
-  void layout(Rect desktop) override;
+  void layout(Rect desktop, const std::vector<Rect>& outputs) override;
   void layout_source_gone() override;
   void helper_changed(bool present) override;
   void on_displays_changed();
-  void change_desktop(Rect desktop, std::string_view why);
+  void change_desktop(Rect desktop, std::vector<Rect> outputs, std::string_view why);
   void passthrough(bool on) override;
   void set_passthrough(bool on);
   // Pass-through as asked, with `mode`: relative output already reaches such applications as motion.
@@ -146,6 +146,7 @@ class Daemon final : private ControlHandler {
   const ServiceNotifier& notifier_;
   Configuration config_;
   std::optional<Rect> helper_desktop_;   // the session helper's layout, over `desktop = "auto"`
+  std::vector<Rect> helper_outputs_;     // and where on it its outputs are (Pipeline::set_desktop)
   bool helper_desktop_kept_up_ = false;  // the connection that gave it is open, and reports changes
   std::unique_ptr<Pipeline> pipeline_;
   UdevWatch udev_;

@@ -20,11 +20,15 @@ Rect logical_rect(const WaylandOutput& output) {
   return Rect{output.x, output.y, w / scale, h / scale};
 }
 
-std::optional<Rect> wayland_layout(const std::vector<WaylandOutput>& outputs) {
+std::vector<Rect> wayland_output_rects(const std::vector<WaylandOutput>& outputs) {
   std::vector<Rect> rects;
   rects.reserve(outputs.size());
   for (const WaylandOutput& o : outputs) rects.push_back(logical_rect(o));
-  return bounding_box(rects);
+  return rects;
+}
+
+std::optional<Rect> wayland_layout(const std::vector<WaylandOutput>& outputs) {
+  return bounding_box(wayland_output_rects(outputs));
 }
 
 std::vector<std::string> hyprland_socket_candidates(std::string_view runtime_dir, std::string_view signature) {

@@ -30,6 +30,8 @@ struct WaylandOutput {
 Rect logical_rect(const WaylandOutput& output);
 // The desktop: the bounding box of all outputs' logical rectangles; nullopt while there is none.
 std::optional<Rect> wayland_layout(const std::vector<WaylandOutput>& outputs);
+// Each output's logical rectangle, in the order given.
+std::vector<Rect> wayland_output_rects(const std::vector<WaylandOutput>& outputs);
 
 // Hyprland's request socket: $XDG_RUNTIME_DIR/hypr/SIGNATURE/.socket.sock, then /tmp/hypr/SIGNATURE/.socket.sock
 // (where older versions put it); empty without a signature.

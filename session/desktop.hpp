@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "core/engine/geometry.hpp"
 
@@ -36,8 +37,11 @@ class Desktop {
   virtual Changes read_events() = 0;
   // The second descriptor to wait on; read_events() handles what arrives there too.
   virtual Watch watch() const { return {}; }
-  // The bounding box of all outputs in logical pixels; nullopt while there is none.
+  // What absolute axes span in logical pixels (the bounding box of all outputs; X's root window); nullopt while there
+  // is no output.
   virtual std::optional<Rect> layout() const = 0;
+  // Where on it the outputs are, where they do not cover it (session/protocol.hpp, outputs_to_report).
+  virtual std::vector<Rect> outputs() const = 0;
   // Whether this desktop can say where the pointer is. Without it the helper reports the layout only
   // and does not present itself as the daemon's helper (the daemon then never waits for its answer).
   virtual bool knows_pointer() const = 0;

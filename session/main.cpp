@@ -22,6 +22,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "common/unique_fd.hpp"
@@ -78,7 +79,7 @@ struct Link {
   std::optional<ControlConnection> connection;
   Conversation conversation;
   ph::control::LineBuffer lines;
-  std::optional<ph::Rect> layout_sent;
+  std::optional<std::pair<ph::Rect, std::vector<ph::Rect>>> layout_sent;  // the desktop and its outputs
   std::optional<bool> passthrough_sent;
   int failures = 0;  // connection attempts failed in a row
   Clock::time_point next_attempt = Clock::now();
@@ -179,9 +180,11 @@ class Helper {
   }
 
   void send_layout() {
-    const std::optional<ph::Rect> layout = desktop_.layout();
-    if (!layout || link_.layout_sent == layout) return;  // no output yet: the next change brings one
-    const std::optional<std::string> line = layout_request(*layout);
+    const std::optional<ph::Rect> desktop = desktop_.layout();
+    if (!desktop) return;  // no output yet: the next change brings one
+    const std::pair<ph::Rect, std::vector<ph::Rect>> layout{*desktop, desktop_.outputs()};
+    if (link_.layout_sent == layout) return;
+    const std::optional<std::string> line = layout_request(layout.first, layout.second);
     if (line && send(*line)) link_.layout_sent = layout;
   }
 

@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <iterator>
 #include <limits>
 
 #include "control/protocol.hpp"
+#include "core/engine/desktop_outputs.hpp"
 
 namespace ph::session {
 
@@ -15,9 +17,17 @@ std::string helper_request(std::string_view backend) {
   return control::format_request(control::HelperRequest{std::string(backend)}) + "\n";
 }
 
-std::optional<std::string> layout_request(Rect layout) {
+std::optional<std::string> layout_request(Rect layout, const std::vector<Rect>& outputs) {
   if (!is_valid_desktop(layout)) return std::nullopt;
-  return control::format_request(control::LayoutRequest{layout}) + "\n";
+  return control::format_request(control::LayoutRequest{layout, outputs}) + "\n";
+}
+
+std::vector<Rect> outputs_to_report(Rect desktop, const std::vector<Rect>& outputs, bool x_rules) {
+  std::vector<Rect> shown;
+  std::copy_if(outputs.begin(), outputs.end(), std::back_inserter(shown),
+               [](const Rect& r) { return r.w > 0 && r.h > 0; });
+  if (x_rules && !outputs_contiguous(shown)) return {};
+  return pointer_outputs(desktop, std::move(shown));
 }
 
 std::optional<std::string> position_request(Vec2 position) {

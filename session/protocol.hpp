@@ -17,9 +17,14 @@ namespace ph::session {
 
 // The requests, each a whole line with its '\n'.
 std::string helper_request(std::string_view backend);  // "helper x11"
-// "layout X Y W H"; nullopt for a layout the daemon refuses (is_valid_desktop: W and H from 1 to 2^20, X and Y
-// within ±2^20).
-std::optional<std::string> layout_request(Rect layout);
+// "layout X Y W H", then each output's X Y W H; nullopt for a layout the daemon refuses (is_valid_desktop: W and H
+// from 1 to 2^20, X and Y within ±2^20). `outputs` as outputs_to_report gives them.
+std::optional<std::string> layout_request(Rect layout, const std::vector<Rect>& outputs = {});
+
+// The outputs to tell the daemon on `desktop` (core/engine/desktop_outputs.hpp): none where they cover it (or are
+// too many, or reach past it), and under X's rules (`x_rules`) none where they are not contiguous, as X then lets
+// the pointer roam the whole root window.
+std::vector<Rect> outputs_to_report(Rect desktop, const std::vector<Rect>& outputs, bool x_rules);
 // "position X Y"; nullopt for a coordinate the daemon refuses (not finite, or past ±2^20: a compositor that
 // misbehaves), which would only earn an error for every query.
 std::optional<std::string> position_request(Vec2 position);

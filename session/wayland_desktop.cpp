@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "session/compositor_answers.hpp"
+#include "session/protocol.hpp"
 #include "xdg-output-unstable-v1-client-protocol.h"
 
 namespace ph::session {
@@ -154,12 +155,17 @@ struct WaylandDesktop::State {
   }
   static constexpr wl_registry_listener kRegistryListener{on_global, on_global_remove};
 
-  std::optional<Rect> layout() const {
-    std::vector<WaylandOutput> described;
+  std::vector<WaylandOutput> described() const {
+    std::vector<WaylandOutput> them;
     for (const auto& o : outputs) {
-      if (o->described) described.push_back(o->current);
+      if (o->described) them.push_back(o->current);
     }
-    return wayland_layout(described);
+    return them;
+  }
+  std::optional<Rect> layout() const { return wayland_layout(described()); }
+  std::vector<Rect> output_rects() const {
+    const std::optional<Rect> desktop = layout();
+    return desktop ? outputs_to_report(*desktop, wayland_output_rects(described()), false) : std::vector<Rect>{};
   }
 };
 
@@ -210,6 +216,8 @@ WaylandDesktop::Changes WaylandDesktop::read_events() {
 }
 
 std::optional<Rect> WaylandDesktop::layout() const { return state_->layout(); }
+
+std::vector<Rect> WaylandDesktop::outputs() const { return state_->output_rects(); }
 
 std::optional<Vec2> WaylandDesktop::pointer() const { return cursor_ ? cursor_->position() : std::nullopt; }
 

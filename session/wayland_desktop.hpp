@@ -46,6 +46,7 @@ class WaylandDesktop : public Desktop {
   Changes read_events() override;
   Watch watch() const override { return cursor_ ? cursor_->watch() : Watch{}; }
   std::optional<Rect> layout() const override;
+  std::vector<Rect> outputs() const override;
   bool knows_pointer() const override { return cursor_ != nullptr; }
   std::optional<Vec2> pointer() const override;
   std::optional<std::pair<std::string, std::string>> active_class() const override { return std::nullopt; }

@@ -64,13 +64,18 @@ int X11Desktop::fd() const { return ConnectionNumber(display_.get()); }
 
 bool X11Desktop::events_queued() const { return XEventsQueued(display_.get(), QueuedAlready) > 0; }
 
+// X scales an absolute device's axes onto the root window (the screen), which may be larger than its CRTCs
+// (xrandr --fb): the root is the layout, and the CRTCs the outputs on it.
 std::optional<Rect> X11Desktop::layout() const {
   Display* d = display_.get();
-  const Window root = DefaultRootWindow(d);
-  const Rect whole{0, 0, DisplayWidth(d, DefaultScreen(d)), DisplayHeight(d, DefaultScreen(d))};
-  if (!has_randr()) return whole;
-  XRRScreenResources* resources = XRRGetScreenResourcesCurrent(d, root);
-  if (resources == nullptr) return whole;
+  return Rect{0, 0, DisplayWidth(d, DefaultScreen(d)), DisplayHeight(d, DefaultScreen(d))};
+}
+
+std::vector<Rect> X11Desktop::outputs() const {
+  Display* d = display_.get();
+  if (!has_randr()) return {};
+  XRRScreenResources* resources = XRRGetScreenResourcesCurrent(d, DefaultRootWindow(d));
+  if (resources == nullptr) return {};
   std::vector<Rect> outputs;
   for (int i = 0; i < resources->ncrtc; ++i) {
     XRRCrtcInfo* crtc = XRRGetCrtcInfo(d, resources, resources->crtcs[i]);
@@ -82,7 +87,7 @@ std::optional<Rect> X11Desktop::layout() const {
     XRRFreeCrtcInfo(crtc);
   }
   XRRFreeScreenResources(resources);
-  return bounding_box(outputs).value_or(whole);
+  return outputs_to_report(*layout(), outputs, true);
 }
 
 std::optional<Vec2> X11Desktop::pointer() const {

@@ -40,6 +40,7 @@ class X11Desktop : public Desktop {
   bool has_randr() const { return randr_event_base_ >= 0; }
   // Always known: the root window's size where RandR says nothing.
   std::optional<Rect> layout() const override;
+  std::vector<Rect> outputs() const override;
   bool knows_pointer() const override { return true; }
   // Where the pointer is (the centre of its pixel); nullopt while it is on another X screen than the default one.
   std::optional<Vec2> pointer() const override;

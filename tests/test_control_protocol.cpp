@@ -32,13 +32,20 @@ TEST(ControlProtocol, RequestsRoundTrip) {
   EXPECT_EQ(p.position, (Vec2{960.5, -3.25}));
   const auto l = std::get<LayoutRequest>(parsed("layout -1920 0 3840 1080"));
   EXPECT_EQ(l.desktop, (Rect{-1920, 0, 3840, 1080}));
+  EXPECT_TRUE(l.outputs.empty());
+  // Monitors of different sizes: the outputs follow the desktop.
+  const auto uneven = std::get<LayoutRequest>(parsed("layout 0 0 4480 1440 0 0 2560 1440 2560 0 1920 1080"));
+  EXPECT_EQ(uneven.desktop, (Rect{0, 0, 4480, 1440}));
+  EXPECT_EQ(uneven.outputs, (std::vector<Rect>{{0, 0, 2560, 1440}, {2560, 0, 1920, 1080}}));
   EXPECT_EQ(std::get<HelperRequest>(parsed("helper x11")).backend, "x11");
   EXPECT_TRUE(std::get<PassthroughRequest>(parsed("passthrough on")).on);
   EXPECT_FALSE(std::get<PassthroughRequest>(parsed("passthrough off")).on);
   EXPECT_NE(refusal("passthrough yes").find("on or off"), std::string::npos);
   for (const Request& r : {Request{StatusRequest{}}, Request{CursorRequest{}}, Request{PositionRequest{{0.1, 1e-3}}},
-                           Request{LayoutRequest{{1, 2, 3, 4}}}, Request{HelperRequest{"wayland-kwin"}},
-                           Request{PassthroughRequest{true}}, Request{PassthroughRequest{false}}}) {
+                           Request{LayoutRequest{{1, 2, 3, 4}, {}}},
+                           Request{LayoutRequest{{-5, 0, 20, 10}, {{-5, 0, 10, 10}, {5, 2, 10, 5}}}},
+                           Request{HelperRequest{"wayland-kwin"}}, Request{PassthroughRequest{true}},
+                           Request{PassthroughRequest{false}}}) {
     EXPECT_EQ(format_request(parsed(format_request(r))), format_request(r));
   }
   // Extra spaces between words are harmless.
@@ -66,6 +73,13 @@ TEST(ControlProtocol, MalformedRequestsAreRefusedWithAReason) {
   EXPECT_NE(refusal("layout 0 0 0 1080").find("from 1"), std::string::npos);
   EXPECT_NE(refusal("layout 0 0 1.5 1080").find("whole"), std::string::npos);
   EXPECT_NE(refusal("layout 0 0 99999999999 1080").find("whole"), std::string::npos);
+  EXPECT_NE(refusal("layout 0 0 1920 1080 0 0 1920").find("outputs' X Y W H"), std::string::npos);  // 3 of 4
+  EXPECT_NE(refusal("layout 0 0 1920 1080 0 0 1921 1080").find("not a rectangle within"), std::string::npos);
+  EXPECT_NE(refusal("layout 0 0 1920 1080 -1 0 100 100").find("not a rectangle within"), std::string::npos);
+  EXPECT_NE(refusal("layout 0 0 1920 1080 0 0 0 100").find("not a rectangle within"), std::string::npos);
+  std::string seventeen = "layout 0 0 1920 1080";
+  for (int i = 0; i < 17; ++i) seventeen += " 0 0 10 10";
+  EXPECT_NE(refusal(seventeen).find("up to 16 outputs"), std::string::npos);
   EXPECT_NE(refusal("helper").find("backend"), std::string::npos);
   EXPECT_NE(refusal("helper x11; rm").find("backend"), std::string::npos);
   EXPECT_NE(refusal(std::string(kMaxLine + 1, 'a')).find("too long"), std::string::npos);

@@ -64,9 +64,10 @@ class RecordingHandler final : public ControlHandler {
     at_ = p;
     helper_positions_ += from_helper;
   }
-  void layout(Rect d) override {
+  void layout(Rect d, const std::vector<Rect>& outputs) override {
     std::lock_guard lock(mutex_);
     desktop_ = d;
+    outputs_ = outputs;
     ++layouts_;
   }
   void layout_source_gone() override { layout_sources_gone_ += 1; }
@@ -81,6 +82,10 @@ class RecordingHandler final : public ControlHandler {
   Rect desktop() {
     std::lock_guard lock(mutex_);
     return desktop_;
+  }
+  std::vector<Rect> outputs() {
+    std::lock_guard lock(mutex_);
+    return outputs_;
   }
   int helper_positions() {
     std::lock_guard lock(mutex_);
@@ -97,6 +102,7 @@ class RecordingHandler final : public ControlHandler {
   std::mutex mutex_;
   Vec2 at_{960.5, 540.5};
   Rect desktop_;
+  std::vector<Rect> outputs_;
   int helper_positions_ = 0;
   int layouts_ = 0;
 };
@@ -169,8 +175,12 @@ TEST(ControlServer, AnswersEveryRequestAndQueriesTheHelper) {
     control::Client helper(path);
     ASSERT_TRUE(helper.request("helper test").ok);
     EXPECT_TRUE(server.handler.helper_present_);
+    ASSERT_TRUE(helper.request("layout -1920 0 3840 1440 -1920 0 1920 1080 0 0 1920 1440").ok);
+    EXPECT_EQ(server.handler.desktop(), (Rect{-1920, 0, 3840, 1440}));
+    EXPECT_EQ(server.handler.outputs(), (std::vector<Rect>{{-1920, 0, 1920, 1080}, {0, 0, 1920, 1440}}));
     ASSERT_TRUE(helper.request("layout -1920 0 3840 1080").ok);
     EXPECT_EQ(server.handler.desktop(), (Rect{-1920, 0, 3840, 1080}));
+    EXPECT_TRUE(server.handler.outputs().empty());
     EXPECT_TRUE(control::parse_status(tool.request("status").text)->helper);
     server.query_helper();
     EXPECT_EQ(helper.read_line(2s), "query");

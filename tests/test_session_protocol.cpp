@@ -19,12 +19,16 @@ TEST(SessionRequests, AreWholeLinesTheDaemonParses) {
   EXPECT_EQ(helper_request("x11"), "helper x11\n");
   EXPECT_EQ(layout_request({0, 0, 1920, 1080}), "layout 0 0 1920 1080\n");
   EXPECT_EQ(layout_request({-1280, -200, 3200, 1280}), "layout -1280 -200 3200 1280\n");
+  EXPECT_EQ(layout_request({0, 0, 4480, 1440}, {{0, 0, 2560, 1440}, {2560, 0, 1920, 1080}}),
+            "layout 0 0 4480 1440 0 0 2560 1440 2560 0 1920 1080\n");
   EXPECT_EQ(position_request({960, 540}), "position 960 540\n");
   EXPECT_EQ(position_request({960.5, 0.25}), "position 960.5 0.25\n");
   // Whatever it sends, the daemon's parser reads back the same request.
   for (const std::string& line :
-       {helper_request("x11"), *layout_request({-1280, -200, 3200, 1280}), *position_request({-12.125, 1919.75}),
-        *position_request({3, 0}), passthrough_request(true), passthrough_request(false)}) {
+       {helper_request("x11"), *layout_request({-1280, -200, 3200, 1280}),
+        *layout_request({-1280, -200, 3200, 1280}, {{-1280, -200, 1280, 720}, {0, 0, 1920, 1080}}),
+        *position_request({-12.125, 1919.75}), *position_request({3, 0}), passthrough_request(true),
+        passthrough_request(false)}) {
     const auto parsed = control::parse_request(std::string_view(line).substr(0, line.size() - 1));  // no '\n'
     ASSERT_TRUE(std::holds_alternative<control::Request>(parsed)) << line << ": " << std::get<std::string>(parsed);
     EXPECT_EQ(control::format_request(std::get<control::Request>(parsed)) + "\n", line);
@@ -34,6 +38,26 @@ TEST(SessionRequests, AreWholeLinesTheDaemonParses) {
     EXPECT_EQ(position_request({960.5, 0.25}), "position 960.5 0.25\n");
     std::setlocale(LC_ALL, "C");
   }
+}
+
+// The outputs told: where they leave part of the desktop uncovered; under X's rules only where they touch (X lets the
+// pointer roam the whole root window otherwise).
+TEST(SessionRequests, OutputsAreToldWhereTheyLeaveDeadSpace) {
+  const Rect desktop{0, 0, 4480, 1440};
+  const std::vector<Rect> uneven{{0, 0, 2560, 1440}, {2560, 0, 1920, 1080}};
+  for (const bool x_rules : {false, true}) {
+    EXPECT_EQ(outputs_to_report(desktop, uneven, x_rules), uneven);
+    EXPECT_TRUE(outputs_to_report({0, 0, 3840, 1080}, {{0, 0, 1920, 1080}, {1920, 0, 1920, 1080}}, x_rules).empty());
+    EXPECT_TRUE(outputs_to_report({0, 0, 1920, 1080}, {{0, 0, 1920, 1080}, {0, 0, 1920, 1080}}, x_rules).empty());
+  }
+  // A gap between them: X does not stop the pointer at their edges; a compositor does.
+  const std::vector<Rect> apart{{0, 0, 1920, 1080}, {2000, 0, 1920, 1080}};
+  EXPECT_TRUE(outputs_to_report({0, 0, 3920, 1080}, apart, true).empty());
+  EXPECT_EQ(outputs_to_report({0, 0, 3920, 1080}, apart, false), apart);
+  // X's root window larger than its one CRTC (xrandr --fb): the CRTC is told.
+  EXPECT_EQ(outputs_to_report(desktop, {{0, 0, 1920, 1080}}, true), (std::vector<Rect>{{0, 0, 1920, 1080}}));
+  // A CRTC switched off (no size) is no output.
+  EXPECT_TRUE(outputs_to_report({0, 0, 1920, 1080}, {{0, 0, 1920, 1080}, {1920, 0, 0, 0}}, true).empty());
 }
 
 TEST(SessionRequests, RefuseWhatTheDaemonWouldRefuse) {

@@ -209,6 +209,9 @@ TEST(WaylandDesktop, FollowsOutputsThatComeChangeAndGo) {
   EXPECT_EQ(desktop.layout(), (Rect{0, 0, 3200, 1080}));
   EXPECT_FALSE(desktop.read_events().layout);  // nothing new since it connected
 
+  // Of different heights: the space below the smaller one is no output's.
+  EXPECT_EQ(desktop.outputs(), (std::vector<Rect>{{0, 0, 1920, 1080}, {1920, 0, 1280, 720}}));
+
   const int above = compositor.add({0, -900, 1600, 900});  // plugged in
   ASSERT_TRUE(wait_for_layout_change(desktop));
   EXPECT_EQ(desktop.layout(), (Rect{0, -900, 3200, 1980}));

@@ -108,6 +108,7 @@ Pipeline::Pipeline(std::shared_ptr<const Scene> scene, const PipelineConfig& con
     : scene_(scene ? std::move(scene) : std::make_shared<const Scene>()),
       config_(config),
       acceleration_(config.acceleration) {
+  config_.outputs = pointer_outputs(config_.desktop, std::move(config_.outputs));
   desktop_changed();
   const Rect d = config_.desktop;
   cursor_ = cursor_at(config_.start.value_or(Vec2{d.x + d.w / 2.0, d.y + d.h / 2.0}));
@@ -123,9 +124,10 @@ void Pipeline::move_cursor_to(Vec2 position) {
   clamp_to_desktop();
 }
 
-void Pipeline::set_desktop(Rect desktop) {
+void Pipeline::set_desktop(Rect desktop, std::vector<Rect> outputs) {
   if (desktop.w <= 0 || desktop.h <= 0) return;
   config_.desktop = desktop;
+  config_.outputs = pointer_outputs(desktop, std::move(outputs));
   desktop_changed();
   clamp_to_desktop();
 }
@@ -137,13 +139,16 @@ void Pipeline::desktop_changed() {
   desktop_hi_ = {std::nextafter(d.x + d.w, d.x), std::nextafter(d.y + d.h, d.y)};
 }
 
-void Pipeline::clamp_to_desktop() {
+void Pipeline::clamp_to_desktop(std::optional<Vec2> from) {
   const Rect d = config_.desktop;
   if (d.w <= 0 || d.h <= 0 || on_desktop(cursor_.position)) return;
-  // The real pointer stops at the desktop's edge; so does the model (the model and the pointer agree
-  // again whenever the pointer is pushed to an edge).
-  const double x = std::clamp(cursor_.position.x, desktop_lo_.x, desktop_hi_.x);
-  const double y = std::clamp(cursor_.position.y, desktop_lo_.y, desktop_hi_.y);
+  // The real pointer stops at the desktop's edge, or at its output's; so does the model (the model and the pointer
+  // agree again whenever the pointer is pushed to an edge).
+  Vec2 p = cursor_.position;
+  if (!config_.outputs.empty() && !on_an_output(config_.outputs, p))
+    p = stop_on_outputs(config_.outputs, from.value_or(p), p);
+  const double x = std::clamp(p.x, desktop_lo_.x, desktop_hi_.x);
+  const double y = std::clamp(p.y, desktop_lo_.y, desktop_hi_.y);
   const EffectStates effects = cursor_.effects;  // pushing against the edge is still the same hand
   cursor_ = cursor_at({x, y});
   cursor_.effects = effects;
@@ -163,9 +168,10 @@ PH_FRAME_PATH void Pipeline::process(const Frame& in, Frame& out, FrameReport* r
   if (dx != 0 || dy != 0) {
     const Vec2 counts{static_cast<double>(dx), static_cast<double>(dy)};
     const Vec2 motor = acceleration_.apply(counts, frame_time(in)) * config_.pointer_gain;
+    const Vec2 from = cursor_.position;
     moved = advance(*scene_, cursor_, motor, frame_time(in));
     // The real pointer stops at the desktop's edge; so does the model. Out of line only where it must move.
-    if (!on_desktop(cursor_.position)) clamp_to_desktop();
+    if (!on_desktop(cursor_.position)) clamp_to_desktop(from);
   }
   if (report != nullptr) {
     report->cd_min = moved.cd_min;

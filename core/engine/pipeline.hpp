@@ -6,8 +6,10 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "core/engine/acceleration.hpp"
+#include "core/engine/desktop_outputs.hpp"
 #include "core/engine/device.hpp"
 #include "core/engine/event.hpp"
 #include "core/engine/scene.hpp"
@@ -31,8 +33,8 @@ class EventSink {
 enum class OutputMode { relative, absolute };
 
 // Absolute output: ABS_X/ABS_Y count half pixels of the desktop, and a position is emitted as the centre
-// of the pixel the cursor model is in. Desktops scale the axis range onto the desktop's bounding box
-// (libinput: (v - min) * width / (max - min + 1)) and X rounds the result down after losing up to
+// of the pixel the cursor model is in. Desktops scale the axis range onto the desktop, the outputs' bounding box
+// or X's root window (libinput: (v - min) * width / (max - min + 1)), and X rounds the result down after losing up to
 // 1/65536 of it; a pixel centre lands on its pixel under both (docs/SERVICE.md, "Absolute output").
 inline constexpr std::int32_t kAbsUnitsPerPixel = 2;
 inline std::int32_t abs_value_of_pixel(std::int32_t pixel) { return pixel * kAbsUnitsPerPixel + 1; }
@@ -42,6 +44,9 @@ struct PipelineConfig {
   AccelSettings acceleration;  // before the C/D; the default (flat, speed 0, 1000 dpi) is the identity
   OutputMode mode = OutputMode::relative;
   Rect desktop{0, 0, 1920, 1080};
+  // Where on the desktop the pointer may be (core/engine/desktop_outputs.hpp): the outputs where they do not cover
+  // it; empty: all of it.
+  std::vector<Rect> outputs;
   std::optional<Vec2> start;  // cursor model's start; default: the desktop's centre
 };
 
@@ -69,9 +74,10 @@ class Pipeline {
   // The desktop's real cursor is elsewhere (a warp, another pointer, the session helper's first word):
   // the model moves there, clamped to the desktop, and any effect in progress starts over.
   void move_cursor_to(Vec2 position);
-  // A new desktop layout (the session helper); the model is clamped into it. Absolute output needs
-  // new virtual devices for the new ranges: output_device() with config() describes them.
-  void set_desktop(Rect desktop);
+  // A new desktop layout (the session helper): the desktop and where on it its outputs are (pointer_outputs); the
+  // model is clamped into them. Absolute output needs new virtual devices for a new desktop's ranges:
+  // output_device() with config() describes them.
+  void set_desktop(Rect desktop, std::vector<Rect> outputs = {});
 
   // Rescales one complete frame (ending in SYN_REPORT). Frames without motion come back unchanged.
   Frame process(const Frame& in, FrameReport* report = nullptr);
@@ -92,9 +98,11 @@ class Pipeline {
   void desktop_changed();  // the bounds of the desktop below, for clamp_to_desktop()
   // Whether p lies in the model's range (inline: the frame's path asks it before it calls clamp_to_desktop()).
   bool on_desktop(Vec2 p) const {
-    return p.x >= desktop_lo_.x && p.x <= desktop_hi_.x && p.y >= desktop_lo_.y && p.y <= desktop_hi_.y;
+    return p.x >= desktop_lo_.x && p.x <= desktop_hi_.x && p.y >= desktop_lo_.y && p.y <= desktop_hi_.y &&
+           (config_.outputs.empty() || on_an_output(config_.outputs, p));
   }
-  void clamp_to_desktop();
+  // The model stopped where the pointer stops: at the edge of the output it moved from (`from`; none: the nearest).
+  void clamp_to_desktop(std::optional<Vec2> from = std::nullopt);
 
   std::shared_ptr<const Scene> scene_;
   PipelineConfig config_;

@@ -19,6 +19,8 @@
 //   e  pseudohaptic-session (HELPER) against a stand-in control socket;
 //   d  with the helper connected: an application warp, then motion: the model follows within two frames;
 //   g  ... a pointer the daemon does not take moves the cursor: the model follows;
+//   j  with the helper: two outputs of different sizes; where X stops the pointer at an output's edge, the model
+//      stops too (X's pixel holds it at every frame);
 //   f  our adaptive profile against X's libinput adaptive profile (the daemon's relative output, its own
 //      acceleration flat) on the same out-and-back strokes, given the times libinput saw (those of the daemon's
 //      events): the two cursors within 2 % of the path's length; the daemon's absolute output live beside it,
@@ -65,9 +67,9 @@ struct Options {
   int frames = 2000;          // motion frames of the absolute case
   int relative_frames = 600;  // motion frames of each relative case
   bool verbose = false;
-  std::string cases = "abcedf";  // which run, by letter (e: the helper alone; d: d, g and h; f)
-  long trace_from = -1;          // -v: trace 12 frames from this one
-  int acceleration_strokes = 8;  // out-and-back strokes of case f
+  std::string cases = "abcedjf";  // which run, by letter (e: the helper alone; d: d, g and h; j; f)
+  long trace_from = -1;           // -v: trace 12 frames from this one
+  int acceleration_strokes = 8;   // out-and-back strokes of case f
   std::filesystem::path scratch;
   std::filesystem::path scene_dir;  // the targets' maps; default: in scratch
   std::string session;              // pseudohaptic-session, for its case; none: not run
@@ -721,6 +723,98 @@ int follow_cases(const Options& options, XServer& x, TestMouse& mouse, TestMouse
   return failed + (problems.empty() ? 0 : 1);
 }
 
+// ---- [j] outputs of different sizes ---------------------------------------------------------------------------
+
+// Two outputs side by side, 1920 x 1080 and 1280 x 720 to its right: below the smaller one lies a 1280 x 360 px part
+// of the root window that no output shows, and X stops the pointer at the edge of the output it comes from
+// (RandR's RRConstrainCursorHarder). With pseudohaptic-session telling the daemon where the outputs are, the model
+// stops there too: X's pixel holds the model at every frame, down against the smaller output's bottom edge, back up
+// (the first frame moves the cursor), and right against the larger one's edge below the smaller one.
+bool outputs_case(const Options& options, XServer& x, TestMouse& mouse, const UeventMonitor& uevents) {
+  const auto case_start = Clock::now();
+  const std::string label = "[j] outputs of different sizes: the model stops where X stops the pointer";
+  std::vector<std::string> problems, notes;
+  std::system("xrandr --addmode DUMMY1 1280x720 2>/dev/null");  // (already there after [e])
+  if (const int status = std::system("xrandr --output DUMMY1 --mode 1280x720 --right-of DUMMY0"); status != 0)
+    problems.push_back(fmt::format("xrandr: status {}", status));
+  // The desktop left to the helper (no `desktop` key): the daemon's desktop and its outputs are the helper's.
+  const std::filesystem::path config = options.scratch / "j.toml";
+  std::ofstream(config, std::ios::trunc) << "[daemon]\ndevices = [\"name:ph-x11 mouse\"]\noutput = \"absolute\"\n"
+                                            "acceleration = \"flat\"\nspeed = 0.0\npointer_speed = 1.0\n";
+  try {
+    RunningDaemon daemon(options, x, mouse, uevents, config);
+    const int first_device = daemon.x_device();
+    const char* display = std::getenv("DISPLAY");
+    ChildProcess helper({options.session, "--control", daemon.control(), "-v"},
+                        {std::string("DISPLAY=") + (display != nullptr ? display : ""), "PATH=/usr/bin:/bin"},
+                        (options.scratch / "session-outputs.log").string());
+    ControlClient control(daemon.control(), 10s);
+    const auto laid_out = [&] {
+      const std::string status = control.request("status");
+      return status.find("helper=yes") != std::string::npos &&
+             status.find("desktop=0,0,3200,1080") != std::string::npos;
+    };
+    if (!wait_until(laid_out, 20s, nullptr, 200ms))
+      daemon.fatal("the daemon did not take the helper's 3200 x 1080 layout within 20 s; its log:\n" + helper.log());
+    // A new desktop remakes the absolute device (new axis ranges): X's id for it changes.
+    std::optional<int> device;
+    wait_until([&] { return (device = x.pointer_device(kVirtualName)) && *device != first_device; }, 10s, nullptr,
+               100ms);
+    if (!device) daemon.fatal("X has no virtual device after the new layout");
+    long motions = x.motions(*device);
+    Distances held;
+    long frame = 0;
+    const auto play = [&](int dx, int dy, int frames) {
+      for (int i = 0; i < frames; ++i, ++frame) {
+        mouse.send(make_frame({rel(ev::kRelX, dx), rel(ev::kRelY, dy)}));
+        // Held against an edge the position may not change, and nothing comes out: waited for briefly.
+        if (x.wait_motions(*device, motions + 1, 300ms)) {
+          ++motions;
+        } else {
+          x.drain();
+          motions = x.motions(*device);
+        }
+        std::this_thread::sleep_for(8ms);
+        held.add(frame, control.cursor(), x.pointer());
+      }
+    };
+    // X's pointer and the model on the smaller output (the helper's answer after a pause would bring the model to
+    // wherever X's pointer is).
+    x.warp(2500, 500);
+    control.request("position 2500.5 500.5");
+    std::this_thread::sleep_for(500ms);
+    play(0, 1, 1);
+    play(0, 40, 12);  // down into the space below the smaller output: both stop at its bottom row
+    const XServer::Pointer bottom = x.pointer();
+    const Vec2 model_bottom = control.cursor();
+    play(0, -40, 1);  // back up: the cursor moves at once
+    const XServer::Pointer first_up = x.pointer();
+    play(0, -40, 3);
+    play(-40, 0, 20);  // left onto the larger output
+    play(0, 40, 12);   // down below the smaller output's bottom row, on the larger one
+    play(40, 0, 12);   // right, below the smaller one: both stop at the larger one's right column
+    const XServer::Pointer right = x.pointer();
+    notes.push_back(
+        fmt::format("down against the smaller output: X ({}, {}), the model ({:.2f}, {:.2f}); one frame of "
+                    "-40 counts up: X at y {}; right below it: X ({}, {})",
+                    bottom.x, bottom.y, model_bottom.x, model_bottom.y, first_up.y, right.x, right.y));
+    notes.push_back("every frame: " + distances_text(held));
+    if (bottom.y != 719) problems.push_back("X did not hold the pointer at the smaller output's bottom row (719)");
+    if (first_up.y >= bottom.y) problems.push_back("the first frame up did not move the cursor");
+    if (right.x != 1919) problems.push_back("X did not hold the pointer at the larger output's right column (1919)");
+    if (held.over(0.5) > 0) problems.push_back("first beyond 0.5 px: " + held.first_over(0.5));
+    helper.signal(SIGTERM);
+    helper.wait_exit(5s);
+    daemon.stop(x, problems);
+  } catch (const Fatal& e) {
+    problems.push_back(e.what());
+  }
+  if (const int status = std::system("xrandr --output DUMMY1 --off"); status != 0)
+    problems.push_back(fmt::format("xrandr --off: status {}", status));
+  print_verdict(label, problems, notes, std::chrono::duration<double>(Clock::now() - case_start).count());
+  return problems.empty();
+}
+
 // ---- [f] the daemon's adaptive profile against libinput's own ------------------------------------------------
 
 // The pixels X shows after each motion frame of `frames`, with the daemon on `config` (X's libinput
@@ -867,7 +961,8 @@ bool session_case(const Options& options, XServer& x) {
     expect("layout 0 0 1920 1080", "after the mode back");
     xrandr("--addmode DUMMY1 1280x720");  // the dummy driver's other outputs are disconnected, without modes
     xrandr("--output DUMMY1 --mode 1280x720 --right-of DUMMY0");
-    expect("layout 0 0 3200 1080", "after a second output to the right");
+    // Below the smaller one lies space no output shows: the outputs follow the desktop.
+    expect("layout 0 0 3200 1080 0 0 1920 1080 1920 0 1280 720", "after a second, smaller output to the right");
     xrandr("--output DUMMY1 --off");
     expect("layout 0 0 1920 1080", "after the second output is off");
     // A listed application gets the focus (as a window manager says: _NET_ACTIVE_WINDOW), then none has it.
@@ -982,6 +1077,9 @@ int main(int argc, char** argv) {
         std::printf("FAIL [d, g]: %s\n", e.what());
         ++failed;
       }
+    }
+    if (!options.session.empty() && options.cases.find('j') != std::string::npos) {
+      failed += !outputs_case(options, x, mouse, uevents);
     }
     if (options.cases.find('f') != std::string::npos) {
       try {
