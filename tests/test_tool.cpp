@@ -29,6 +29,7 @@
 #include "core/engine/default_scene.hpp"
 #include "core/engine/targets.hpp"
 #include "core/lab/map_storage.hpp"
+#include "tests/as_nobody.hpp"
 #include "tests/csv_table.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/tool_runner.hpp"
@@ -306,6 +307,22 @@ TEST(Tool, ACsvFileIsReplacedWholeOrNotAtAll) {
   null.write("x\n");
   null.close();
   EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  // A file its user may not write is not replaced (a rename would, as the folder allows it), as a shell's > would not.
+  fs::permissions(dir.path(), fs::perms::all);
+  EXPECT_EQ(as_nobody([&] {
+              const fs::path locked = dir / "locked.csv";
+              std::ofstream(locked) << "kept\n";
+              fs::permissions(locked, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+              try {
+                tools::CsvFile f(locked);
+                return 1;
+              } catch (const std::runtime_error& e) {
+                const std::string message = e.what();
+                if (message.find("cannot open for writing: Permission denied") == std::string::npos) return 2;
+              }
+              return read_text(locked) == "kept\n" ? 0 : 3;
+            }),
+            0);
 }
 
 // A command's files are replaced as a set: until commit() each is written beside its name, so that a run that fails or
@@ -722,6 +739,16 @@ TEST(Tool, TraceSaysWhenTheStrokeMissesEveryRegionOrIsTooLong) {
   expect_clean_failure(run_tool("trace --target " + kBump + " --speed 1 --rate 1e5 -o " + quote(dir / "s.csv"), dir),
                        {"a larger --speed or a smaller --rate"});
   EXPECT_FALSE(fs::exists(dir / "s.csv"));
+  // A stroke that fits the frames at C/D 1 but not at its C/D: stopped short, a failed run that leaves the file as it
+  // was (it had replaced it with the rows so far).
+  std::ofstream(dir / "kept.csv") << "old\n";
+  const ToolResult short_of_it =
+      run_tool("trace --target bump-linear-h1-r100 --step 0.0000526 -o " + quote(dir / "kept.csv"), dir);
+  expect_clean_failure(short_of_it, {"stopped after 10000000 frames", "kept.csv is left as it was", "a larger --step"});
+  EXPECT_EQ(read_text(dir / "kept.csv"), "old\n");
+  // A start past the bounds the cursor model keeps to: refused, not moved in silence.
+  expect_clean_failure(run_tool("trace --target " + kBump + " --from 5e9,250 --to 0,250 --step 1e3", dir),
+                       {"--from: X and Y must be within ±1e+09 px"});
 }
 
 // An empty path, and a negative or overlong seed, are turned down by the command line, naming the argument.

@@ -220,6 +220,9 @@ void check_stroke_options(const TraceOptions& o) {
   for (const auto& [name, v] : {std::pair<const char*, const std::vector<double>&>{"--from", o.from}, {"--to", o.to}}) {
     if (!std::all_of(v.begin(), v.end(), [](double c) { return std::isfinite(c); }))
       throw std::invalid_argument(fmt::format("{}: X and Y must be finite numbers", name));
+    // The cursor model never leaves the world's bounds: a point past them would be moved in silence.
+    if (!std::all_of(v.begin(), v.end(), [](double c) { return std::abs(c) <= kWorldLimitPx; }))
+      throw std::invalid_argument(fmt::format("{}: X and Y must be within ±{:g} px", name, kWorldLimitPx));
   }
 }
 
@@ -285,7 +288,8 @@ int run_trace(const TraceOptions& o) {
     if (out.size() > (1 << 16)) flush();
   });
   flush();
-  file.close();
+  // A stroke stopped short is a failed run: its file is left as it was (standard output has had it already).
+  if (result.reached || o.output == "-") file.close();
   fmt::print(stderr, "{} frames, cursor ended at ({:.3f}, {:.3f}), C/D range [{:.4g}, {:.4g}]{}\n", result.frames,
              result.end.position.x, result.end.position.y, result.cd_min, result.cd_max,
              result.reached ? "" : " (stopped before the end point)");
@@ -301,8 +305,10 @@ int run_trace(const TraceOptions& o) {
   if (!result.reached) {
     fmt::print(stderr,
                "pseudohaptic: error: the stroke stopped after {} frames, the most a stroke may take, before its end "
-               "point; {} holds it so far: give a larger {}\n",
-               result.frames, o.output == "-" ? "the output" : o.output, o.speed ? "--speed" : "--step");
+               "point ({}): give a larger {}\n",
+               result.frames,
+               o.output == "-" ? std::string("the output holds it so far") : o.output + " is left as it was",
+               o.speed ? "--speed" : "--step");
     return 1;
   }
   return 0;

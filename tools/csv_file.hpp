@@ -29,6 +29,8 @@ class CsvFile {
     struct stat st {};
     const bool exists = path_ != "-" && ::lstat(path_.c_str(), &st) == 0;
     if (staged && path_ != "-" && (!exists || S_ISREG(st.st_mode))) {
+      // A file the user may not write is not replaced either (a rename needs only the folder's permission).
+      if (exists && ::access(path_.c_str(), W_OK) != 0) fail("cannot open for writing");
       staged_ = path_.parent_path() / fmt::format(".{}.{}.partial", path_.filename().string(), ::getpid());
       if (exists) mode_ = st.st_mode & 07777;
     }
