@@ -1230,6 +1230,12 @@ TEST(Tool, TargetsAndDemo) {
   EXPECT_TRUE(contains(mended.err, "not a PNG file; writing the target " + damaged.name() + " again")) << mended.err;
   EXPECT_EQ(mended.out, r.out);
   EXPECT_EQ(run_tool("demo --targets " + quote(folder), dir).err, "");  // mended for good
+  // Its depth map too, which the scene's own method (curvature) does not read but the demo's depth column does.
+  std::filesystem::resize_file(target_file_paths(folder, damaged).depth_map, 1000);
+  const ToolResult depth_mended = run_tool("demo --targets " + quote(folder), dir);
+  ASSERT_EQ(depth_mended.rc, 0) << depth_mended.err;
+  EXPECT_TRUE(contains(depth_mended.err, "writing the target " + damaged.name() + " again")) << depth_mended.err;
+  EXPECT_EQ(depth_mended.out, r.out);
 
   // A file the targets cannot be written to: the file system's reason.
   fs::create_directories(dir / "blocked" / (all.front().name() + ".toml"));

@@ -189,6 +189,13 @@ TEST(ToolInterrogation, InspectOptionsAndErrors) {
     expect_clean_failure(r, {"67125248 px", "8192 x 8192", "--size"});
     EXPECT_FALSE(fs::exists(dir / "x"));
   }
+  {
+    // A folder that cannot take the pictures is said before they are computed, by its own name.
+    fs::create_directories(dir / "taken" / "class.png");
+    const ToolResult r = run_tool("inspect --depth-map " + quote(depth_map) + " " + quote(dir / "taken"), dir);
+    expect_clean_failure(r, {(dir / "taken" / "class.png").string() + ": is a folder"});
+    EXPECT_EQ(r.err.find("partial"), std::string::npos) << r.err;
+  }
 }
 
 // --size and --light take their one argument wherever they stand: before OUTDIR with an option after it, CLI11 took

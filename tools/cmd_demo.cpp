@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
+#include <string>
+#include <string_view>
 
 #include "config/scene_file.hpp"
 #include "config/target_files.hpp"
@@ -64,7 +66,12 @@ SceneSpec readable_target_scene(const std::filesystem::path& folder, const Targe
   const std::filesystem::path scene_file = target_file_paths(folder, t).scene;
   try {
     SceneSpec spec = parse_scene_file(scene_file);
-    (void)load_scene(spec);
+    // Loaded as each method the demo runs reads it: the scene's own (curvature) does not read the depth map.
+    for (std::string_view method : {CurvatureMethod::kName, DepthMethod::kName}) {
+      SceneSpec as = spec;
+      for (RegionSpec& r : as.regions) r.method = std::string(method);
+      (void)load_scene(as);
+    }
     return spec;
   } catch (const std::exception& e) {
     fmt::print(stderr, "pseudohaptic: warning: {}; writing the target {} again\n", e.what(), t.name());

@@ -171,6 +171,8 @@ int run_inspect(const InspectOptions& o) {
                     "smaller --size",
                     texels, kMaxRegionTexels));
   }
+  // Before the pictures are computed (a minute for a large texture): a folder that cannot take them fails now.
+  prepare_output_folder(o.outdir, {"K.png", "H.png", "class.png", "isophotes.png", "contours.png"});
   FieldLoadReport report;
   // On a terminal only: where standard error is a file the legend and the warnings say what was done.
   ProgressLine progress;
