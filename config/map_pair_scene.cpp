@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "config/image_io.hpp"
+#include "config/staged_write.hpp"
 #include "config/write_all.hpp"
 
 namespace ph {
@@ -55,9 +56,11 @@ void write_map_pair_files(const std::filesystem::path& outdir, const MapPairScen
                           const Grid<float>& heights) {
   Grid<float> values = heights;  // h / relief_px in [-1, 1] mapped to v in [0, 1], the range a unorm image holds
   for (float& v : values.values) v = static_cast<float>((v / scene.relief_px + 1.0) / 2.0);
-  write_normal_png16(outdir / (scene.name + ".normal.png"), normals);
-  write_gray_png16(outdir / (scene.name + ".depth.png"), values);
-  write_text_file(outdir / (scene.name + ".toml"), map_pair_scene_text(scene));
+  // Each whole or as it was: a run cut short leaves no truncated map that the next run takes for a target's.
+  write_staged(outdir / (scene.name + ".normal.png"), [&](const auto& path) { write_normal_png16(path, normals); });
+  write_staged(outdir / (scene.name + ".depth.png"), [&](const auto& path) { write_gray_png16(path, values); });
+  write_staged(outdir / (scene.name + ".toml"),
+               [&](const auto& path) { write_text_file(path, map_pair_scene_text(scene)); });
 }
 
 }  // namespace ph

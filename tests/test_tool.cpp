@@ -16,6 +16,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <iterator>
+#include <map>
 #include <random>
 #include <sstream>
 #include <string>
@@ -31,6 +32,7 @@
 #include "core/lab/map_storage.hpp"
 #include "tests/as_nobody.hpp"
 #include "tests/csv_table.hpp"
+#include "tests/file_bytes.hpp"
 #include "tests/scratch_dir.hpp"
 #include "tests/tool_runner.hpp"
 #include "tools/csv_file.hpp"
@@ -1185,6 +1187,26 @@ TEST(Tool, TargetsAndDemo) {
       EXPECT_TRUE(fs::exists(paths.normal_map)) << paths.normal_map;
       EXPECT_TRUE(fs::exists(paths.depth_map)) << paths.depth_map;
       EXPECT_EQ(read_text(paths.scene), target_scene_text(t)) << paths.scene;
+    }
+  }
+
+  {
+    // Written again and cut short (here by the file size limit, at the first normal map of 100 KiB or more): each
+    // file is whole or as it was, none cut short under its own name, which demo and the daemon would read as a
+    // target's (before, the normal map was left truncated).
+    std::map<std::string, std::vector<char>> earlier;
+    for (const auto& entry : fs::directory_iterator(folder)) earlier[entry.path().filename()] = read_file_bytes(entry);
+    const std::string limited =
+        "ulimit -c 0 && ulimit -f 64 && exec " + quote(std::string(PH_TOOL_PATH)) + " targets " + quote(folder);
+    EXPECT_EQ(run_program("/bin/sh", "-c " + quote(limited), dir).rc, 128 + SIGXFSZ);
+    // As a full disk is met (SIGXFSZ ignored): the run fails naming the file, not its temporary.
+    const ToolResult full = run_program("/bin/sh", "-c " + quote("trap '' XFSZ && " + limited), dir);
+    expect_clean_failure(full, {(folder / (all.front().name() + ".normal.png")).string() + ": cannot write"});
+    EXPECT_FALSE(contains(full.err, "partial")) << full.err;
+    for (const auto& entry : fs::directory_iterator(folder)) {
+      const std::string name = entry.path().filename();
+      if (name.ends_with(".partial")) continue;  // the temporary of the file it was writing when killed
+      EXPECT_TRUE(earlier.contains(name) && earlier.at(name) == read_file_bytes(entry)) << name << " changed";
     }
   }
 

@@ -6,6 +6,7 @@
 
 #include "config/image_io.hpp"
 #include "config/map_pair_scene.hpp"
+#include "config/staged_write.hpp"
 #include "core/lab/surfaces.hpp"
 #include "tools/argument_checks.hpp"
 #include "tools/commands.hpp"
@@ -16,7 +17,8 @@ namespace {
 
 void write_surface(const std::filesystem::path& outdir, const SurfaceSpec& spec) {
   const std::string name = spec.name();
-  write_float_exr(outdir / (name + ".K.exr"), surface_curvature_fields(spec).gaussian);
+  write_staged(outdir / (name + ".K.exr"),
+               [&](const auto& path) { write_float_exr(path, surface_curvature_fields(spec).gaussian); });
   const MapPairScene scene{
       name, spec.size, spec.relief_px(),
       fmt::format("# pseudohaptic scene: the {} of the second paper's test surfaces ({}), {} x {} px\n", name,
