@@ -592,6 +592,9 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
   } else {
     rep.fail(t.get("normal_encoding"), where + "normal_encoding", "must be \"auto\", \"unorm\" or \"signed\"");
   }
+  for (const char* key : {"normal_green", "normal_encoding", "depth_zero", "relief_px"}) {
+    if (const toml::node* node = t.get(key)) r.decoding_key_lines[key] = static_cast<int>(node->source().begin.line);
+  }
   r.sources.depth_options.depth_zero = get_number(rep, t, "depth_zero", where, 0.0);
   r.sources.depth_options.relief_px = get_number(rep, t, "relief_px", where, 100.0);
   const auto bounded = [&](const char* key, double value, double bound) {
@@ -1156,6 +1159,7 @@ std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadRep
   for (std::string& w : effect_warnings(spec, scene)) out.push_back(std::move(w));
   for (std::string& w : method_warnings(spec)) out.push_back(std::move(w));
   for (std::string& w : unused_method_table_warnings(spec)) out.push_back(std::move(w));
+  for (std::string& w : unused_key_warnings(spec)) out.push_back(std::move(w));
   for (std::string& w : daemon_warnings(spec)) out.push_back(std::move(w));
   return out;
 }
@@ -1194,8 +1198,24 @@ std::vector<std::string> unused_method_table_warnings(const SceneSpec& spec) {
                       "`pseudohaptic trace` and `replay` with --method {} read it)",
                       spec.file.string(), line, r.name, name, r.method_in_file,
                       r.method_in_file == HybridMethod::kName ? "takes the curvature and depth methods' defaults"
+                      : r.method_in_file == FlatMethod::kName ? "has no table"
                                                               : "reads its own table alone",
                       name));
+    }
+  }
+  return out;
+}
+
+std::vector<std::string> unused_key_warnings(const SceneSpec& spec) {
+  std::vector<std::string> out;
+  for (const RegionSpec& r : spec.regions) {
+    for (const auto& [key, line] : r.decoding_key_lines) {
+      const bool of_normals = key.starts_with("normal_");
+      if (of_normals ? r.sources.normal_map.has_value() : r.sources.depth_map.has_value()) continue;
+      out.push_back(
+          fmt::format("{}:{}: region '{}': {} changes nothing: it says how to read a {}, which the region "
+                      "has not",
+                      spec.file.string(), line, r.name, key, of_normals ? "normal_map" : "depth_map"));
     }
   }
   return out;

@@ -62,6 +62,8 @@ struct RegionSpec {
   int line = 0;               // where the region starts in the file
   int normal_map_line = 0;    // where its normal_map and depth_map keys are (0: not given)
   int depth_map_line = 0;
+  // Where the keys that say how to decode a map are written (normal_green, normal_encoding, depth_zero, relief_px).
+  std::map<std::string, int, std::less<>> decoding_key_lines;
   bool own_lut_directions = false;  // the region sets lut_directions itself (not taking the [daemon] table's)
 };
 
@@ -154,6 +156,10 @@ std::vector<std::string> method_warnings(const SceneSpec& spec);
 // `pseudohaptic trace --method` reads the table of the method it is given.
 std::vector<std::string> unused_method_table_warnings(const SceneSpec& spec);
 
+// One line per key that says how to decode a map the region does not have ("FILE:LINE: region 'NAME': " and which):
+// normal_green or normal_encoding without a normal_map, depth_zero or relief_px without a depth_map.
+std::vector<std::string> unused_key_warnings(const SceneSpec& spec);
+
 // A line for each [daemon] key that changes nothing: mouse_dpi with the flat profile in force, which does not read
 // it (libinput's flat filter scales a mouse's own counts); lut_directions when no frame walks with a direction
 // table of that count (neither the [daemon] traversal nor a region's without its own lut_directions is
@@ -161,8 +167,8 @@ std::vector<std::string> unused_method_table_warnings(const SceneSpec& spec);
 std::vector<std::string> daemon_warnings(const SceneSpec& spec);
 
 // What loading the scene found to warn of, in this order: map_warnings, relief_scale_warnings, effect_warnings,
-// method_warnings, unused_method_table_warnings and daemon_warnings. What the daemon logs at load (with
-// desktop_warnings), and what the tools that load a scene file print.
+// method_warnings, unused_method_table_warnings, unused_key_warnings and daemon_warnings. What the daemon logs at load
+// (with desktop_warnings), and what the tools that load a scene file print.
 std::vector<std::string> load_warnings(const SceneSpec& spec, const SceneLoadReport& report, const Scene& scene);
 
 // Where a region of `rect` lies wholly or partly off `desktop`: "at X,Y (WxH px) lies outside the desktop X,Y WxH px:

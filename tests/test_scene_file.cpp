@@ -483,6 +483,33 @@ TEST(SceneFileWarnings, AMethodTableTheRegionsMethodDoesNotReadIsWarnedOf) {
 
 // mouse_dpi is read by the adaptive profile alone: set beside the flat one (relative output's default) it changes
 // nothing, which is said; with the adaptive profile, or left out, nothing is.
+// pseudohaptic(1) says check-config warns of keys that change nothing where they are: a decoding key without its map.
+TEST(SceneFileWarnings, ADecodingKeyWithoutItsMapIsWarnedOf) {
+  const SceneSpec spec = parse_scene_text(
+      "[[region]]\nname = \"n\"\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\nrelief_px = 40\ndepth_zero = 0.5\n"
+      "normal_green = \"directx\"\n"
+      "[[region]]\nname = \"d\"\nwidth = 2\nheight = 2\ndepth_map = \"d.png\"\nnormal_encoding = \"unorm\"\n"
+      "relief_px = 40\n",
+      kOrigin);
+  const std::vector<std::string> warnings = unused_key_warnings(spec);
+  ASSERT_EQ(warnings.size(), 3u) << fmt::format("{}", fmt::join(warnings, "\n"));
+  EXPECT_EQ(warnings[0], kOrigin.string() +
+                             ":7: region 'n': depth_zero changes nothing: it says how to read a "
+                             "depth_map, which the region has not");
+  EXPECT_EQ(warnings[1], kOrigin.string() +
+                             ":6: region 'n': relief_px changes nothing: it says how to read a "
+                             "depth_map, which the region has not");
+  EXPECT_EQ(warnings[2], kOrigin.string() +
+                             ":14: region 'd': normal_encoding changes nothing: it says how to read a "
+                             "normal_map, which the region has not");
+  // With both maps, none.
+  EXPECT_TRUE(
+      unused_key_warnings(parse_scene_text("[[region]]\nwidth = 2\nheight = 2\nnormal_map = \"n.png\"\n"
+                                           "depth_map = \"d.png\"\nrelief_px = 40\nnormal_green = \"directx\"\n",
+                                           kOrigin))
+          .empty());
+}
+
 TEST(SceneFileWarnings, AMouseDpiTheFlatProfileDoesNotReadIsWarnedOf) {
   const auto warnings = [](const std::string& daemon) {
     return daemon_warnings(parse_scene_text("[daemon]\n" + daemon, kOrigin));
