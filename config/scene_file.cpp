@@ -129,8 +129,9 @@ void reject_region_keys_in_its_tables(const Reporter& rep, const toml::table& t,
     for (const auto& [key, value] : *sub) {
       if (kRegionOwnKeys.contains(key.str())) {
         rep.fail(&value, fmt::format("{}{}.{}", where, path, key.str()),
-                 fmt::format("is a region's own key, read here as the [region.{0}] table's (in TOML every key below "
-                             "a table's header belongs to that table): write it above [region.{0}]",
+                 fmt::format("is a region's own key, read here as the [region.{}] table's (in TOML every key below "
+                             "a table's header belongs to that table): write it with the region's keys, above the "
+                             "region's first [region.NAME] table",
                              path));
       }
     }

@@ -76,8 +76,8 @@ Configuration load_configuration(const ConfigChoice& choice) {
 }
 
 bool only_scene_differs(const Configuration& a, const Configuration& b) {
-  return a.pipeline.desktop == b.pipeline.desktop && a.pipeline.mode == b.pipeline.mode &&
-         a.pipeline.pointer_gain == b.pipeline.pointer_gain &&
+  return a.pipeline.desktop == b.pipeline.desktop && a.pipeline.outputs == b.pipeline.outputs &&
+         a.pipeline.mode == b.pipeline.mode && a.pipeline.pointer_gain == b.pipeline.pointer_gain &&
          a.pipeline.acceleration.profile == b.pipeline.acceleration.profile &&
          a.pipeline.acceleration.speed == b.pipeline.acceleration.speed &&
          a.pipeline.acceleration.dpi == b.pipeline.acceleration.dpi &&

@@ -850,22 +850,23 @@ std::string outputs_said(const std::vector<Rect>& outputs) {
 
 void Daemon::change_desktop(Rect desktop, std::vector<Rect> outputs, std::string_view why) {
   outputs = pointer_outputs(desktop, std::move(outputs));
-  if (desktop == config_.pipeline.desktop) {
-    if (outputs == config_.pipeline.outputs) return;
-    // The same axes' ranges: the virtual devices stay, the model is bounded by the outputs from the next frame on.
-    log_.info("desktop {}x{}+{}+{} ({}){}", desktop.w, desktop.h, desktop.x, desktop.y, why,
-              outputs.empty() ? "; its outputs cover it" : outputs_said(outputs));
-    config_.pipeline.outputs = outputs;
-    pipeline_->set_desktop(desktop, std::move(outputs));
-    return;
-  }
+  const bool same_ranges = desktop == config_.pipeline.desktop;
+  if (same_ranges && outputs == config_.pipeline.outputs) return;
   log_.info("desktop {}x{}+{}+{} ({}){}", desktop.w, desktop.h, desktop.x, desktop.y, why, outputs_said(outputs));
-  if (config_.embedded && !default_scene_laid_out_for(*config_.scene, desktop)) {
+  // On one monitor, not across a seam or into space no monitor shows.
+  const Rect laid_out_on = default_scene_area(desktop, outputs);
+  if (config_.embedded && !default_scene_laid_out_for(*config_.scene, laid_out_on)) {
     std::shared_ptr<const Scene> replaced = config_.scene;
-    config_.scene = std::make_shared<const Scene>(default_scene(desktop));
+    config_.scene = std::make_shared<const Scene>(default_scene(laid_out_on));
     pipeline_->set_scene(config_.scene);
     reloader_.dispose(std::move(replaced));  // freed off the event loop
     log_.info("the embedded default scene laid out again for it: {}", default_scene_places(*config_.scene));
+  }
+  if (same_ranges) {
+    // The same axes' ranges: the virtual devices stay, the model is bounded by the outputs from the next frame on.
+    config_.pipeline.outputs = outputs;
+    pipeline_->set_desktop(desktop, std::move(outputs));
+    return;
   }
   // The scene file could not say this: its desktop is "auto" (config/scene_file.hpp, desktop_warnings).
   for (const std::string& note : off_desktop_notes(*config_.scene, desktop))
@@ -945,14 +946,15 @@ void Daemon::apply(Configuration next) {
   // scene file set the desktop may be out of date, with no display change seen meanwhile to say so.
   if (helper_desktop_ && !next.settings.desktop && (helper_desktop_kept_up_ || !config_.settings.desktop)) {
     next.pipeline.desktop = *helper_desktop_;
-    next.pipeline.outputs = helper_outputs_;
+    next.pipeline.outputs = pointer_outputs(next.pipeline.desktop, helper_outputs_);
     std::erase(next.warnings, next.desktop_guessed);  // not guessed: the helper's
   } else if (!next.settings.desktop) {
     helper_desktop_.reset();
     helper_outputs_.clear();
   }
-  if (next.embedded && !default_scene_laid_out_for(*next.scene, next.pipeline.desktop)) {
-    next.scene = std::make_shared<const Scene>(default_scene(next.pipeline.desktop));
+  const Rect laid_out_on = default_scene_area(next.pipeline.desktop, next.pipeline.outputs);
+  if (next.embedded && !default_scene_laid_out_for(*next.scene, laid_out_on)) {
+    next.scene = std::make_shared<const Scene>(default_scene(laid_out_on));
     next.notes.push_back("the embedded default scene laid out again for the session helper's desktop: " +
                          default_scene_places(*next.scene));
   }

@@ -80,6 +80,7 @@ struct Link {
   Conversation conversation;
   ph::control::LineBuffer lines;
   std::optional<std::pair<ph::Rect, std::vector<ph::Rect>>> layout_sent;  // the desktop and its outputs
+  bool outputs_refused = false;  // the daemon reads `layout X Y W H` alone: layouts go without their outputs
   std::optional<bool> passthrough_sent;
   int failures = 0;  // connection attempts failed in a row
   Clock::time_point next_attempt = Clock::now();
@@ -182,7 +183,8 @@ class Helper {
   void send_layout() {
     const std::optional<ph::Rect> desktop = desktop_.layout();
     if (!desktop) return;  // no output yet: the next change brings one
-    const std::pair<ph::Rect, std::vector<ph::Rect>> layout{*desktop, desktop_.outputs()};
+    const std::pair<ph::Rect, std::vector<ph::Rect>> layout{
+        *desktop, link_.outputs_refused ? std::vector<ph::Rect>{} : desktop_.outputs()};
     if (link_.layout_sent == layout) return;
     const std::optional<std::string> line = layout_request(layout.first, layout.second);
     if (line && send(*line)) link_.layout_sent = layout;
@@ -240,6 +242,15 @@ class Helper {
       } else {
         log_.debug(complaint);
       }
+    }
+    if (reactions.outputs_refused && !link_.outputs_refused) {
+      // An older daemon: the layout without its outputs rather than none (the daemon would keep its own guess).
+      log_.notice(
+          "the daemon does not read the outputs of a layout (older than this helper?): sending the layout without "
+          "them, so the cursor model may go where no monitor shows; restarting pseudohapticd brings its update in");
+      link_.outputs_refused = true;
+      link_.layout_sent.reset();
+      send_layout();
     }
     if (reactions.send_position) send_position();  // once for all the queries read
     if (!link_.connection) return;

@@ -22,11 +22,11 @@ std::optional<std::string> layout_request(Rect layout, const std::vector<Rect>& 
   return control::format_request(control::LayoutRequest{layout, outputs}) + "\n";
 }
 
-std::vector<Rect> outputs_to_report(Rect desktop, const std::vector<Rect>& outputs, bool x_rules) {
+std::vector<Rect> outputs_to_report(Rect desktop, const std::vector<Rect>& outputs) {
   std::vector<Rect> shown;
   std::copy_if(outputs.begin(), outputs.end(), std::back_inserter(shown),
                [](const Rect& r) { return r.w > 0 && r.h > 0; });
-  if (x_rules && !outputs_contiguous(shown)) return {};
+  if (!outputs_contiguous(shown)) return {};
   return pointer_outputs(desktop, std::move(shown));
 }
 
@@ -124,6 +124,8 @@ Conversation::Reaction Conversation::on_line(std::string_view line) {
   }
   reaction.accepted = reply->ok;
   if (!reply->ok) reaction.complaint = fmt::format("the daemon refused '{}': {}", request, reply->text);
+  reaction.outputs_refused =
+      !reply->ok && request.starts_with("layout ") && std::count(request.begin(), request.end(), ' ') > 4;
   return reaction;
 }
 
@@ -134,6 +136,7 @@ Conversation::Reactions Conversation::on_lines(const std::vector<std::string>& l
     all.send_position = all.send_position || one.send_position;
     all.accepted = all.accepted || one.accepted;
     all.refused_connection = all.refused_connection || one.refused_connection;
+    all.outputs_refused = all.outputs_refused || one.outputs_refused;
     if (!one.complaint.empty()) all.complaints.push_back(std::move(one.complaint));
   }
   return all;

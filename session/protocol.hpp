@@ -22,9 +22,10 @@ std::string helper_request(std::string_view backend);  // "helper x11"
 std::optional<std::string> layout_request(Rect layout, const std::vector<Rect>& outputs = {});
 
 // The outputs to tell the daemon on `desktop` (core/engine/desktop_outputs.hpp): none where they cover it (or are
-// too many, or reach past it), and under X's rules (`x_rules`) none where they are not contiguous, as X then lets
-// the pointer roam the whole root window.
-std::vector<Rect> outputs_to_report(Rect desktop, const std::vector<Rect>& outputs, bool x_rules);
+// too many, or reach past it), and none where they do not touch one another: X then lets the pointer roam the whole
+// root window, and wlroots moves it across a gap to the nearest output where the model, stopped at the edge of the
+// output it left, would never cross.
+std::vector<Rect> outputs_to_report(Rect desktop, const std::vector<Rect>& outputs);
 // "position X Y"; nullopt for a coordinate the daemon refuses (not finite, or past ±2^20: a compositor that
 // misbehaves), which would only earn an error for every query.
 std::optional<std::string> position_request(Vec2 position);
@@ -77,6 +78,8 @@ class Conversation {
     bool accepted = false;            // an `ok` reply: the daemon takes this helper's requests
     bool refused_connection = false;  // the daemon refused the connection itself, before any request
     std::string complaint;            // non-empty: a line to log (an error reply, or a line not understood)
+    // A layout with its outputs refused: a daemon that reads `layout X Y W H` alone (one older than this helper).
+    bool outputs_refused = false;
   };
   // What a batch of lines read at once asks: a position once however many `query` lines came (each answer costs
   // a compositor query, which may take its whole time limit, and one position answers them all), whether any
@@ -85,6 +88,7 @@ class Conversation {
     bool send_position = false;
     bool accepted = false;
     bool refused_connection = false;
+    bool outputs_refused = false;
     std::vector<std::string> complaints;
   };
 

@@ -165,7 +165,7 @@ struct WaylandDesktop::State {
   std::optional<Rect> layout() const { return wayland_layout(described()); }
   std::vector<Rect> output_rects() const {
     const std::optional<Rect> desktop = layout();
-    return desktop ? outputs_to_report(*desktop, wayland_output_rects(described()), false) : std::vector<Rect>{};
+    return desktop ? outputs_to_report(*desktop, wayland_output_rects(described())) : std::vector<Rect>{};
   }
 };
 

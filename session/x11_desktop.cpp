@@ -81,13 +81,21 @@ std::vector<Rect> X11Desktop::outputs() const {
     XRRCrtcInfo* crtc = XRRGetCrtcInfo(d, resources, resources->crtcs[i]);
     if (crtc == nullptr) continue;
     if (crtc->mode != None && crtc->noutput > 0) {
-      outputs.push_back(
-          {crtc->x, crtc->y, static_cast<std::int32_t>(crtc->width), static_cast<std::int32_t>(crtc->height)});
+      Rect shown{crtc->x, crtc->y, static_cast<std::int32_t>(crtc->width), static_cast<std::int32_t>(crtc->height)};
+      // A panning CRTC bounds the pointer by its panning area, not by the part it shows now (RandR's cursor_bounds).
+      if (XRRPanning* panning = XRRGetPanning(d, resources, resources->crtcs[i])) {
+        if (panning->width > 0 && panning->height > 0) {
+          shown = {static_cast<std::int32_t>(panning->left), static_cast<std::int32_t>(panning->top),
+                   static_cast<std::int32_t>(panning->width), static_cast<std::int32_t>(panning->height)};
+        }
+        XRRFreePanning(panning);
+      }
+      outputs.push_back(shown);
     }
     XRRFreeCrtcInfo(crtc);
   }
   XRRFreeScreenResources(resources);
-  return outputs_to_report(*layout(), outputs, true);
+  return outputs_to_report(*layout(), outputs);
 }
 
 std::optional<Vec2> X11Desktop::pointer() const {

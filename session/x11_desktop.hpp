@@ -1,6 +1,6 @@
 // The X11 backend of pseudohaptic-session: where the pointer is (XQueryPointer on the root window) and
-// the desktop's layout (the bounding box of the active RandR CRTCs, or the root window's size where
-// RandR is absent), and whether RandR says the layout changed.
+// the desktop's layout (the root window's size, onto which X maps absolute devices, and the active RandR CRTCs on
+// it, their panning areas where they pan), and whether RandR says the layout changed.
 #pragma once
 
 #include <X11/Xlib.h>

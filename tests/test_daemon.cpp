@@ -191,6 +191,10 @@ TEST(DaemonConfiguration, ReloadKeepsThePipelineWhenOnlyTheSceneChanged) {
   Configuration wider = base;
   wider.pipeline.desktop.w = 3840;
   EXPECT_FALSE(only_scene_differs(base, wider));
+  // The same desktop with its outputs told (monitors of different sizes): the pipeline must take them too.
+  Configuration uneven = base;
+  uneven.pipeline.outputs = {{0, 0, 100, 100}};
+  EXPECT_FALSE(only_scene_differs(base, uneven));
   Configuration pickier = base;
   std::string error;
   pickier.settings.devices.push_back(*parse_device_match("name:Logitech*", error));

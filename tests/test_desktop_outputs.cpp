@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/engine/default_scene.hpp"
 #include "core/engine/pipeline.hpp"
 
 namespace ph {
@@ -65,6 +66,20 @@ TEST(DesktopOutputs, PointerOutputsAreNoneWhereTheySayNothingOrCannotBeSo) {
   EXPECT_TRUE(pointer_outputs(kDesktop, {{0, 0, 2560, 1440}, {2560, 0, 1921, 1080}}).empty());  // past the desktop
   EXPECT_TRUE(pointer_outputs(kDesktop, {{0, 0, 2560, 1440}, {2560, 0, 0, 1080}}).empty());     // empty
   EXPECT_TRUE(pointer_outputs(kDesktop, std::vector<Rect>(kMaxOutputs + 1, Rect{0, 0, 10, 10})).empty());
+  EXPECT_TRUE(pointer_outputs({0, 0, 5760, 1080}, {{0, 0, 1920, 1080}, {3840, 0, 1920, 1080}}).empty());  // a gap
+}
+
+// The embedded default scene lies on one monitor, the largest, not across a seam or where no monitor shows.
+TEST(DesktopOutputs, TheDefaultSceneIsLaidOutOnTheLargestOutput) {
+  EXPECT_EQ(default_scene_area(kDesktop, kOutputs), (Rect{0, 0, 2560, 1440}));
+  EXPECT_EQ(default_scene_area(kDesktop, {}), kDesktop);
+  const Rect laptop_below{0, 1440, 1920, 1080};
+  EXPECT_EQ(default_scene_area({0, 0, 2560, 2520}, {{0, 0, 2560, 1440}, laptop_below}), (Rect{0, 0, 2560, 1440}));
+  const Scene laid_out = default_scene(default_scene_area(kDesktop, kOutputs));
+  ASSERT_EQ(laid_out.regions().size(), 3u);
+  for (const Region& r : laid_out.regions()) {
+    EXPECT_TRUE(r.rect.x >= 0 && r.rect.x + r.rect.w <= 2560 && r.rect.y >= 0 && r.rect.y + r.rect.h <= 1440) << r.name;
+  }
 }
 
 Frame motion(TimeUs t, std::int32_t dx, std::int32_t dy) {
@@ -104,14 +119,14 @@ TEST(DesktopOutputs, TheModelStopsAtTheEdgeOfItsOutputAndComesBackAtOnce) {
 TEST(DesktopOutputs, ANewLayoutMovesTheModelOntoAnOutput) {
   PipelineConfig config;
   config.mode = OutputMode::absolute;
-  config.desktop = {0, 0, 5760, 1080};
-  config.start = Vec2{3000.5, 500.5};  // on the middle of three monitors
+  config.desktop = kDesktop;
+  config.start = Vec2{3000.5, 1300.5};  // where, with the outputs not yet told, nothing bounds the model
   Pipeline pipeline(std::make_shared<const Scene>(), config);
-  // The middle one unplugged: the bounding box stays, the model goes to the nearest output (840 px right, 1080.5
-  // left), as X moves the pointer.
-  pipeline.set_desktop({0, 0, 5760, 1080}, {{0, 0, 1920, 1080}, {3840, 0, 1920, 1080}});
-  EXPECT_EQ(pipeline.cursor().position.x, 3840);
-  EXPECT_EQ(pipeline.cursor().position.y, 500.5);
+  EXPECT_EQ(pipeline.cursor().position, (Vec2{3000.5, 1300.5}));
+  // Told: the model goes to the nearest point of the nearest output, the smaller one's bottom row.
+  pipeline.set_desktop(kDesktop, kOutputs);
+  EXPECT_EQ(pipeline.cursor().position.x, 3000.5);
+  EXPECT_EQ(std::floor(pipeline.cursor().position.y), 1079);
   // The start of a pipeline made for an uneven desktop (its centre in the dead space) is on an output too.
   PipelineConfig uneven;
   uneven.desktop = kDesktop;

@@ -258,13 +258,14 @@ TEST(SceneFileErrors, UnknownRegionKeyListsTheAllowedOnes) {
 TEST(SceneFileErrors, ARegionsKeyBelowOneOfItsTablesIsSaidAsSuch) {
   const std::string head = "[[region]]\nname = \"a\"\nnormal_map = \"n.png\"\n";  // 3 lines
   expect_error(head + "[region.curvature]\nkmax_prime = 3\nwidth = 200\n", 6, "region[0].curvature.width",
-               {"a region's own key", "[region.curvature]", "write it above"});
+               {"a region's own key", "[region.curvature]",
+                "write it with the region's keys, above the region's first [region.NAME] table"});
   expect_error(head +
                    "width = 2\nheight = 2\n[region.materials]\nplanar = \"friction\"\n[region.materials.friction]\n"
                    "stuck_cd = 3\ndepth_map = \"d.png\"\n",
                10, "region[0].materials.friction.depth_map", {"a region's own key", "[region.materials.friction]"});
   expect_error(head + "width = 2\nheight = 2\n[region.wells]\nstrength = 0.5\nmethod = \"none\"\n", 8,
-               "region[0].wells.method", {"a region's own key", "above [region.wells]"});
+               "region[0].wells.method", {"a region's own key", "[region.wells] table's"});
 }
 
 // An unknown key is an error that lists the allowed ones, and says the one a slip away, or the table it belongs in.

@@ -40,24 +40,31 @@ TEST(SessionRequests, AreWholeLinesTheDaemonParses) {
   }
 }
 
-// The outputs told: where they leave part of the desktop uncovered; under X's rules only where they touch (X lets the
-// pointer roam the whole root window otherwise).
+// The outputs told: where they leave part of the desktop uncovered, and touch one another (X lets the pointer roam the
+// whole root window otherwise, and wlroots crosses a gap the model would stop at).
 TEST(SessionRequests, OutputsAreToldWhereTheyLeaveDeadSpace) {
   const Rect desktop{0, 0, 4480, 1440};
   const std::vector<Rect> uneven{{0, 0, 2560, 1440}, {2560, 0, 1920, 1080}};
-  for (const bool x_rules : {false, true}) {
-    EXPECT_EQ(outputs_to_report(desktop, uneven, x_rules), uneven);
-    EXPECT_TRUE(outputs_to_report({0, 0, 3840, 1080}, {{0, 0, 1920, 1080}, {1920, 0, 1920, 1080}}, x_rules).empty());
-    EXPECT_TRUE(outputs_to_report({0, 0, 1920, 1080}, {{0, 0, 1920, 1080}, {0, 0, 1920, 1080}}, x_rules).empty());
-  }
-  // A gap between them: X does not stop the pointer at their edges; a compositor does.
-  const std::vector<Rect> apart{{0, 0, 1920, 1080}, {2000, 0, 1920, 1080}};
-  EXPECT_TRUE(outputs_to_report({0, 0, 3920, 1080}, apart, true).empty());
-  EXPECT_EQ(outputs_to_report({0, 0, 3920, 1080}, apart, false), apart);
+  EXPECT_EQ(outputs_to_report(desktop, uneven), uneven);
+  EXPECT_TRUE(outputs_to_report({0, 0, 3840, 1080}, {{0, 0, 1920, 1080}, {1920, 0, 1920, 1080}}).empty());
+  EXPECT_TRUE(outputs_to_report({0, 0, 1920, 1080}, {{0, 0, 1920, 1080}, {0, 0, 1920, 1080}}).empty());
+  EXPECT_TRUE(outputs_to_report({0, 0, 3920, 1080}, {{0, 0, 1920, 1080}, {2000, 0, 1920, 1080}}).empty());  // a gap
   // X's root window larger than its one CRTC (xrandr --fb): the CRTC is told.
-  EXPECT_EQ(outputs_to_report(desktop, {{0, 0, 1920, 1080}}, true), (std::vector<Rect>{{0, 0, 1920, 1080}}));
+  EXPECT_EQ(outputs_to_report(desktop, {{0, 0, 1920, 1080}}), (std::vector<Rect>{{0, 0, 1920, 1080}}));
   // A CRTC switched off (no size) is no output.
-  EXPECT_TRUE(outputs_to_report({0, 0, 1920, 1080}, {{0, 0, 1920, 1080}, {1920, 0, 0, 0}}, true).empty());
+  EXPECT_TRUE(outputs_to_report({0, 0, 1920, 1080}, {{0, 0, 1920, 1080}, {1920, 0, 0, 0}}).empty());
+}
+
+// A daemon older than the outputs refuses a layout that carries them: the helper is told, to send it without them.
+TEST(SessionConversation, ARefusedLayoutWithOutputsIsSaid) {
+  Conversation c;
+  c.sent("layout 0 0 4480 1440 0 0 2560 1440 2560 0 1920 1080\n");
+  const Conversation::Reaction refused = c.on_line("error layout needs X Y W H (whole px)");
+  EXPECT_TRUE(refused.outputs_refused);
+  c.sent("layout 0 0 0 1080\n");
+  EXPECT_FALSE(c.on_line("error layout: W and H must be from 1").outputs_refused);  // no outputs in it
+  c.sent("layout 0 0 4480 1440 0 0 2560 1440 2560 0 1920 1080\n");
+  EXPECT_FALSE(c.on_line("ok").outputs_refused);
 }
 
 TEST(SessionRequests, RefuseWhatTheDaemonWouldRefuse) {

@@ -288,8 +288,9 @@ int run_trace(const TraceOptions& o) {
     if (out.size() > (1 << 16)) flush();
   });
   flush();
-  // A stroke stopped short is a failed run: its file is left as it was (standard output has had it already).
-  if (result.reached || o.output == "-") file.close();
+  // A stroke stopped short is a failed run: its file is left as it was (what is written through has had it already).
+  const bool left_as_it_was = !result.reached && file.staged();
+  if (!left_as_it_was) file.close();
   fmt::print(stderr, "{} frames, cursor ended at ({:.3f}, {:.3f}), C/D range [{:.4g}, {:.4g}]{}\n", result.frames,
              result.end.position.x, result.end.position.y, result.cd_min, result.cd_max,
              result.reached ? "" : " (stopped before the end point)");
@@ -307,7 +308,7 @@ int run_trace(const TraceOptions& o) {
                "pseudohaptic: error: the stroke stopped after {} frames, the most a stroke may take, before its end "
                "point ({}): give a larger {}\n",
                result.frames,
-               o.output == "-" ? std::string("the output holds it so far") : o.output + " is left as it was",
+               left_as_it_was ? o.output + " is left as it was" : std::string("the output holds it so far"),
                o.speed ? "--speed" : "--step");
     return 1;
   }

@@ -54,6 +54,9 @@ class CsvFile {
     write(fmt::format(format, std::forward<Args>(args)...));
   }
 
+  // Whether the file is written beside its name and renamed over it (false: written through, or standard output).
+  bool staged() const { return !staged_.empty(); }
+
   void close() {
     if (mode_ != 0 && file_ != nullptr && file_ != stdout) ::fchmod(::fileno(file_), mode_);  // the file's own mode
     const bool failed = std::fflush(file_) != 0 || std::ferror(file_) != 0;

@@ -78,4 +78,16 @@ Scene default_scene(const MethodPtr& method, const Rect& desktop) {
   return Scene(std::move(regions));
 }
 
+Rect default_scene_area(const Rect& desktop, const std::vector<Rect>& outputs) {
+  Rect largest = desktop;
+  std::int64_t largest_area = -1;
+  for (const Rect& o : outputs) {
+    if (o.area() > largest_area) {
+      largest = o;
+      largest_area = o.area();
+    }
+  }
+  return largest;
+}
+
 }  // namespace ph

@@ -1,5 +1,6 @@
 // The scene used when no scene file is given: three targets of the curvature paper, built in memory
-// from their exact analytic normals (no files), side by side in the middle of the desktop. On the 1920 x 1080
+// from their exact analytic normals (no files), side by side in the middle of the desktop (of its largest output,
+// default_scene_area). On the 1920 x 1080
 // desktop they were first laid out for:
 //   bump-gaussian-h1-r200 at (135, 290), hole-polynomial-h1-r200 at (710, 290),
 //   bump-linear-h1-r100 at (1285, 290); each 500 x 500 px, curvature method with default parameters.
@@ -25,6 +26,11 @@ inline constexpr Rect kDefaultSceneDesktop{0, 0, 1920, 1080};
 std::vector<Rect> default_scene_layout(const Rect& desktop);
 
 Scene default_scene(const Rect& desktop = kDefaultSceneDesktop);
+
+// Where on a desktop of `outputs` (core/engine/desktop_outputs.hpp; none: the desktop whole) the default scene is laid
+// out: the largest output (the first of those as large), so that no target lies across two monitors or where none
+// shows it.
+Rect default_scene_area(const Rect& desktop, const std::vector<Rect>& outputs);
 
 // Whether `scene`'s regions lie where default_scene_layout puts the targets on `desktop` (so that a default scene
 // need not be built again for it).

@@ -9,7 +9,9 @@ namespace ph {
 
 namespace {
 
-bool on_output(const Rect& r, Vec2 p) { return p.x >= r.x && p.x < r.x + r.w && p.y >= r.y && p.y < r.y + r.h; }
+bool on_output(const Rect& r, Vec2 p) {
+  return p.x >= r.x && p.x < static_cast<double>(r.x) + r.w && p.y >= r.y && p.y < static_cast<double>(r.y) + r.h;
+}
 
 // `p` clamped into `r`, short of its far edges.
 Vec2 clamped_into(const Rect& r, Vec2 p) {
@@ -94,7 +96,7 @@ std::vector<Rect> pointer_outputs(Rect desktop, std::vector<Rect> outputs) {
            std::int64_t{r.y} + r.h <= std::int64_t{desktop.y} + desktop.h;
   };
   if (outputs.size() > kMaxOutputs || !std::all_of(outputs.begin(), outputs.end(), inside) ||
-      outputs_cover(outputs, desktop)) {
+      !outputs_contiguous(outputs) || outputs_cover(outputs, desktop)) {
     return {};
   }
   return outputs;

@@ -18,8 +18,9 @@ inline constexpr std::size_t kMaxOutputs = 16;
 bool on_an_output(const std::vector<Rect>& outputs, Vec2 p);
 
 // Where the pointer stops that moved from `from` toward `to`, which lies on no output, as X's RandR stops it: on the
-// output it came from, at that output's edge (each axis clamped into it); or, coming from no output (a layout that
-// changed under it, a position set from outside), at the nearest point of the nearest output. The far edges are
+// output it came from, at that output's edge (each axis clamped into it). Coming from no output (a layout that
+// changed under it, a position set from outside), at the nearest point of the nearest output, as wlroots puts it (X
+// leaves such a pointer where it is until it moves onto an output). The far edges are
 // excluded as a pixel's are: the point stays within the last pixel. `outputs` not empty.
 Vec2 stop_on_outputs(const std::vector<Rect>& outputs, Vec2 from, Vec2 to);
 
@@ -32,7 +33,9 @@ bool outputs_cover(const std::vector<Rect>& outputs, Rect area);
 bool outputs_contiguous(const std::vector<Rect>& outputs);
 
 // The outputs the pointer is bounded by on `desktop`: `outputs` as given, or none (the desktop whole) where they cover
-// it, are more than kMaxOutputs, or one is empty or reaches past the desktop.
+// it, do not touch one another (outputs_contiguous: X lets the pointer roam the root window then, and the model,
+// stopped at the edge of the output it left, would never cross a gap), are more than kMaxOutputs, or one is empty or
+// reaches past the desktop.
 std::vector<Rect> pointer_outputs(Rect desktop, std::vector<Rect> outputs);
 
 }  // namespace ph
