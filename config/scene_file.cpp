@@ -45,8 +45,8 @@ class Reporter {
   std::string origin_;
 };
 
-// A region's own keys, which no table within a region has (the method tables', [region.materials]' and
-// [region.wells]' keys are other words: tests/test_scene_file.cpp checks that they stay so).
+// A region's own keys, besides its tables; no table within a region has one of them (the method tables',
+// [region.materials]' and [region.wells]' keys are other words: tests/test_scene_file.cpp checks that they stay so).
 const std::set<std::string_view> kRegionOwnKeys = {"name",
                                                    "x",
                                                    "y",
@@ -515,24 +515,9 @@ RegionSpec parse_region(const Reporter& rep, const toml::table& t, std::size_t i
                         const std::filesystem::path& base_dir, const MethodRegistry& methods,
                         const EngineOptions& scene_engine) {
   const std::string where = fmt::format("region[{}].", index);
-  std::set<std::string_view> keys = {"name",
-                                     "x",
-                                     "y",
-                                     "width",
-                                     "height",
-                                     "method",
-                                     "normal_map",
-                                     "normal_green",
-                                     "normal_encoding",
-                                     "depth_map",
-                                     "depth_zero",
-                                     "relief_px",
-                                     "materials",
-                                     "wells",
-                                     "traversal",
-                                     "sampling",
-                                     "lut_directions",
-                                     "accuracy_px"};
+  // Its own keys and its tables (materials, wells, a method's parameters).
+  std::set<std::string_view> keys = kRegionOwnKeys;
+  keys.insert({"materials", "wells"});
   for (const auto& entry : methods.entries()) {
     if (!entry->keys.empty()) keys.insert(entry->name);  // its parameter table
   }
