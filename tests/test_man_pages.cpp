@@ -162,16 +162,22 @@ TEST(ManPages, TheDaemonRefusesAnEmptySceneFilePathAsTheCommandLineErrorItIs) {
 }
 
 // pseudohapticd(8): SIGTERM and SIGINT end the daemon, also while its scene loads: it waited for the load (seconds
-// for a large image, for ever for a FIFO named as the scene file), as systemd's stop timeout ran out. Also when the
+// for a large image, for ever for a pipe given as the scene file that no one writes), as systemd's stop timeout ran
+// out. Also when the
 // signal was ignored where the daemon was started (a shell's background job ignores SIGINT): Linux keeps a blocked
 // signal pending even when it is ignored, which the daemon's signalfd relies on.
 TEST(ManPages, TheDaemonStopsOnSigtermWhileItsSceneLoads) {
-  const ph::ScratchDir dir("daemon-fifo");
-  const std::string fifo = (dir / "scene.toml").string(), log = (dir / "daemon.log").string();
-  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const ph::ScratchDir dir("daemon-pipe");
+  const std::string log = (dir / "daemon.log").string();
   for (const int signal : {SIGTERM, SIGINT}) {
     for (const bool ignored_at_start : {false, true}) {
       SCOPED_TRACE(fmt::format("{}{}", ::strsignal(signal), ignored_at_start ? ", ignored where it was started" : ""));
+      // A pipe whose writer (this test) never writes nor closes it: the daemon's load reads it as /dev/fd/N and waits.
+      int ends[2];
+      ASSERT_EQ(::pipe(ends), 0);
+      const std::string scene = "/dev/fd/" + std::to_string(ends[0]);
+      struct stat pipe_stat {};
+      ASSERT_EQ(::fstat(ends[0], &pipe_stat), 0);
       const pid_t daemon = ::fork();
       ASSERT_GE(daemon, 0);
       if (daemon == 0) {
@@ -179,17 +185,29 @@ TEST(ManPages, TheDaemonStopsOnSigtermWhileItsSceneLoads) {
         ::dup2(out, 1);
         ::dup2(out, 2);
         if (ignored_at_start) ::signal(signal, SIG_IGN);
-        ::execl(PH_DAEMON_PATH, PH_DAEMON_PATH, "-c", fifo.c_str(), "--control", "", static_cast<char*>(nullptr));
+        ::close(ends[1]);
+        ::execl(PH_DAEMON_PATH, PH_DAEMON_PATH, "-c", scene.c_str(), "--control", "", static_cast<char*>(nullptr));
         ::_exit(127);
       }
-      // Opening the FIFO for writing returns once the daemon's load has opened it for reading (past the blocking of
-      // its signals, which comes first); the load then waits for lines that never come.
-      int writer = -1;
-      for (int i = 0; i < 1000 && writer < 0; ++i) {
-        writer = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
-        if (writer < 0) ::usleep(10'000);
-      }
-      ASSERT_GE(writer, 0) << "the daemon did not open its scene file within 10 s";
+      ::close(ends[0]);
+      // The daemon's load has opened the pipe (past the blocking of its signals, which comes first) once a second
+      // descriptor of the daemon's leads to it (the one it was started with is the first; before the exec, the fork's
+      // copy of the writer's end, of the same inode, would count); the load then waits for lines that never come.
+      const auto opened_twice = [&] {
+        int found = 0;
+        std::error_code ignored;
+        if (!std::filesystem::equivalent(fmt::format("/proc/{}/exe", daemon), PH_DAEMON_PATH, ignored)) return false;
+        for (const auto& fd : std::filesystem::directory_iterator(fmt::format("/proc/{}/fd", daemon), ignored)) {
+          struct stat st {};
+          found +=
+              ::stat(fd.path().c_str(), &st) == 0 && st.st_ino == pipe_stat.st_ino && st.st_dev == pipe_stat.st_dev;
+        }
+        return found >= 2;
+      };
+      bool opened = false;
+      for (int i = 0; i < 1000 && !(opened = opened_twice()); ++i) ::usleep(10'000);
+      ASSERT_TRUE(opened) << "the daemon did not open its scene file within 10 s";
+      const int writer = ends[1];
       const auto sent = std::chrono::steady_clock::now();
       ::kill(daemon, signal);
       int status = 0;

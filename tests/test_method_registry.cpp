@@ -126,7 +126,8 @@ TEST(MethodRegistry, SceneFileReadsTheNewMethodAndItsTable) {
 
   // Its keys and values are checked where they are written; the built-in registry does not know it.
   const std::string unknown = error_of(region + "[region.blend]\nweigth = 1\n", methods);
-  EXPECT_NE(unknown.find("blend.toml:7: region[0].blend.weigth: unknown key (allowed: weight)"), std::string::npos)
+  EXPECT_NE(unknown.find("blend.toml:7: region[0].blend.weigth: unknown key: did you mean 'weight'? (allowed: weight)"),
+            std::string::npos)
       << unknown;
   const std::string range = error_of(region + "[region.blend]\nweight = 2\n", methods);
   EXPECT_NE(range.find("blend.toml:7: region[0].blend.weight: must be between 0 and 1"), std::string::npos) << range;
