@@ -86,10 +86,7 @@ std::variant<Request, std::string> parse_layout(const std::vector<std::string_vi
                        kMaxDesktopCoordinate);
   std::vector<Rect> outputs(rects.begin() + 1, rects.end());
   for (const Rect& o : outputs) {
-    const bool inside = o.w >= 1 && o.h >= 1 && o.x >= desktop.x && o.y >= desktop.y &&
-                        std::int64_t{o.x} + o.w <= std::int64_t{desktop.x} + desktop.w &&
-                        std::int64_t{o.y} + o.h <= std::int64_t{desktop.y} + desktop.h;
-    if (!inside) {
+    if (!output_within(o, desktop)) {
       return fmt::format("layout: the output {} {} {} {} is not a rectangle within the desktop {} {} {} {}", o.x, o.y,
                          o.w, o.h, desktop.x, desktop.y, desktop.w, desktop.h);
     }

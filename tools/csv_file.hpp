@@ -15,6 +15,8 @@
 #include <string_view>
 #include <utility>
 
+#include "config/staged_write.hpp"
+
 namespace ph::tools {
 
 // Any failure (cannot open, a full disk) is an error that names the file and the reason. A regular file (or a new
@@ -31,7 +33,7 @@ class CsvFile {
     if (staged && path_ != "-" && (!exists || S_ISREG(st.st_mode))) {
       // A file the user may not write is not replaced either (a rename needs only the folder's permission).
       if (exists && ::access(path_.c_str(), W_OK) != 0) fail("cannot open for writing");
-      staged_ = path_.parent_path() / fmt::format(".{}.{}.partial", path_.filename().string(), ::getpid());
+      staged_ = staged_path(path_);
       if (exists) mode_ = st.st_mode & 07777;
     }
     const std::filesystem::path& opened = staged_.empty() ? path_ : staged_;

@@ -16,6 +16,8 @@
 #include <utility>
 #include <vector>
 
+#include "config/staged_write.hpp"
+
 namespace ph::tools {
 
 // Creates `outdir` if needed; throws std::runtime_error naming the file or folder when `outdir` cannot be written
@@ -54,7 +56,7 @@ class OutputSet {
     std::filesystem::path path = outdir_ / name;
     struct stat st {};
     if (::lstat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) return path;
-    std::filesystem::path staged = outdir_ / fmt::format(".{}.{}.partial", name, ::getpid());
+    std::filesystem::path staged = staged_path(path);
     files_.emplace_back(std::move(path), staged);
     return staged;
   }

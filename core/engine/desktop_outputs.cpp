@@ -22,6 +22,12 @@ Vec2 clamped_into(const Rect& r, Vec2 p) {
 
 }  // namespace
 
+bool output_within(const Rect& output, const Rect& desktop) {
+  return output.w >= 1 && output.h >= 1 && output.x >= desktop.x && output.y >= desktop.y &&
+         std::int64_t{output.x} + output.w <= std::int64_t{desktop.x} + desktop.w &&
+         std::int64_t{output.y} + output.h <= std::int64_t{desktop.y} + desktop.h;
+}
+
 bool on_an_output(const std::vector<Rect>& outputs, Vec2 p) {
   return std::any_of(outputs.begin(), outputs.end(), [p](const Rect& r) { return on_output(r, p); });
 }
@@ -90,11 +96,7 @@ bool outputs_contiguous(const std::vector<Rect>& outputs) {
 }
 
 std::vector<Rect> pointer_outputs(Rect desktop, std::vector<Rect> outputs) {
-  const auto inside = [&desktop](const Rect& r) {
-    return r.w >= 1 && r.h >= 1 && r.x >= desktop.x && r.y >= desktop.y &&
-           std::int64_t{r.x} + r.w <= std::int64_t{desktop.x} + desktop.w &&
-           std::int64_t{r.y} + r.h <= std::int64_t{desktop.y} + desktop.h;
-  };
+  const auto inside = [&desktop](const Rect& r) { return output_within(r, desktop); };
   if (outputs.size() > kMaxOutputs || !std::all_of(outputs.begin(), outputs.end(), inside) ||
       !outputs_contiguous(outputs) || outputs_cover(outputs, desktop)) {
     return {};

@@ -14,6 +14,9 @@ namespace ph {
 // At most this many outputs are told apart (a layout line holds them all); a desktop of more is taken whole.
 inline constexpr std::size_t kMaxOutputs = 16;
 
+// Whether `output` is a rectangle of at least one pixel that lies within `desktop`.
+bool output_within(const Rect& output, const Rect& desktop);
+
 // Whether `p` lies on one of `outputs` (each [x, x + w) x [y, y + h)).
 bool on_an_output(const std::vector<Rect>& outputs, Vec2 p);
 
